@@ -1,0 +1,1 @@
+"""The verify language grammar, shipped as package data (``verify.grammar``)."""

@@ -1,0 +1,1 @@
+"""The normative specifications, shipped as package data so that `verify explain CODE` can show them."""

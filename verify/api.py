@@ -1,0 +1,112 @@
+"""The library façade: load a project and get its semantic models plus every diagnostic.
+
+    result = verify.load("examples/navigation/navigation.vfy")
+    if result.ok:
+        model = result.system()          # the one system of the root file (or by name)
+
+The pipeline is parse → resolve → validate → build model → chain checks; each stage reports all it
+finds and later stages run only on what the earlier ones accepted.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from .diagnostics import Diagnostic, DiagnosticSink, has_errors
+from .loader import Project, load_project, project_from_text
+from .model import SystemModel, build_system
+from .resolve import Resolution, resolve
+from .source import SourceFile, Span
+from .validate import validate, validate_chains
+
+
+class SelectionError(Exception):
+    """A command asked for a system the project does not have (exit code 2)."""
+
+    def __init__(self, diagnostic: Diagnostic):
+        super().__init__(diagnostic.message)
+        self.diagnostic = diagnostic
+
+
+@dataclass(frozen=True)
+class LoadResult:
+    project: Project
+    resolution: Resolution | None
+    models: dict[str, SystemModel] = field(compare=False)
+    diagnostics: tuple[Diagnostic, ...] = ()
+
+    @property
+    def ok(self) -> bool:
+        return not has_errors(self.diagnostics)
+
+    @property
+    def sources(self) -> dict[str, SourceFile]:
+        return self.project.sources
+
+    def root_system_names(self) -> list[str]:
+        root = self.project.root_module
+        return [sy.name.text for sy in root.systems] if root else []
+
+    def system(self, name: str | None = None) -> SystemModel:
+        """The named system, or the only system of the root file."""
+        sink = DiagnosticSink()
+        names = self.root_system_names()
+        where = Span(self.project.root, 1, 1, 1, 1)
+        if name is None:
+            if len(names) != 1:
+                found = ", ".join(f"`{n}`" for n in names) or "none"
+                sink.emit("E105", f"{self.project.root} must hold exactly one system to choose from "
+                          f"(found {found})", where, help="name one with `--system NAME`")
+                raise SelectionError(sink.items[0])
+            name = names[0]
+        if name not in self.models:
+            from .diagnostics import suggest
+
+            hint = suggest(name, names)
+            sink.emit("E105", f"no valid system `{name}` in {self.project.root}", where,
+                      help=f"did you mean `{hint}`?" if hint else "systems here: " + (", ".join(names) or "none"))
+            raise SelectionError(sink.items[0])
+        return self.models[name]
+
+
+def _finish(project: Project, sink: DiagnosticSink) -> LoadResult:
+    if not project.modules:
+        return LoadResult(project, None, {}, tuple(sorted(sink.items, key=Diagnostic.sort_key)))
+    resolution = resolve(project, sink)
+    validate(resolution, sink)
+    models: dict[str, SystemModel] = {}
+    for name, scope in resolution.systems.items():
+        if not scope.resolved or not _clean(scope, sink):
+            continue
+        model = build_system(scope)
+        before = len(sink.items)
+        validate_chains(scope, model, sink)
+        if len(sink.items) == before:
+            models[name] = model
+    diagnostics = tuple(sorted(sink.items, key=Diagnostic.sort_key))
+    return LoadResult(project, resolution, models, diagnostics)
+
+
+def _clean(scope, sink: DiagnosticSink) -> bool:
+    """No error lies inside the system or inside a component it instantiates."""
+    files_lines = [scope.system.span] + [c.component.span for c in scope.component_of.values()]
+    for d in sink.items:
+        if d.severity.value != "error":
+            continue
+        for region in files_lines:
+            if d.span.file == region.file and region.line <= d.span.line <= region.end_line:
+                return False
+    return True
+
+
+def load(path: str) -> LoadResult:
+    """Load, resolve and validate the project rooted at ``path`` (imports followed)."""
+    sink = DiagnosticSink()
+    project = load_project(path, sink)
+    return _finish(project, sink)
+
+
+def load_text(text: str, path: str = "<text>") -> LoadResult:
+    """The same for text in memory (one file; imports are not followed)."""
+    sink = DiagnosticSink()
+    project = project_from_text(text, path, sink)
+    return _finish(project, sink)

@@ -1,0 +1,232 @@
+"""The command line: a thin layer over the library façade.
+
+Exit codes (stable, documented in README.md):
+  0  ok: the model is valid / every spec holds
+  1  a spec is violated, or synthesis is unsatisfiable
+  2  invalid input or usage (diagnostics say where)
+  3  undecided (solver budget exhausted, or the command cannot decide yet)
+  70 internal error (a bug: please report it)
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+from typing import Callable
+
+from . import api
+from .codes import CODES
+from .render import diagnostics_json, render_all_text
+
+EXIT_OK, EXIT_VIOLATED, EXIT_INVALID, EXIT_UNDECIDED, EXIT_INTERNAL = 0, 1, 2, 3, 70
+
+
+def _emit_diagnostics(result: api.LoadResult, fmt: str, extra: dict | None = None) -> None:
+    if fmt == "json":
+        doc = diagnostics_json(result.diagnostics)
+        if extra:
+            doc.update(extra)
+        print(json.dumps(doc, indent=2, sort_keys=False))
+    elif result.diagnostics:
+        print(render_all_text(result.diagnostics, result.sources), file=sys.stderr)
+
+
+def _load_or_fail(args) -> api.LoadResult | int:
+    result = api.load(args.file)
+    if not result.ok:
+        _emit_diagnostics(result, args.format)
+        return EXIT_INVALID
+    return result
+
+
+def cmd_check(args) -> int:
+    result = api.load(args.file)
+    _emit_diagnostics(result, args.format)
+    if not result.ok:
+        return EXIT_INVALID
+    if args.format == "text":
+        comps = len(result.project.components)
+        systems = len(result.project.systems)
+        print(f"{args.file}: ok ({comps} component{'s' * (comps != 1)}, "
+              f"{systems} system{'s' * (systems != 1)})")
+    return EXIT_OK
+
+
+def _select(result: api.LoadResult, args):
+    try:
+        return result.system(args.system)
+    except api.SelectionError as err:
+        print(render_all_text([err.diagnostic], result.sources), file=sys.stderr)
+        return None
+
+
+def cmd_pending(what: str) -> Callable:
+    """``synth`` and ``prove`` before their issues land: run the checks, say what is not done yet."""
+
+    def run(args) -> int:
+        result = _load_or_fail(args)
+        if isinstance(result, int):
+            return result
+        if _select(result, args) is None:
+            return EXIT_INVALID
+        print(f"{args.file}: the model is valid, but `{what}` is not implemented yet: "
+              f"nothing was {'synthesized' if what == 'synth' else 'proved'}.", file=sys.stderr)
+        return EXIT_UNDECIDED
+
+    return run
+
+
+def cmd_fmt(args) -> int:
+    from .fmt import format_text
+    from .loader import _read
+    from .diagnostics import DiagnosticSink
+    from .render import render_all_text as render
+
+    sink = DiagnosticSink()
+    text = _read(os.path.normpath(args.file), sink, None)
+    if text is None:
+        print(render(sink.items, {}), file=sys.stderr)
+        return EXIT_INVALID
+    formatted, diagnostics = format_text(text, args.file)
+    if formatted is None:
+        from .source import SourceFile
+
+        print(render(diagnostics, {args.file: SourceFile(args.file, text)}), file=sys.stderr)
+        return EXIT_INVALID
+    if args.check:
+        if formatted != text:
+            print(f"{args.file}: not canonically formatted (run `verify fmt --in-place {args.file}`)",
+                  file=sys.stderr)
+            return EXIT_VIOLATED
+        return EXIT_OK
+    if args.in_place:
+        if formatted != text:
+            with open(args.file, "w", encoding="utf-8") as fh:
+                fh.write(formatted)
+        return EXIT_OK
+    if args.output:
+        return _write_new_file(args.output, formatted, args.force)
+    sys.stdout.write(formatted)
+    return EXIT_OK
+
+
+def _write_new_file(path: str, text: str, force: bool) -> int:
+    if os.path.exists(path) and not force:
+        print(f"error: {path} exists; refusing to overwrite it (pass --force to replace it)", file=sys.stderr)
+        return EXIT_INVALID
+    try:
+        with open(path, "w", encoding="utf-8") as fh:
+            fh.write(text)
+    except OSError as err:
+        print(f"error: cannot write {path}: {err.strerror or err}", file=sys.stderr)
+        return EXIT_INVALID
+    return EXIT_OK
+
+
+def cmd_explain(args) -> int:
+    from .explain import explain
+
+    code = args.code.upper()
+    if code not in CODES:
+        from .diagnostics import suggest
+
+        hint = suggest(code, CODES)
+        print(f"error: unknown diagnostic code {args.code}" + (f"; did you mean {hint}?" if hint else ""),
+              file=sys.stderr)
+        return EXIT_INVALID
+    print(explain(code))
+    return EXIT_OK
+
+
+def cmd_analyze(args) -> int:
+    result = _load_or_fail(args)
+    if isinstance(result, int):
+        return result
+    system = _select(result, args)
+    if system is None:
+        return EXIT_INVALID
+    from .timing import analyze, diagnostics_of
+    from .timing.report import to_json, to_text
+
+    analysis = analyze(system, data_age=args.data_age)
+    problems = diagnostics_of(analysis)
+    if args.format == "json":
+        doc = to_json(analysis)
+        doc["diagnostics"] = diagnostics_json(problems)["diagnostics"]
+        print(json.dumps(doc, indent=2))
+    else:
+        print(to_text(analysis))
+        if problems:
+            print(render_all_text(problems, result.sources), file=sys.stderr)
+    if any(d.severity.value == "error" for d in problems):
+        return EXIT_INVALID
+    return EXIT_OK
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="verify", description="Timing verification for component-based "
+                                     "robotics software: check, analyze, synthesize and prove.")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    def add(name: str, func, help: str, system: bool = True) -> argparse.ArgumentParser:
+        p = sub.add_parser(name, help=help, description=help)
+        p.add_argument("file", metavar="FILE", help="the .vfy file (imports are followed)")
+        p.add_argument("--format", choices=("text", "json"), default="text", help="output format")
+        if system:
+            p.add_argument("--system", metavar="NAME", help="the system to use when the file holds several")
+        p.set_defaults(func=func)
+        return p
+
+    add("check", cmd_check, "parse, resolve and validate a model", system=False)
+    p = add("analyze", cmd_analyze, "rates, sampling, response times and chain latencies")
+    p.add_argument("--data-age", choices=("reduced", "non-reduced"), default="reduced",
+                   help="data age measured from the first task's read (reduced) or from the earliest event")
+    add("synth", cmd_pending("synth"), "synthesize periods, prescalers and activation kinds")
+    add("prove", cmd_pending("prove"), "prove every latency spec of a configured system")
+
+    p = sub.add_parser("fmt", help="print the canonical formatting of a file",
+                       description="print the canonical formatting of a file (comments are kept)")
+    p.add_argument("file", metavar="FILE")
+    group = p.add_mutually_exclusive_group()
+    group.add_argument("--check", action="store_true", help="exit 1 if the file is not canonically formatted")
+    group.add_argument("--in-place", action="store_true", help="rewrite FILE itself")
+    group.add_argument("-o", "--output", metavar="OUT", help="write to a new file OUT")
+    p.add_argument("--force", action="store_true", help="with -o: replace OUT if it exists")
+    p.set_defaults(func=cmd_fmt)
+
+    p = sub.add_parser("explain", help="explain a diagnostic code with a minimal failing example")
+    p.add_argument("code", metavar="CODE")
+    p.set_defaults(func=cmd_explain)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    try:
+        args = _parser().parse_args(argv)
+        return args.func(args)
+    except KeyboardInterrupt:
+        return 130
+    except SystemExit as exit_:
+        return int(exit_.code) if isinstance(exit_.code, int) else EXIT_INVALID
+    except Exception as err:  # the last line of defence: never a traceback for the user
+        if os.environ.get("VERIFY_DEBUG"):
+            raise
+        print(f"internal error: {type(err).__name__}: {err}\n"
+              "This is a bug in verify; please report it with the input file. "
+              "Set VERIFY_DEBUG=1 to see the traceback.", file=sys.stderr)
+        return EXIT_INTERNAL
+
+
+def _command_main(command: str) -> None:
+    sys.exit(main([command, *sys.argv[1:]]))
+
+
+def synth_main() -> None:
+    """The ``synth`` console script: ``synth FILE`` is ``verify synth FILE``."""
+    _command_main("synth")
+
+
+def prove_main() -> None:
+    """The ``prove`` console script: ``prove FILE`` is ``verify prove FILE``."""
+    _command_main("prove")

@@ -1,0 +1,75 @@
+"""The registry of diagnostic codes: one place, stable numbers.
+
+E0xx syntax and files, E1xx names, E2xx structure, E3xx timing, E4xx synthesis, E5xx proof.
+Every code has a section ``## <code>`` in ``specs/diagnostics.md`` with a minimal failing example that
+``tests/test_diagnostic_examples.py`` runs; ``verify explain CODE`` prints that section.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from .diagnostics import Severity
+
+
+@dataclass(frozen=True)
+class Code:
+    code: str
+    title: str
+    severity: Severity = Severity.ERROR
+
+
+_ALL = [
+    # E0xx: files and syntax
+    Code("E001", "unexpected token"),
+    Code("E002", "unexpected character"),
+    Code("E003", "file is not UTF-8 text"),
+    Code("E004", "file cannot be read"),
+    Code("E005", "invalid number"),
+    # E1xx: names
+    Code("E101", "unknown name"),
+    Code("E102", "duplicate name"),
+    Code("E103", "import cycle"),
+    Code("E104", "task uses a port its component does not declare"),
+    Code("E105", "no such system"),
+    Code("E106", "unknown scheduling policy"),
+    Code("E107", "wrong kind of port or member"),
+    # E2xx: structure
+    Code("E201", "connection type mismatch"),
+    Code("E202", "out-port produced by no task"),
+    Code("E203", "out-port produced by more than one task"),
+    Code("E204", "more than one activation binding for a task"),
+    Code("E205", "data trigger on an unconnected in-port"),
+    Code("E206", "required in-port is not connected"),
+    Code("E207", "task has no activation binding"),
+    Code("E208", "chain link is not reachable"),
+    Code("E209", "chain end is ambiguous"),
+    Code("E210", "data-trigger cycle without a timer or sporadic source"),
+    Code("E211", "in-port with more than one incoming connection"),
+    Code("E212", "clause given more than once"),
+    Code("E213", "task has no priority"),
+    Code("E214", "task has no core"),
+    Code("E215", "trigger port is not read by the task"),
+    Code("E216", "synthesis hole on a task whose rate is fixed"),
+    Code("E217", "task has no worst-case execution time"),
+    # E3xx: timing
+    Code("E301", "best-case execution time exceeds worst case"),
+    Code("E302", "time where a frequency is expected, or vice versa"),
+    Code("E303", "empty or inverted range"),
+    Code("E304", "prescaler is not an integer of at least 1"),
+    Code("E305", "activation outside the task's activation constraints"),
+    Code("E306", "activation contradicts a fixed (non-changeable) rate"),
+    Code("E307", "time or frequency must be positive"),
+    Code("E308", "phase outside [0, period)"),
+    Code("E309", "priority is not a non-negative integer"),
+    Code("E310", "sampling tolerance violated"),
+    Code("E311", "core utilisation above 1"),
+    Code("E312", "no response-time bound within the deadline"),
+    Code("E313", "synthesis hole has no candidate values"),
+]
+
+CODES: dict[str, Code] = {c.code: c for c in _ALL}
+
+
+def spec_anchor(code: str) -> str:
+    """The section of specs/diagnostics.md that explains ``code``."""
+    return f"specs/diagnostics.md#{code.lower()}"

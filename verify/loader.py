@@ -1,0 +1,117 @@
+"""Read a project: the root file and everything it imports, each file once, cycles reported.
+
+Files are read as bytes and decoded as strict UTF-8; unreadable, missing or non-UTF-8 files become
+located diagnostics (E003, E004), never exceptions. Imports are resolved relative to the importing file.
+"""
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+
+from . import syntax as s
+from .diagnostics import DiagnosticSink, Label
+from .parse import parse_text
+from .source import Span, SourceFile
+
+MAX_FILE_BYTES = 16 * 1024 * 1024
+
+
+@dataclass(frozen=True)
+class Project:
+    """The parsed files of one project, root first, then imports in the order they were reached."""
+
+    root: str
+    modules: tuple[s.Module, ...]
+    sources: dict[str, SourceFile] = field(compare=False, repr=False)
+
+    @property
+    def root_module(self) -> s.Module | None:
+        return next((m for m in self.modules if m.path == self.root), None)
+
+    @property
+    def components(self) -> tuple[s.Component, ...]:
+        return tuple(c for m in self.modules for c in m.components)
+
+    @property
+    def systems(self) -> tuple[s.System, ...]:
+        return tuple(sy for m in self.modules for sy in m.systems)
+
+
+def _read(path: str, sink: DiagnosticSink, at: Span | None) -> str | None:
+    where = at or Span(path, 1, 1, 1, 1)
+    try:
+        with open(path, "rb") as fh:
+            data = fh.read(MAX_FILE_BYTES + 1)
+    except FileNotFoundError:
+        sink.emit("E004", f"file not found: {path}", where, "cannot be read",
+                  help="check the path; imports are relative to the importing file")
+        return None
+    except IsADirectoryError:
+        sink.emit("E004", f"{path} is a directory, not a file", where, "cannot be read",
+                  help="name a .vfy file")
+        return None
+    except OSError as err:
+        sink.emit("E004", f"cannot read {path}: {err.strerror or err}", where, "cannot be read",
+                  help="check that the file exists and is readable")
+        return None
+    if len(data) > MAX_FILE_BYTES:
+        sink.emit("E004", f"{path} is larger than {MAX_FILE_BYTES // (1024 * 1024)} MiB", where,
+                  "too large", help="split the model into several files joined by `import`")
+        return None
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as err:
+        before = data[: err.start]
+        line = before.count(b"\n") + 1
+        col = err.start - (before.rfind(b"\n") + 1) + 1
+        sink.emit("E003", f"{path} is not UTF-8 text: byte 0x{data[err.start]:02x} at offset {err.start}",
+                  Span(path, line, col, line, col + 1), "invalid byte",
+                  help="save the file as UTF-8")
+        return None
+
+
+def load_project(root: str, sink: DiagnosticSink) -> Project:
+    """Parse ``root`` and its imports. Diagnostics go to ``sink``; the project holds what parsed."""
+    root = os.path.normpath(root)
+    modules: list[s.Module] = []
+    sources: dict[str, SourceFile] = {}
+    seen: dict[str, str] = {}  # realpath -> display path
+    stack: list[str] = []  # realpaths on the current import path
+
+    def visit(path: str, at: Span | None) -> None:
+        real = os.path.realpath(path)
+        if real in stack:
+            cycle = [seen[r] for r in stack[stack.index(real):]] + [seen[real]]
+            sink.emit("E103", "import cycle: " + " -> ".join(cycle), at or Span(path, 1, 1, 1, 1),
+                      "closes the cycle", help="move what both files need into a third file that both import")
+            return
+        if real in seen:
+            return
+        seen[real] = path
+        text = _read(path, sink, at)
+        if text is None:
+            return
+        sources[path] = SourceFile(path, text)
+        module = parse_text(text, path, sink)
+        if module is None:
+            return
+        modules.append(module)
+        stack.append(real)
+        base = os.path.dirname(path)
+        for imp in module.imports:
+            target = os.path.normpath(os.path.join(base, imp.path))
+            visit(target, imp.span)
+        stack.pop()
+
+    visit(root, None)
+    return Project(root, tuple(modules), sources)
+
+
+def project_from_text(text: str, path: str, sink: DiagnosticSink) -> Project:
+    """A one-file project from text in memory (imports are not followed)."""
+    module = parse_text(text, path, sink)
+    if module is not None:
+        for imp in module.imports:
+            sink.emit("E004", f"imports are not followed for in-memory text: {imp.path}", imp.span,
+                      secondary=(Label(imp.span, "here"),), help="load the file from disk instead")
+    return Project(path, (module,) if module else (), {path: SourceFile(path, text)})

@@ -1,0 +1,320 @@
+"""The semantic model of one validated system: what analysis, synthesis, proof and generators walk.
+
+Built from a resolved, validated system (``build_system``). Every time is an exact ``Fraction`` of
+seconds; every rate a ``Fraction`` of hertz. Tasks are identified as ``instance.Task``, ports as
+``instance.port``. Nodes keep the span of the statement they come from so results can point back at
+the user's text. Computed results never live here: analyses return their own result objects.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from fractions import Fraction
+from typing import Literal, Union
+
+from . import syntax as s
+from .resolve import SystemScope
+from .source import NO_SPAN, Span
+
+
+def _span() -> Span:
+    return field(default=NO_SPAN, compare=False, repr=False)
+
+
+# ------------------------------------------------------------------ activations
+
+
+@dataclass(frozen=True)
+class Periodic:
+    """A periodic timer. ``phase`` None means unknown (any offset in [0, period))."""
+
+    period: Fraction
+    phase: Fraction | None = None
+
+    @property
+    def kind(self) -> str:
+        return "timer"
+
+
+@dataclass(frozen=True)
+class SporadicSource:
+    """Activations at least ``min_interarrival`` and at most ``max_interarrival`` apart."""
+
+    min_interarrival: Fraction
+    max_interarrival: Fraction
+
+    @property
+    def kind(self) -> str:
+        return "sporadic"
+
+
+@dataclass(frozen=True)
+class DataTriggered:
+    """Activated by arrivals on ``port`` (an in-port or compound of the task's component).
+
+    ``members`` are the in-ports whose arrivals count: one for a plain in-port; for a compound,
+    its members with ``mode`` "and" (every member holds a fresh sample) or "or" (any arrival).
+    The task fires on every ``prescaler``-th activation event.
+    """
+
+    port: str
+    members: tuple[str, ...]
+    mode: Literal["single", "and", "or"] = "single"
+    prescaler: int = 1
+
+    @property
+    def kind(self) -> str:
+        return "trigger"
+
+
+@dataclass(frozen=True)
+class Hole:
+    """An unknown left for ``synth``: the syntax node says what is unknown and within which range."""
+
+    activation: s.Activation
+
+    @property
+    def kind(self) -> str:
+        return "hole"
+
+
+ActivationModel = Union[Periodic, SporadicSource, DataTriggered, Hole]
+
+
+# ------------------------------------------------------------------ system
+
+
+@dataclass(frozen=True)
+class ReadModel:
+    port: str  # local in-port name
+    optional: bool
+    oversampling: s.Tolerance | None
+    undersampling: s.Tolerance | None
+
+
+@dataclass(frozen=True)
+class TaskModel:
+    id: str  # "instance.Task"
+    instance: str
+    name: str
+    component: str
+    kind: Literal["preemptive", "cooperative"]
+    core: str
+    priority: int
+    bcet: Fraction
+    wcet: Fraction
+    reads: tuple[ReadModel, ...]
+    produces: tuple[str, ...]  # local out-port names
+    activation: ActivationModel
+    min_rate: Fraction | None = None  # activation constraint, Hz
+    max_rate: Fraction | None = None
+    changeable: bool = True
+    wcrt_bound: Fraction | None = None  # a response-time bound given by the user
+    deadline: Fraction | None = None
+    span: Span = _span()  # the binding in the system
+    definition_span: Span = _span()  # the task in its component
+
+    def reads_port(self, port: str) -> bool:
+        return any(r.port == port for r in self.reads)
+
+
+@dataclass(frozen=True)
+class LinkModel:
+    """A connection ``source`` (out-port) → ``target`` (in-port), with its writer and its readers."""
+
+    source: str  # "inst.port"
+    target: str
+    writer: str  # task id producing source
+    readers: tuple[str, ...]  # task ids reading the target in-port
+    delay_min: Fraction = Fraction(0)
+    delay_max: Fraction = Fraction(0)
+    span: Span = _span()
+
+
+@dataclass(frozen=True)
+class HopModel:
+    """One step of a chain: ``writer`` produces on ``link.source``; ``reader`` reads ``link.target``."""
+
+    writer: str
+    reader: str
+    link: LinkModel
+
+
+@dataclass(frozen=True)
+class ChainModel:
+    name: str
+    tasks: tuple[str, ...]  # task ids, first samples the stimulus, last produces the response
+    hops: tuple[HopModel, ...]
+    reaction_time: Fraction | None = None  # spec bounds, seconds
+    data_age: Fraction | None = None
+    jitter: Fraction | None = None
+    span: Span = _span()
+    spec_spans: dict[str, Span] = field(default_factory=dict, compare=False, repr=False)
+
+
+@dataclass(frozen=True)
+class CoreModel:
+    name: str
+    policy: str = "fixed_priority"
+    span: Span = _span()
+
+
+@dataclass(frozen=True)
+class SystemModel:
+    name: str
+    cores: tuple[CoreModel, ...]
+    tasks: tuple[TaskModel, ...]
+    links: tuple[LinkModel, ...]
+    chains: tuple[ChainModel, ...]
+    span: Span = _span()
+
+    def task(self, task_id: str) -> TaskModel:
+        return self._tasks[task_id]
+
+    @property
+    def _tasks(self) -> dict[str, TaskModel]:
+        cache = self.__dict__.get("_task_index")
+        if cache is None:
+            cache = {t.id: t for t in self.tasks}
+            object.__setattr__(self, "_task_index", cache)
+        return cache
+
+    def link_into(self, port: str) -> LinkModel | None:
+        """The connection into in-port ``inst.port`` (at most one: rule E211)."""
+        return next((lk for lk in self.links if lk.target == port), None)
+
+    def producer(self, port: str) -> str | None:
+        """The task id producing out-port ``inst.port``."""
+        inst, name = port.split(".", 1)
+        return next((t.id for t in self.tasks if t.instance == inst and name in t.produces), None)
+
+    @property
+    def holes(self) -> tuple[TaskModel, ...]:
+        return tuple(t for t in self.tasks if isinstance(t.activation, Hole))
+
+    @property
+    def is_configured(self) -> bool:
+        return not self.holes
+
+    def tasks_on(self, core: str) -> tuple[TaskModel, ...]:
+        return tuple(t for t in self.tasks if t.core == core)
+
+
+# ------------------------------------------------------------------ building
+
+
+def _seconds(q: s.Quantity | None) -> Fraction | None:
+    return None if q is None else q.seconds()
+
+
+def activation_model(act: s.Activation, scope_members: dict[str, tuple[str, tuple[str, ...]]]) -> ActivationModel:
+    """The semantic activation of a (validated) binding. ``scope_members`` maps trigger ports to
+    (mode, members) for the task's component."""
+    if isinstance(act, s.Timer):
+        if isinstance(act.period, s.PeriodHole):
+            return Hole(act)
+        return Periodic(act.period.seconds(), _seconds(act.phase))
+    if isinstance(act, s.Sporadic):
+        a, b = act.low.seconds(), act.high.seconds()
+        return SporadicSource(min(a, b), max(a, b))
+    if isinstance(act, s.Trigger):
+        if isinstance(act.prescaler, s.PrescalerHole):
+            return Hole(act)
+        mode, members = scope_members[act.port.text]
+        return DataTriggered(act.port.text, members, mode, int(act.prescaler.value))
+    return Hole(act)
+
+
+def build_system(scope: SystemScope) -> SystemModel:
+    """The semantic model of a system that resolved and validated without errors."""
+    system = scope.system
+    tasks: list[TaskModel] = []
+    for inst in system.instances:
+        comp = scope.component_of[inst.name.text]
+        triggers = {p.name.text: ("single", (p.name.text,)) for p in comp.component.in_ports}
+        triggers.update({c.name.text: (c.mode, tuple(m.text for m in c.members)) for c in comp.component.compounds})
+        for task in comp.component.tasks:
+            binding = scope.bindings[(inst.name.text, task.name.text)]
+            tasks.append(_task_model(inst, task, binding, triggers))
+    links = tuple(_link_model(conn, tasks) for conn in system.connections)
+    model = SystemModel(system.name.text, tuple(CoreModel(c.name.text, c.policy.text if c.policy else
+                                                          "fixed_priority", c.span) for c in system.cores),
+                        tuple(tasks), links, (), system.span)
+    chains = tuple(_chain_model(ch, model, scope) for ch in system.chains)
+    return SystemModel(model.name, model.cores, model.tasks, links, chains, system.span)
+
+
+def _task_model(inst: s.Instance, task: s.Task, binding: s.TaskBinding, triggers) -> TaskModel:
+    core = (binding.core or inst.core).text  # validation guarantees one of them
+    c = task.constraint
+    return TaskModel(
+        id=f"{inst.name.text}.{task.name.text}",
+        instance=inst.name.text,
+        name=task.name.text,
+        component=inst.component.text,
+        kind=task.kind,
+        core=core,
+        priority=int(binding.priority.value),
+        bcet=task.bcet.seconds() if task.bcet else Fraction(0),
+        wcet=task.wcet.seconds(),
+        reads=tuple(ReadModel(r.port.text, r.optional, r.oversampling, r.undersampling) for r in task.reads),
+        produces=tuple(p.text for p in task.produces),
+        activation=activation_model(binding.activation, triggers),
+        min_rate=c.min.hertz() if c and c.min else None,
+        max_rate=c.max.hertz() if c and c.max else None,
+        changeable=c.changeable if c else True,
+        wcrt_bound=_seconds(binding.wcrt),
+        deadline=_seconds(binding.deadline),
+        span=binding.span,
+        definition_span=task.span,
+    )
+
+
+def _link_model(conn: s.Connection, tasks: list[TaskModel]) -> LinkModel:
+    src_inst, src_port = conn.source.instance.text, conn.source.member.text
+    dst_inst, dst_port = conn.target.instance.text, conn.target.member.text
+    writer = next(t.id for t in tasks if t.instance == src_inst and src_port in t.produces)
+    readers = tuple(t.id for t in tasks if t.instance == dst_inst and t.reads_port(dst_port))
+    low = _seconds(conn.delay_min) or Fraction(0)
+    high = _seconds(conn.delay_max) or Fraction(0)
+    return LinkModel(str(conn.source), str(conn.target), writer, readers, low, high, conn.span)
+
+
+def chain_path(chain: s.Chain, model: SystemModel, scope: SystemScope):
+    """Walk a chain. Returns (tasks, hops, problem) where problem is None or
+    (index of the element that cannot be reached, kind 'unreachable'|'ambiguous'|'no-reader', detail)."""
+    refs = chain.refs
+    first = model.producer(str(refs[0]))
+    tasks = [first]
+    hops: list[HopModel] = []
+    for i in range(1, len(refs)):
+        prev_port = str(refs[i - 1])
+        ref = refs[i]
+        kind = scope.component_of[ref.instance.text].kind_of(ref.member.text)
+        outgoing = [lk for lk in model.links if lk.source == prev_port and lk.target.split(".")[0] == ref.instance.text]
+        if kind == "out-port":
+            reader = model.producer(str(ref))
+            candidates = [lk for lk in outgoing if reader in lk.readers]
+        elif kind == "task":
+            reader = str(ref)
+            candidates = [lk for lk in outgoing if reader in lk.readers]
+        else:  # in-port closing the chain
+            candidates = [lk for lk in outgoing if lk.target == str(ref)]
+            if not candidates:
+                return tasks, hops, (i, "unreachable", None)
+            readers = candidates[0].readers
+            if len(readers) != 1:
+                return tasks, hops, (i, "ambiguous" if readers else "no-reader", readers)
+            reader = readers[0]
+        if not candidates:
+            return tasks, hops, (i, "unreachable", reader)
+        hops.append(HopModel(tasks[-1], reader, candidates[0]))
+        tasks.append(reader)
+    return tasks, hops, None
+
+
+def _chain_model(chain: s.Chain, model: SystemModel, scope: SystemScope) -> ChainModel:
+    tasks, hops, _ = chain_path(chain, model, scope)
+    bounds = {sp.kind: sp.bound.seconds() for sp in chain.specs}
+    return ChainModel(chain.name.text, tuple(tasks), tuple(hops), bounds.get("reaction_time"),
+                      bounds.get("data_age"), bounds.get("jitter"), chain.span,
+                      {sp.kind: sp.span for sp in chain.specs})

@@ -1,0 +1,494 @@
+"""Parse one source text into the typed tree of ``verify.syntax``.
+
+Lark LALR with positions; the grammar is data in ``grammar/verify.lark``. Syntax errors are recovered
+from (the offending token is dropped and parsing resumes) so that one run reports several of them, each
+in the language's own words: never ``__ANON_0`` or ``$END``. The transformer only builds nodes.
+"""
+from __future__ import annotations
+
+import functools
+import re
+from fractions import Fraction
+from importlib import resources
+
+from lark import Lark, Token, Transformer, Tree, v_args
+from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken, VisitError
+
+from . import syntax as s
+from .diagnostics import DiagnosticSink
+from .source import Span
+
+MAX_SYNTAX_ERRORS = 20
+MAX_NUMBER_LENGTH = 40
+
+#: how terminals are named in messages
+_TOKEN_WORDS = {
+    "NAME": "a name",
+    "NUMBER": "a number",
+    "UNIT": "a unit (s, ms, us, ns, Hz, kHz)",
+    "STRING": 'a quoted file name ("...")',
+    "$END": "the end of the file",
+}
+
+
+@functools.lru_cache(maxsize=1)
+def grammar_text() -> str:
+    return resources.files("verify.grammar").joinpath("verify.lark").read_text(encoding="utf-8")
+
+
+@functools.lru_cache(maxsize=1)
+def _parser() -> Lark:
+    return Lark(grammar_text(), parser="lalr", lexer="contextual", propagate_positions=True)
+
+
+@functools.lru_cache(maxsize=1)
+def _literal_words() -> dict[str, str]:
+    words = {}
+    for term in _parser().terminals:
+        if term.pattern.type == "str":
+            words[term.name] = f"'{term.pattern.value}'"
+    return words
+
+
+def describe_token_type(name: str) -> str:
+    return _TOKEN_WORDS.get(name) or _literal_words().get(name) or name.lower()
+
+
+def _describe_expected(names) -> str:
+    words = sorted({describe_token_type(n) for n in names if not n.startswith("__IGNORE")})
+    if not words:
+        return "nothing more here"
+    if len(words) > 12:
+        words = words[:12] + ["…"]
+    if len(words) == 1:
+        return words[0]
+    return "one of " + ", ".join(words)
+
+
+def _describe_found(token: Token) -> str:
+    if token.type == "$END":
+        return "the end of the file"
+    text = str(token)
+    return f"'{text}'" if len(text) <= 40 else f"'{text[:37]}...'"
+
+
+def token_span(path: str, tok: Token) -> Span:
+    line = tok.line or 1
+    col = tok.column or 1
+    end_line = tok.end_line or line
+    end_col = tok.end_column or col + 1
+    return Span(path, line, col, end_line, end_col)
+
+
+def _syntax_help(expected: set[str], token: Token) -> str | None:
+    if "UNIT" in expected:
+        return "write a unit after the number, e.g. `10 ms` or `40 Hz`"
+    if "NAME" in expected and token.type != "NAME" and re.fullmatch(r"[A-Za-z_]\w*", str(token)):
+        return f"`{token}` is a keyword of the language; choose another name"
+    if "RBRACE" in expected and token.type == "$END":
+        return "a `}` is missing: every `{` needs its `}`"
+    return None
+
+
+def _report_unexpected(sink: DiagnosticSink, path: str, err: UnexpectedInput, text: str) -> None:
+    if isinstance(err, UnexpectedToken):
+        expected = set(err.expected or ())
+        span = token_span(path, err.token)
+        if err.token.type == "$END":
+            span = _end_span(path, text)
+        sink.emit(
+            "E001",
+            f"expected {_describe_expected(expected)}, found {_describe_found(err.token)}",
+            span,
+            "unexpected here",
+            help=_syntax_help(expected, err.token),
+        )
+    elif isinstance(err, UnexpectedCharacters):
+        ch = text[err.pos_in_stream] if err.pos_in_stream < len(text) else ""
+        shown = repr(ch)[1:-1] if ch.isprintable() else f"U+{ord(ch):04X}" if ch else "end of file"
+        span = Span(path, err.line, err.column, err.line, err.column + 1)
+        allowed = set(err.allowed or ())
+        msg = f"unexpected character '{shown}'"
+        if allowed:
+            msg += f"; expected {_describe_expected(allowed)}"
+        sink.emit("E002", msg, span, "not part of the language",
+                  help="remove it; comments start with `//` or are enclosed in `/* */`")
+    else:  # pragma: no cover - lark raises only the two above from LALR
+        sink.emit("E001", str(err).splitlines()[0], Span(path, 1, 1, 1, 2))
+
+
+_INSERTION_ORDER = ("UNIT", "COLON", "NAME", "NUMBER", "RBRACE")
+
+
+def _repair_by_insertion(err: UnexpectedToken) -> None:
+    """Error recovery: insert the one expected token after which the offending token fits.
+
+    Lark then resumes after the offending token; if no single insertion helps, that token is simply
+    dropped. This keeps one slip (a missing unit, colon or brace) from cascading into many reports.
+    """
+    parser = err.interactive_parser
+    expected = sorted(err.expected or (), key=lambda n: (n not in _INSERTION_ORDER,
+                                                         _INSERTION_ORDER.index(n) if n in _INSERTION_ORDER else 0, n))
+    for name in expected:
+        filler = Token(name, _placeholder(name), line=err.token.line, column=err.token.column)
+        trial = parser.copy()
+        try:
+            trial.feed_token(filler)
+            trial.feed_token(err.token)
+        except UnexpectedInput:
+            continue
+        parser.feed_token(filler)
+        parser.feed_token(err.token)
+        return
+
+
+def _placeholder(name: str) -> str:
+    return {"UNIT": "ms", "NAME": "_", "NUMBER": "0", "STRING": '""'}.get(name) or _literal_words().get(
+        name, "'_'")[1:-1]
+
+
+def _end_span(path: str, text: str) -> Span:
+    lines = text.split("\n")
+    line = len(lines)
+    col = len(lines[-1]) + 1
+    return Span(path, line, col, line, col + 1)
+
+
+def parse_text(text: str, path: str, sink: DiagnosticSink) -> s.Module | None:
+    """Parse ``text``; report syntax errors into ``sink``. Returns None when the text has any."""
+    errors: list[UnexpectedInput] = []
+    last_line = [-1]
+
+    def on_error(err: UnexpectedInput) -> bool:
+        line = getattr(err, "line", -1)
+        at_end = isinstance(err, UnexpectedToken) and err.token.type == "$END"
+        # one report per line: a repair often trips the very next token too
+        if line != last_line[0] or at_end:
+            errors.append(err)
+            last_line[0] = line
+        if isinstance(err, UnexpectedToken):
+            if err.token.type == "$END":
+                return False
+            _repair_by_insertion(err)
+        return len(errors) < MAX_SYNTAX_ERRORS
+
+    try:
+        tree = _parser().parse(text, on_error=on_error)
+    except UnexpectedInput as err:
+        if not errors or getattr(err, "line", None) != last_line[0]:
+            errors.append(err)
+        tree = None
+    for err in errors:
+        _report_unexpected(sink, path, err, text)
+    if errors or tree is None:
+        return None
+    try:
+        return _Builder(path, sink).transform(tree)
+    except VisitError as err:
+        if isinstance(err.orig_exc, _NumberError):
+            return None
+        raise
+
+
+class _NumberError(Exception):
+    pass
+
+
+def parse_number(tok: Token, path: str, sink: DiagnosticSink) -> Fraction:
+    text = str(tok)
+    span = token_span(path, tok)
+    if len(text) > MAX_NUMBER_LENGTH:
+        sink.emit("E005", f"number has {len(text)} characters; at most {MAX_NUMBER_LENGTH} are allowed",
+                  span, "too long", help="use a larger unit, e.g. `2 s` instead of `2000000000 ns`")
+        raise _NumberError
+    if "/" in text:
+        num, den = text.split("/")
+        if Fraction(den) == 0:
+            sink.emit("E005", "division by zero in a rational number", span, "denominator is 0",
+                      help="write a non-zero denominator, e.g. `100/3 ms`")
+            raise _NumberError
+        return Fraction(num) / Fraction(den)
+    return Fraction(text)
+
+
+def _meta_span(path: str, meta) -> Span:
+    if getattr(meta, "empty", True):
+        return Span(path, 1, 1, 1, 1)
+    return Span(path, meta.line, meta.column, meta.end_line, meta.end_column)
+
+
+@v_args(meta=True)
+class _Builder(Transformer):
+    """Builds ``verify.syntax`` nodes; collects repeated clauses for validation to report."""
+
+    def __init__(self, path: str, sink: DiagnosticSink):
+        super().__init__()
+        self.path = path
+        self.sink = sink
+
+    # ---------------------------------------------------------------- helpers
+    def _span(self, meta) -> Span:
+        return _meta_span(self.path, meta)
+
+    def _name(self, tok: Token) -> s.Name:
+        return s.Name(str(tok), token_span(self.path, tok))
+
+    def _number(self, tok: Token) -> s.Number:
+        return s.Number(parse_number(tok, self.path, self.sink), token_span(self.path, tok))
+
+    # ---------------------------------------------------------------- file
+    def start(self, meta, items):
+        imports = tuple(i for i in items if isinstance(i, s.Import))
+        comps = tuple(i for i in items if isinstance(i, s.Component))
+        systems = tuple(i for i in items if isinstance(i, s.System))
+        return s.Module(self.path, imports, comps, systems, self._span(meta))
+
+    def import_decl(self, meta, children):
+        return s.Import(str(children[0])[1:-1], self._span(meta))
+
+    # ---------------------------------------------------------------- quantities
+    def quantity(self, meta, children):
+        num, unit = children
+        return s.Quantity(parse_number(num, self.path, self.sink), str(unit), self._span(meta))
+
+    # ---------------------------------------------------------------- components
+    def component(self, meta, children):
+        name, *members, rbrace = children
+        return s.Component(
+            self._name(name),
+            tuple(m for m in members if isinstance(m, s.InPort)),
+            tuple(m for m in members if isinstance(m, s.OutPort)),
+            tuple(m for m in members if isinstance(m, s.CompoundPort)),
+            tuple(m for m in members if isinstance(m, s.Task)),
+            self._span(meta),
+            token_span(self.path, rbrace),
+        )
+
+    def in_port(self, meta, children):
+        return s.InPort(self._name(children[0]), self._name(children[1]), self._span(meta))
+
+    def out_port(self, meta, children):
+        return s.OutPort(self._name(children[0]), self._name(children[1]), self._span(meta))
+
+    def _compound(self, meta, children, mode):
+        name, *rest = children
+        constraint = rest.pop() if rest and isinstance(rest[-1], s.ActivationConstraint) else None
+        members = tuple(self._name(t) for t in rest if isinstance(t, Token) and t.type == "NAME")
+        return s.CompoundPort(self._name(name), mode, members, constraint, self._span(meta))
+
+    def compound_and(self, meta, children):
+        return self._compound(meta, children, "and")
+
+    def compound_or(self, meta, children):
+        return self._compound(meta, children, "or")
+
+    def preemptive(self, meta, children):
+        return "preemptive"
+
+    def cooperative(self, meta, children):
+        return "cooperative"
+
+    def task(self, meta, children):
+        name, *clauses, rbrace = children
+        kind = "preemptive"
+        if clauses and isinstance(clauses[0], str):
+            kind = clauses.pop(0)
+        fields: dict = {"reads": [], "produces": []}
+        repeated: list[Span] = []
+        for tag, value, span in clauses:
+            if tag in ("reads", "produces"):
+                fields[tag].extend(value)
+            elif tag in fields:
+                repeated.append(span)
+            else:
+                fields[tag] = value
+        return s.Task(
+            self._name(name), kind, tuple(fields.pop("reads")), tuple(fields.pop("produces")),
+            span=self._span(meta), repeated=tuple(repeated), end=token_span(self.path, rbrace), **fields,
+        )
+
+    def reads(self, meta, children):
+        port, *options = children
+        opts: dict = {}
+        for key, value in options:
+            opts[key] = value
+        read = s.Read(self._name(port), span=self._span(meta), **opts)
+        return ("reads", [read], self._span(meta))
+
+    def optional(self, meta, children):
+        return ("optional", True)
+
+    def required(self, meta, children):
+        return ("optional", False)
+
+    def oversampling(self, meta, children):
+        return ("oversampling", children[0])
+
+    def undersampling(self, meta, children):
+        return ("undersampling", children[0])
+
+    def tol_ok(self, meta, children):
+        return s.Tolerance("ok", None, self._span(meta))
+
+    def tol_forbidden(self, meta, children):
+        return s.Tolerance("forbidden", None, self._span(meta))
+
+    def tol_max(self, meta, children):
+        return s.Tolerance("max", self._number(children[0]), self._span(meta))
+
+    def produces(self, meta, children):
+        return ("produces", [self._name(t) for t in children], self._span(meta))
+
+    def bcet(self, meta, children):
+        return ("bcet", children[0], self._span(meta))
+
+    def wcet(self, meta, children):
+        return ("wcet", children[0], self._span(meta))
+
+    def act_constraint(self, meta, children):
+        (low, high), *rest = children
+        changeable = rest[0] if rest else True
+        constraint = s.ActivationConstraint(low, high, changeable, self._span(meta))
+        return ("constraint", constraint, self._span(meta))
+
+    def bounds_range(self, meta, children):
+        return (children[0], children[1])
+
+    def bounds_exact(self, meta, children):
+        return (children[0], children[0])
+
+    def bounds_min(self, meta, children):
+        return (children[0], None)
+
+    def bounds_max(self, meta, children):
+        return (None, children[0])
+
+    def fixed(self, meta, children):
+        return False
+
+    def changeable(self, meta, children):
+        return True
+
+    # ---------------------------------------------------------------- systems
+    def system(self, meta, children):
+        name, *members, rbrace = children
+        return s.System(
+            self._name(name),
+            tuple(m for m in members if isinstance(m, s.Core)),
+            tuple(m for m in members if isinstance(m, s.Instance)),
+            tuple(m for m in members if isinstance(m, s.Connection)),
+            tuple(m for m in members if isinstance(m, s.Chain)),
+            self._span(meta),
+            token_span(self.path, rbrace),
+        )
+
+    def core(self, meta, children):
+        policy = self._name(children[1]) if len(children) > 1 else None
+        return s.Core(self._name(children[0]), policy, self._span(meta))
+
+    def instance(self, meta, children):
+        name, comp, *rest = children
+        core = None
+        bindings: tuple = ()
+        end = None
+        for r in rest:
+            if isinstance(r, Token):
+                core = self._name(r)
+            else:
+                bindings, end = r
+        return s.Instance(self._name(name), self._name(comp), core, bindings, self._span(meta), end)
+
+    def instance_body(self, meta, children):
+        *bindings, rbrace = children
+        return tuple(bindings), token_span(self.path, rbrace)
+
+    def binding(self, meta, children):
+        name, *clauses = children
+        fields: dict = {"activations": []}
+        repeated: list[Span] = []
+        for tag, value, span in clauses:
+            if tag == "activations":
+                fields[tag].append(value)
+            elif tag in fields:
+                repeated.append(span)
+            else:
+                fields[tag] = value
+        fields["activations"] = tuple(fields["activations"])
+        return s.TaskBinding(self._name(name), span=self._span(meta), repeated=tuple(repeated), **fields)
+
+    def priority(self, meta, children):
+        return ("priority", self._number(children[0]), self._span(meta))
+
+    def task_core(self, meta, children):
+        return ("core", self._name(children[0]), self._span(meta))
+
+    def wcrt(self, meta, children):
+        return ("wcrt", children[0], self._span(meta))
+
+    def deadline(self, meta, children):
+        return ("deadline", children[0], self._span(meta))
+
+    def timer(self, meta, children):
+        phase = children[1] if len(children) > 1 else None
+        return ("activations", s.Timer(children[0], phase, self._span(meta)), self._span(meta))
+
+    def period_hole(self, meta, children):
+        low, high, step = (list(children) + [None, None, None])[:3]
+        return s.PeriodHole(low, high, step, self._span(meta))
+
+    def trigger(self, meta, children):
+        port = self._name(children[0])
+        prescaler = children[1] if len(children) > 1 else s.Number(Fraction(1))
+        return ("activations", s.Trigger(port, prescaler, self._span(meta)), self._span(meta))
+
+    def prescaler_number(self, meta, children):
+        return self._number(children[0])
+
+    def prescaler_hole(self, meta, children):
+        if children:
+            return s.PrescalerHole(self._number(children[0]), self._number(children[1]), self._span(meta))
+        return s.PrescalerHole(span=self._span(meta))
+
+    def sporadic(self, meta, children):
+        return ("activations", s.Sporadic(children[0], children[1], self._span(meta)), self._span(meta))
+
+    def unknown_activation(self, meta, children):
+        return ("activations", s.UnknownActivation(self._span(meta)), self._span(meta))
+
+    def connection(self, meta, children):
+        src, dst, *delay = children
+        low, high = delay[0] if delay else (None, None)
+        return s.Connection(src, dst, low, high, self._span(meta))
+
+    def delay_exact(self, meta, children):
+        return (children[0], children[0])
+
+    def delay_range(self, meta, children):
+        return (children[0], children[1])
+
+    def chain(self, meta, children):
+        name, *rest = children
+        refs = tuple(r for r in rest if isinstance(r, s.PortRef))
+        specs, end = (), None
+        if rest and isinstance(rest[-1], tuple):
+            specs, end = rest[-1]
+        return s.Chain(self._name(name), refs, specs, self._span(meta), end)
+
+    def chain_body(self, meta, children):
+        *specs, rbrace = children
+        return tuple(specs), token_span(self.path, rbrace)
+
+    def spec_reaction_time(self, meta, children):
+        return s.Spec("reaction_time", children[0], self._span(meta))
+
+    def spec_data_age(self, meta, children):
+        return s.Spec("data_age", children[0], self._span(meta))
+
+    def spec_jitter(self, meta, children):
+        return s.Spec("jitter", children[0], self._span(meta))
+
+    def port_ref(self, meta, children):
+        return s.PortRef(self._name(children[0]), self._name(children[1]), self._span(meta))
+
+    def __default__(self, data, children, meta):  # pragma: no cover - every rule has a method
+        return Tree(data, children, meta)

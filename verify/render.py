@@ -1,0 +1,115 @@
+"""Renderers for diagnostics: rustc-style text with source snippets, and JSON (schema below).
+
+JSON schema ``verify.diagnostics/1``::
+
+    {"schema": "verify.diagnostics/1",
+     "diagnostics": [{"code", "severity", "message", "file", "line", "column", "end_line",
+                      "end_column", "label", "secondary": [{"file", "line", "column", "end_line",
+                      "end_column", "message"}], "notes": [...], "help": str | null, "spec": str}],
+     "summary": {"errors": int, "warnings": int}}
+
+Lines and columns are 1-based; ``end_column`` is exclusive.
+"""
+from __future__ import annotations
+
+from .codes import spec_anchor
+from .diagnostics import Diagnostic, Label, Severity
+from .source import SourceFile, Span
+
+
+def _gutter_width(d: Diagnostic) -> int:
+    lines = [d.primary.span.line] + [lb.span.line for lb in d.secondary]
+    return max(len(str(n)) for n in lines)
+
+
+def _snippet(label: Label, marker: str, sources: dict[str, SourceFile], width: int) -> list[str]:
+    span = label.span
+    source = sources.get(span.file)
+    if source is None or span.line < 1:
+        return []
+    text = source.line(span.line).replace("\t", " ")
+    start = max(span.column, 1)
+    end = span.end_column if span.end_line == span.line else len(text) + 1
+    length = max(1, min(end, len(text) + 1) - start)
+    pad = " " * width
+    underline = " " * (start - 1) + marker * length
+    if label.message:
+        underline += " " + label.message
+    return [f"{str(span.line).rjust(width)} | {text}", f"{pad} | {underline}"]
+
+
+def render_text(d: Diagnostic, sources: dict[str, SourceFile]) -> str:
+    """One diagnostic, rustc-style."""
+    width = _gutter_width(d)
+    pad = " " * width
+    out = [f"{d.severity.value}[{d.code}]: {d.message}", f"{pad}--> {_where(d.primary.span)}"]
+    snippet = _snippet(d.primary, "^", sources, width)
+    if snippet:
+        out.append(f"{pad} |")
+        out.extend(snippet)
+    for label in d.secondary:
+        if label.span.file != d.primary.span.file:
+            out.append(f"{pad}::: {_where(label.span)}")
+        lines = _snippet(label, "-", sources, width)
+        if lines:
+            out.append(f"{pad} |")
+            out.extend(lines)
+    if snippet or d.secondary:
+        out.append(f"{pad} |")
+    for note in d.notes:
+        out.append(f"{pad} = note: {note}")
+    if d.help:
+        out.append(f"{pad} = help: {d.help}")
+    return "\n".join(out)
+
+
+def _where(span: Span) -> str:
+    return f"{span.file}:{span.line}:{span.column}" if span.line > 0 else span.file
+
+
+def summary_line(diagnostics) -> str:
+    errors = sum(1 for d in diagnostics if d.severity is Severity.ERROR)
+    warnings = sum(1 for d in diagnostics if d.severity is Severity.WARNING)
+    parts = []
+    if errors:
+        parts.append(f"{errors} error{'s' if errors != 1 else ''}")
+    if warnings:
+        parts.append(f"{warnings} warning{'s' if warnings != 1 else ''}")
+    return ", ".join(parts)
+
+
+def render_all_text(diagnostics, sources: dict[str, SourceFile]) -> str:
+    blocks = [render_text(d, sources) for d in diagnostics]
+    if blocks:
+        blocks.append(summary_line(diagnostics))
+    return "\n\n".join(blocks)
+
+
+def _span_json(span: Span) -> dict:
+    return {"file": span.file, "line": span.line, "column": span.column,
+            "end_line": span.end_line, "end_column": span.end_column}
+
+
+def diagnostic_json(d: Diagnostic) -> dict:
+    return {
+        "code": d.code,
+        "severity": d.severity.value,
+        "message": d.message,
+        **_span_json(d.primary.span),
+        "label": d.primary.message,
+        "secondary": [{**_span_json(lb.span), "message": lb.message} for lb in d.secondary],
+        "notes": list(d.notes),
+        "help": d.help,
+        "spec": spec_anchor(d.code),
+    }
+
+
+def diagnostics_json(diagnostics) -> dict:
+    return {
+        "schema": "verify.diagnostics/1",
+        "diagnostics": [diagnostic_json(d) for d in diagnostics],
+        "summary": {
+            "errors": sum(1 for d in diagnostics if d.severity is Severity.ERROR),
+            "warnings": sum(1 for d in diagnostics if d.severity is Severity.WARNING),
+        },
+    }
