@@ -1,0 +1,44 @@
+"""Every example in examples/ loads, resolves and validates."""
+from __future__ import annotations
+
+import pytest
+
+import verify
+from verify.cli import main
+
+from .conftest import EXAMPLES
+
+EXAMPLE_FILES = sorted(EXAMPLES.rglob("*.vfy"))
+
+
+def test_examples_exist():
+    assert len(EXAMPLE_FILES) >= 4
+
+
+@pytest.mark.parametrize("path", EXAMPLE_FILES, ids=lambda p: p.name)
+def test_example_checks_clean(path, capsys):
+    result = verify.load(str(path))
+    assert result.ok, [d.message for d in result.diagnostics]
+    assert main(["check", str(path)]) == 0
+
+
+def test_navigation_model_shape():
+    model = verify.load(str(EXAMPLES / "navigation" / "navigation.vfy")).system()
+    assert [t.id for t in model.tasks] == [
+        "base.PoseUpdateTask", "base.RobotTask", "laser.LaserTask", "oa.OATask",
+        "mapper.CurMapTask", "planner.PlannerTask",
+    ]
+    mapper = model.task("mapper.CurMapTask")
+    assert mapper.activation.prescaler == 10 and mapper.activation.port == "scan"
+    reactive = next(c for c in model.chains if c.name == "reactive")
+    assert reactive.tasks == ("base.PoseUpdateTask", "laser.LaserTask", "oa.OATask", "base.RobotTask")
+    assert [h.link.target for h in reactive.hops] == ["laser.odom", "oa.scan", "base.navvel"]
+    from fractions import Fraction
+    assert reactive.reaction_time == Fraction(1, 4)
+    assert model.task("laser.LaserTask").activation.period == Fraction(1, 40)
+
+
+def test_holes_variant_has_holes():
+    model = verify.load(str(EXAMPLES / "navigation" / "navigation-holes.vfy")).system()
+    assert sorted(t.id for t in model.holes) == ["mapper.CurMapTask", "oa.OATask", "planner.PlannerTask"]
+    assert not model.is_configured

@@ -1,0 +1,526 @@
+"""An independent job-level discrete-event reference simulator (specs/timing.md §1–§4).
+
+This is the oracle the analytic bounds are tested against, so it is kept literal and small and it
+imports nothing from the analysis. All times are exact ``Fraction`` seconds; there are no floats.
+
+* ``Scenario`` fixes every free choice the semantics leaves open (phases, execution times, delays,
+  sporadic inter-arrival times, prescaler counters). ``simulate`` checks each choice against its legal
+  range and raises ``ScenarioError`` otherwise, so a trace is always one the semantics allows.
+* ``random_scenario`` draws every choice within its legal range, reproducibly from one ``rng``.
+* ``simulate`` runs the system over the half-open window ``[0, horizon)``: events at or after the
+  horizon are not processed; a job still running then has ``finish`` None.
+* ``chain_latencies`` derives the §4 quantities of a chain from a trace, each sample naming its jobs.
+
+Job indices are 0-based per task (job 0 is the first release); the spec's "j ≥ 2" is index ≥ 1.
+
+Events at one instant are processed in rounds, each round in this order (specs/timing.md §2,
+"Simultaneous events"):
+
+1. **completions**: every running job whose remaining time is 0 completes (in system task order)
+   and writes its outputs; each message is scheduled at ``max(write + d, previous arrival)``;
+2. **arrivals** due now, in send order (zero-delay messages of step 1 included): each stores its
+   value in the in-port register and is an activation event; data-triggered releases happen here;
+3. **releases** of timers and sporadic sources due now;
+4. **dispatch**: every core picks its job (§1); a job that starts now reads its inputs now, so it
+   sees everything that arrived at this instant.
+
+A job with execution time 0 that starts at ``t`` completes at ``t`` in a further round at the same
+instant; jobs started in the earlier round have already read their inputs by then.
+
+Decisions where the spec is silent: an AND compound starts with no member fresh; when the model
+fixes a timer's phase the scenario may omit or repeat it (a different value is an error); messages
+and registers carry the writer job's identity, from which ``chain_latencies`` computes the §4
+provenance stamps afterwards; the non-reduced data age of a value stamped by the first job of ``τ₁``
+(which has no previous read) is not sampled, just as reaction time skips that job.
+"""
+from __future__ import annotations
+
+import heapq
+import random
+from bisect import bisect_left
+from dataclasses import dataclass, field
+from fractions import Fraction
+from typing import Callable, Mapping
+
+from .model import ChainModel, DataTriggered, LinkModel, Periodic, SporadicSource, SystemModel, TaskModel
+
+ZERO = Fraction(0)
+GRID = 1000  # random choices lie on a grid of GRID steps across their range
+DEFAULT_MAX_EVENTS = 2_000_000
+
+ExecTime = Callable[[str, int], Fraction]  # (task id, job index) -> execution time
+Delay = Callable[[str, str, int], Fraction]  # (link source, link target, message index) -> delay
+Interarrival = Callable[[str, int], Fraction]  # (task id, i) -> gap between releases i and i+1
+
+
+class ScenarioError(ValueError):
+    """A scenario choice outside its legal range (or a system the simulator cannot run)."""
+
+
+class SimulationError(RuntimeError):
+    """The simulation exceeded its event budget (e.g. a zero-time activation loop)."""
+
+
+# ------------------------------------------------------------------ scenarios
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """The free choices of one run. Missing entries take documented defaults:
+
+    ``phases``: timer phase in [0, T) (ignored when the model fixes the phase) or the first release of
+    a sporadic task in [0, a⁺); default 0. ``exec_time``: default ``wcet``. ``delay``: default the
+    link's ``delay_min``. ``interarrival``: default ``min_interarrival``. ``counter_phase``: the
+    number of trigger events already counted at time 0, in 0..k−1; default 0.
+    """
+
+    horizon: Fraction
+    phases: Mapping[str, Fraction] = field(default_factory=dict)
+    exec_time: ExecTime | None = None
+    delay: Delay | None = None
+    interarrival: Interarrival | None = None
+    counter_phase: Mapping[str, int] = field(default_factory=dict)
+
+
+def pick_in(rng: random.Random, lo: Fraction, hi: Fraction) -> Fraction:
+    """A value in [lo, hi] on a grid; each extreme comes up with probability 1/8 on its own."""
+    roll = rng.randrange(8)
+    if roll == 0:
+        return Fraction(lo)
+    if roll == 1:
+        return Fraction(hi)
+    return lo + (hi - lo) * Fraction(rng.randint(0, GRID), GRID)
+
+
+@dataclass(frozen=True)
+class Draw:
+    """A reproducible per-key choice: ``Draw(seed, bounds)(*name, index)`` picks within
+    ``bounds[name]`` and always returns the same Fraction for the same seed, name and index."""
+
+    seed: int
+    bounds: Mapping[tuple[str, ...], tuple[Fraction, Fraction]]
+
+    def __call__(self, *key) -> Fraction:
+        lo, hi = self.bounds[tuple(key[:-1])]
+        return pick_in(random.Random(f"{self.seed}|{'|'.join(map(str, key))}"), lo, hi)
+
+
+def _offset(rng: random.Random, length: Fraction) -> Fraction:
+    """A value in [0, length) on a grid, 0 with probability about 1/8."""
+    return ZERO if rng.randrange(8) == 0 else length * Fraction(rng.randrange(GRID), GRID)
+
+
+def random_scenario(system: SystemModel, rng: random.Random, horizon: Fraction) -> Scenario:
+    """A scenario drawing every free choice of ``system`` within its legal range (§1–§3)."""
+    phases: dict[str, Fraction] = {}
+    counters: dict[str, int] = {}
+    gaps: dict[tuple[str, ...], tuple[Fraction, Fraction]] = {}
+    for t in system.tasks:
+        act = t.activation
+        if isinstance(act, Periodic) and act.phase is None:
+            phases[t.id] = _offset(rng, act.period)
+        elif isinstance(act, SporadicSource):
+            phases[t.id] = _offset(rng, act.max_interarrival)
+            gaps[(t.id,)] = (act.min_interarrival, act.max_interarrival)
+        elif isinstance(act, DataTriggered):
+            counters[t.id] = rng.randrange(act.prescaler)
+    execs = {(t.id,): (t.bcet, t.wcet) for t in system.tasks}
+    delays = {(lk.source, lk.target): (lk.delay_min, lk.delay_max) for lk in system.links}
+    return Scenario(Fraction(horizon), phases, Draw(rng.getrandbits(64), execs),
+                    Draw(rng.getrandbits(64), delays), Draw(rng.getrandbits(64), gaps), counters)
+
+
+# ------------------------------------------------------------------ traces
+
+
+@dataclass(frozen=True)
+class Message:
+    """One value sent over connection ``source → target``: the ``index``-th on that connection,
+    written by job ``job`` of task ``writer`` at ``written``, arriving at ``arrival`` (§2)."""
+
+    source: str
+    target: str
+    index: int
+    writer: str
+    job: int
+    written: Fraction
+    arrival: Fraction
+
+
+@dataclass(frozen=True)
+class JobRecord:
+    """One job (§1). ``reads`` holds, per in-port read (``inst.port``), the message seen at start
+    (None: no value yet). ``start``/``finish`` are None if the horizon came first."""
+
+    task: str
+    index: int
+    release: Fraction
+    exec_time: Fraction
+    start: Fraction | None
+    finish: Fraction | None
+    reads: tuple[tuple[str, Message | None], ...]
+
+    def read(self, port: str) -> Message | None:
+        return dict(self.reads).get(port)
+
+
+@dataclass(frozen=True)
+class Trace:
+    """The outcome of one run: jobs per task (by index) and all arrived messages in arrival order."""
+
+    horizon: Fraction
+    jobs: Mapping[str, tuple[JobRecord, ...]]
+    messages: tuple[Message, ...]
+
+    def job(self, task: str, index: int) -> JobRecord:
+        return self.jobs[task][index]
+
+    def finished(self, task: str) -> tuple[JobRecord, ...]:
+        return tuple(j for j in self.jobs[task] if j.finish is not None)
+
+
+# ------------------------------------------------------------------ the simulator
+
+
+@dataclass(eq=False)
+class _Job:
+    task: TaskModel
+    index: int
+    order: int  # the task's position in system.tasks
+    release: Fraction
+    exec_time: Fraction
+    remaining: Fraction
+    start: Fraction | None = None
+    finish: Fraction | None = None
+    reads: dict[str, Message | None] = field(default_factory=dict)
+
+    def key(self) -> tuple:
+        """Dispatch rank (§1): higher priority, then earlier release, then task order."""
+        return (-self.task.priority, self.release, self.order, self.index)
+
+    def record(self) -> JobRecord:
+        return JobRecord(self.task.id, self.index, self.release, self.exec_time, self.start,
+                         self.finish, tuple(self.reads.items()))
+
+
+_ARRIVAL, _RELEASE = 1, 2  # heap phases: arrivals before releases at one instant
+
+
+def _check(ok: bool, what: str) -> None:
+    if not ok:
+        raise ScenarioError(what)
+
+
+class _Simulator:
+    def __init__(self, system: SystemModel, scenario: Scenario, max_events: int):
+        if system.holes:
+            raise ScenarioError(f"cannot simulate unresolved holes: {[t.id for t in system.holes]}")
+        self.system, self.sc, self.max_events = system, scenario, max_events
+        self.now, self.events, self.seq = ZERO, 0, 0
+        self.heap: list[tuple[Fraction, int, int, object]] = []
+        self.order = {t.id: i for i, t in enumerate(system.tasks)}
+        self.jobs: dict[str, list[_Job]] = {t.id: [] for t in system.tasks}
+        self.ready: dict[str, list[_Job]] = {t.core: [] for t in system.tasks}
+        self.running: dict[str, _Job | None] = dict.fromkeys(self.ready)
+        self.holder: dict[str, _Job] = {}  # instance -> started, uncompleted cooperative job
+        self.registers: dict[str, Message] = {}
+        self.messages: list[Message] = []
+        self.links_from: dict[str, list[LinkModel]] = {}
+        for lk in system.links:
+            self.links_from.setdefault(lk.source, []).append(lk)
+        self.sent: dict[tuple[str, str], int] = {}
+        self.last_arrival: dict[tuple[str, str], Fraction] = {}
+        self.triggered: dict[str, list[tuple[TaskModel, str]]] = {}
+        self.counter: dict[str, int] = {}
+        self.fresh: dict[str, set[str]] = {}
+        for t in system.tasks:
+            self._init_activation(t)
+
+    # -------------------------------------------------------------- setup (§3)
+
+    def _init_activation(self, t: TaskModel) -> None:
+        act, phase = t.activation, self.sc.phases.get(t.id)
+        if isinstance(act, Periodic):
+            if act.phase is not None:
+                _check(phase is None or phase == act.phase, f"{t.id}: phase is fixed to {act.phase}")
+                phase = act.phase
+            else:
+                phase = ZERO if phase is None else phase
+                _check(0 <= phase < act.period, f"{t.id}: phase {phase} outside [0, {act.period})")
+            self._push(phase, _RELEASE, t)
+        elif isinstance(act, SporadicSource):
+            phase = ZERO if phase is None else phase
+            _check(0 <= phase < act.max_interarrival or phase == 0,
+                   f"{t.id}: first release {phase} outside [0, {act.max_interarrival})")
+            self._push(phase, _RELEASE, t)
+        elif isinstance(act, DataTriggered):
+            c = self.sc.counter_phase.get(t.id, 0)
+            _check(0 <= c < act.prescaler, f"{t.id}: counter phase {c} outside 0..{act.prescaler - 1}")
+            self.counter[t.id], self.fresh[t.id] = c, set()
+            for member in act.members:
+                self.triggered.setdefault(f"{t.instance}.{member}", []).append((t, member))
+
+    # -------------------------------------------------------------- scenario choices
+
+    def _exec_time(self, t: TaskModel, index: int) -> Fraction:
+        c = t.wcet if self.sc.exec_time is None else self.sc.exec_time(t.id, index)
+        _check(t.bcet <= c <= t.wcet, f"{t.id}#{index}: execution time {c} outside [{t.bcet}, {t.wcet}]")
+        return Fraction(c)
+
+    def _delay(self, lk: LinkModel, index: int) -> Fraction:
+        d = lk.delay_min if self.sc.delay is None else self.sc.delay(lk.source, lk.target, index)
+        _check(lk.delay_min <= d <= lk.delay_max,
+               f"{lk.source}->{lk.target}#{index}: delay {d} outside [{lk.delay_min}, {lk.delay_max}]")
+        return Fraction(d)
+
+    def _gap(self, t: TaskModel, act: SporadicSource, index: int) -> Fraction:
+        a = act.min_interarrival if self.sc.interarrival is None else self.sc.interarrival(t.id, index)
+        _check(act.min_interarrival <= a <= act.max_interarrival,
+               f"{t.id}#{index}: inter-arrival {a} outside [{act.min_interarrival}, {act.max_interarrival}]")
+        return Fraction(a)
+
+    # -------------------------------------------------------------- the event loop
+
+    def _push(self, time: Fraction, phase: int, payload: object) -> None:
+        self.seq += 1
+        heapq.heappush(self.heap, (Fraction(time), phase, self.seq, payload))
+
+    def _count(self) -> None:
+        self.events += 1
+        if self.events > self.max_events:
+            raise SimulationError(f"more than {self.max_events} events by t={self.now} "
+                                  "(a zero-time activation loop, or raise max_events)")
+
+    def _next_time(self) -> Fraction | None:
+        times = [self.now + j.remaining for j in self.running.values() if j is not None]
+        if self.heap:
+            times.append(self.heap[0][0])
+        return min(times, default=None)
+
+    def run(self) -> Trace:
+        while (t := self._next_time()) is not None and t < self.sc.horizon:
+            self._advance(t)
+            self._complete_due()
+            self._pop_due(_ARRIVAL, self._arrive)
+            self._pop_due(_RELEASE, self._timed_release)
+            self._dispatch()
+        jobs = {tid: tuple(j.record() for j in js) for tid, js in self.jobs.items()}
+        return Trace(self.sc.horizon, jobs, tuple(self.messages))
+
+    def _advance(self, t: Fraction) -> None:
+        for job in self.running.values():
+            if job is not None:
+                job.remaining -= t - self.now
+        self.now = t
+
+    def _pop_due(self, phase: int, handle: Callable) -> None:
+        while self.heap and self.heap[0][0] == self.now and self.heap[0][1] == phase:
+            self._count()
+            handle(heapq.heappop(self.heap)[3])
+
+    # -------------------------------------------------------------- completion and messages (§2)
+
+    def _complete_due(self) -> None:
+        due = [j for j in self.running.values() if j is not None and j.remaining == 0]
+        for job in sorted(due, key=lambda j: j.order):
+            self._count()
+            self._complete(job)
+
+    def _complete(self, job: _Job) -> None:
+        t = job.task
+        job.finish = self.now
+        self.ready[t.core].remove(job)
+        self.running[t.core] = None
+        if self.holder.get(t.instance) is job:
+            del self.holder[t.instance]
+        for port in t.produces:
+            for lk in self.links_from.get(f"{t.instance}.{port}", ()):
+                self._send(job, lk)
+
+    def _send(self, job: _Job, lk: LinkModel) -> None:
+        """Schedule one message; FIFO: never before the previous message on the connection (§2)."""
+        key = (lk.source, lk.target)
+        index = self.sent.get(key, 0)
+        self.sent[key] = index + 1
+        arrival = self.now + self._delay(lk, index)
+        arrival = max(arrival, self.last_arrival.get(key, arrival))
+        self.last_arrival[key] = arrival
+        self._push(arrival, _ARRIVAL, Message(lk.source, lk.target, index, job.task.id, job.index,
+                                              self.now, arrival))
+
+    def _arrive(self, msg: Message) -> None:
+        """Store in the in-port register (last is best) and count as an activation event (§2, §3)."""
+        self.registers[msg.target] = msg
+        self.messages.append(msg)
+        for task, member in self.triggered.get(msg.target, ()):
+            self._trigger_event(task, member)
+
+    # -------------------------------------------------------------- activation (§3)
+
+    def _trigger_event(self, t: TaskModel, member: str) -> None:
+        act = t.activation
+        assert isinstance(act, DataTriggered)
+        if act.mode == "and":
+            fresh = self.fresh[t.id]
+            fresh.add(member)
+            if not fresh.issuperset(act.members):
+                return
+            fresh.clear()  # the event consumes the freshness
+        self.counter[t.id] += 1
+        if self.counter[t.id] >= act.prescaler:
+            self.counter[t.id] = 0
+            self._release(t)
+
+    def _timed_release(self, t: TaskModel) -> None:
+        job = self._release(t)
+        act = t.activation
+        if isinstance(act, Periodic):
+            self._push(self.now + act.period, _RELEASE, t)
+        elif isinstance(act, SporadicSource):
+            self._push(self.now + self._gap(t, act, job.index), _RELEASE, t)
+
+    def _release(self, t: TaskModel) -> _Job:
+        index = len(self.jobs[t.id])
+        c = self._exec_time(t, index)
+        job = _Job(t, index, self.order[t.id], self.now, c, c)
+        self.jobs[t.id].append(job)
+        self.ready[t.core].append(job)
+        return job
+
+    # -------------------------------------------------------------- scheduling (§1)
+
+    def _eligible(self, job: _Job) -> bool:
+        """A cooperative job may start only while no other cooperative job of its instance holds."""
+        t = job.task
+        return t.kind != "cooperative" or job.start is not None or t.instance not in self.holder
+
+    def _pick(self, core: str) -> _Job | None:
+        return min((j for j in self.ready[core] if self._eligible(j)), key=_Job.key, default=None)
+
+    def _dispatch(self) -> None:
+        """Every core runs its best eligible job. Jobs about to start are started one at a time in
+        rank order, so among cooperative jobs of one instance the highest-ranked one wins (§1)."""
+        while True:
+            choice = {core: self._pick(core) for core in self.ready}
+            starting = [j for j in choice.values() if j is not None and j.start is None]
+            if not starting:
+                self.running = choice
+                return
+            self._start(min(starting, key=_Job.key))
+
+    def _start(self, job: _Job) -> None:
+        """Read all inputs at start (§2) and take the instance's cooperative token (§1)."""
+        t = job.task
+        job.start = self.now
+        for r in t.reads:
+            port = f"{t.instance}.{r.port}"
+            job.reads[port] = self.registers.get(port)
+        if t.kind == "cooperative":
+            self.holder[t.instance] = job
+
+
+def simulate(system: SystemModel, scenario: Scenario, max_events: int = DEFAULT_MAX_EVENTS) -> Trace:
+    """Run ``system`` under ``scenario`` over ``[0, scenario.horizon)`` (specs/timing.md §1–§3)."""
+    return _Simulator(system, scenario, max_events).run()
+
+
+# ------------------------------------------------------------------ chains (§4)
+
+
+@dataclass(frozen=True)
+class Sample:
+    """One observed latency ``value = end − begin``. ``begin`` is the read time of job ``origin`` of
+    τ₁; ``end`` the completion of job ``last`` of τₙ, which holds the stamp of τ₁'s job ``stamp``."""
+
+    value: Fraction
+    begin: Fraction
+    end: Fraction
+    origin: int
+    stamp: int
+    last: int
+
+    def explain(self, chain: ChainModel) -> str:
+        first, final = chain.tasks[0], chain.tasks[-1]
+        return (f"{self.value}: from read of {first}#{self.origin} at {self.begin} to completion of "
+                f"{final}#{self.last} at {self.end} (holding the stamp of {first}#{self.stamp})")
+
+
+KINDS = ("reaction_time", "reaction_time_reduced", "data_age", "data_age_nonreduced")
+
+
+@dataclass(frozen=True)
+class ChainLatencies:
+    """All samples of one chain in one trace (§4). ``reaction_time`` is non-reduced and ``data_age``
+    reduced, the defaults of the spec."""
+
+    chain: str
+    reaction_time: tuple[Sample, ...]
+    reaction_time_reduced: tuple[Sample, ...]
+    data_age: tuple[Sample, ...]
+    data_age_nonreduced: tuple[Sample, ...]
+
+    def worst(self, kind: str = "data_age") -> Sample | None:
+        return max(self._samples(kind), key=lambda s: s.value, default=None)
+
+    def best(self, kind: str = "data_age") -> Sample | None:
+        return min(self._samples(kind), key=lambda s: s.value, default=None)
+
+    def _samples(self, kind: str) -> tuple[Sample, ...]:
+        if kind not in KINDS:
+            raise ValueError(f"unknown latency kind {kind!r}; one of {KINDS}")
+        return getattr(self, kind)
+
+
+def _stamp(trace: Trace, chain: ChainModel, pos: int, job: JobRecord,
+           memo: dict) -> tuple[int, Fraction] | None:
+    """The provenance (τ₁ job index, its read time) held by ``job`` at chain position ``pos``."""
+    if pos == 0:
+        assert job.start is not None
+        return job.index, job.start
+    key = (pos, job.task, job.index)
+    if key not in memo:
+        msg = job.read(chain.hops[pos - 1].link.target)
+        memo[key] = None if msg is None else _stamp(trace, chain, pos - 1, trace.job(msg.writer, msg.job), memo)
+    return memo[key]
+
+
+def chain_latencies(trace: Trace, chain: ChainModel) -> ChainLatencies:
+    """Reaction times and data ages of ``chain`` observed in ``trace`` (specs/timing.md §4). Only
+    τₙ jobs completed before the horizon count; the first job of τ₁ opens no reaction sample."""
+    first, n = chain.tasks[0], len(chain.tasks)
+    reads = {j.index: j.start for j in trace.jobs[first] if j.start is not None}
+    memo: dict = {}
+    holders: list[tuple[Fraction, int, JobRecord]] = []  # (stamp time, stamp index, τn job)
+    for job in trace.finished(chain.tasks[-1]):
+        st = _stamp(trace, chain, n - 1, job, memo)
+        if st is not None:
+            holders.append((st[1], st[0], job))
+    age, age_nr = [], []
+    for s, k, job in holders:
+        age.append(Sample(job.finish - s, s, job.finish, k, k, job.index))
+        if k >= 1:
+            age_nr.append(Sample(job.finish - reads[k - 1], reads[k - 1], job.finish, k - 1, k, job.index))
+    react, react_r = _reactions(reads, holders)
+    return ChainLatencies(chain.name, tuple(react), tuple(react_r), tuple(age), tuple(age_nr))
+
+
+def _reactions(reads: dict[int, Fraction], holders: list) -> tuple[list[Sample], list[Sample]]:
+    """For τ₁ job j ≥ 1 at s_j: the earliest-completing τₙ job holding a stamp ≥ s_j ends both
+    the reaction from s_{j−1} (non-reduced) and from s_j (reduced)."""
+    holders = sorted(holders, key=lambda h: h[0])
+    stamps = [h[0] for h in holders]
+    best_from: list[tuple[Fraction, int, int]] = [None] * len(holders)  # type: ignore[list-item]
+    running = None
+    for i in range(len(holders) - 1, -1, -1):  # suffix minimum of (finish, τn index, stamp index)
+        cand = (holders[i][2].finish, holders[i][2].index, holders[i][1])
+        running = cand if running is None or cand < running else running
+        best_from[i] = running
+    react, react_r = [], []
+    for j in sorted(reads):
+        pos = bisect_left(stamps, reads[j])
+        if j == 0 or pos == len(holders):
+            continue
+        f, last, k = best_from[pos]
+        react.append(Sample(f - reads[j - 1], reads[j - 1], f, j - 1, k, last))
+        react_r.append(Sample(f - reads[j], reads[j], f, j, k, last))
+    return react, react_r
