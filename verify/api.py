@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from .diagnostics import Diagnostic, DiagnosticSink, has_errors
+from .diagnostics import Diagnostic, DiagnosticSink, Label, has_errors
 from .loader import Project, load_project, project_from_text
 from .model import SystemModel, build_system
 from .resolve import Resolution, resolve
@@ -51,18 +51,31 @@ class LoadResult:
         sink = DiagnosticSink()
         names = self.root_system_names()
         where = Span(self.project.root, 1, 1, 1, 1)
+        systems = {sy.name.text: sy for sy in self.project.root_module.systems} if self.project.root_module else {}
         if name is None:
             if len(names) != 1:
                 found = ", ".join(f"`{n}`" for n in names) or "none"
+                first, *others = list(systems.values()) or [None]
+                secondary = ()
+                if others:  # point at the second system, the first one as context
+                    where, secondary = others[0].name.span, (Label(first.name.span, "first system"),)
                 sink.emit("E105", f"{self.project.root} must hold exactly one system to choose from "
-                          f"(found {found})", where, help="name one with `--system NAME`")
+                          f"(found {found})", where, "a second system" if others else "",
+                          secondary=secondary, help="name one with `--system NAME`")
                 raise SelectionError(sink.items[0])
             name = names[0]
         if name not in self.models:
             from .diagnostics import suggest
 
+            if name in systems:
+                sink.emit("E105", f"system `{name}` in {self.project.root} is not valid", systems[name].name.span,
+                          "has errors", help="fix the errors `verify check` reports for it")
+                raise SelectionError(sink.items[0])
             hint = suggest(name, names)
-            sink.emit("E105", f"no valid system `{name}` in {self.project.root}", where,
+            if hint in systems:
+                where = systems[hint].name.span
+            sink.emit("E105", f"no system `{name}` in {self.project.root}", where,
+                      "the closest system" if hint in systems else "",
                       help=f"did you mean `{hint}`?" if hint else "systems here: " + (", ".join(names) or "none"))
             raise SelectionError(sink.items[0])
         return self.models[name]

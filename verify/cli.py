@@ -207,6 +207,10 @@ def main(argv: list[str] | None = None) -> int:
         return args.func(args)
     except KeyboardInterrupt:
         return 130
+    except BrokenPipeError:  # the reader went away (`verify explain E101 | head`): not an error of ours
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return EXIT_OK
     except SystemExit as exit_:
         return int(exit_.code) if isinstance(exit_.code, int) else EXIT_INVALID
     except Exception as err:  # the last line of defence: never a traceback for the user

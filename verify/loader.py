@@ -9,7 +9,7 @@ import os
 from dataclasses import dataclass, field
 
 from . import syntax as s
-from .diagnostics import DiagnosticSink, Label
+from .diagnostics import DiagnosticSink
 from .parse import parse_text
 from .source import Span, SourceFile
 
@@ -37,7 +37,10 @@ class Project:
         return tuple(sy for m in self.modules for sy in m.systems)
 
 
-def _read(path: str, sink: DiagnosticSink, at: Span | None) -> str | None:
+def _read(path: str, sink: DiagnosticSink, at: Span | None,
+          sources: dict[str, SourceFile] | None = None) -> str | None:
+    """The text of ``path``, or None after reporting why not. A file that is not UTF-8 is still put in
+    ``sources`` (undecodable bytes replaced) so that the report can show the offending line."""
     where = at or Span(path, 1, 1, 1, 1)
     try:
         with open(path, "rb") as fh:
@@ -63,10 +66,12 @@ def _read(path: str, sink: DiagnosticSink, at: Span | None) -> str | None:
     except UnicodeDecodeError as err:
         before = data[: err.start]
         line = before.count(b"\n") + 1
-        col = err.start - (before.rfind(b"\n") + 1) + 1
+        col = len(before[before.rfind(b"\n") + 1:].decode("utf-8")) + 1  # in characters, as in the snippet
+        if sources is not None:
+            sources[path] = SourceFile(path, data.decode("utf-8", errors="replace"))
         sink.emit("E003", f"{path} is not UTF-8 text: byte 0x{data[err.start]:02x} at offset {err.start}",
-                  Span(path, line, col, line, col + 1), "invalid byte",
-                  help="save the file as UTF-8")
+                  Span(path, line, col, line, col + 1), "not UTF-8",
+                  help="save the file as UTF-8 (it may have been saved as Latin-1 or Windows-1252)")
         return None
 
 
@@ -88,7 +93,7 @@ def load_project(root: str, sink: DiagnosticSink) -> Project:
         if real in seen:
             return
         seen[real] = path
-        text = _read(path, sink, at)
+        text = _read(path, sink, at, sources)
         if text is None:
             return
         sources[path] = SourceFile(path, text)
@@ -113,5 +118,5 @@ def project_from_text(text: str, path: str, sink: DiagnosticSink) -> Project:
     if module is not None:
         for imp in module.imports:
             sink.emit("E004", f"imports are not followed for in-memory text: {imp.path}", imp.span,
-                      secondary=(Label(imp.span, "here"),), help="load the file from disk instead")
+                      "not followed", help="load the file from disk instead")
     return Project(path, (module,) if module else (), {path: SourceFile(path, text)})

@@ -168,24 +168,33 @@ class SystemModel:
     span: Span = _span()
 
     def task(self, task_id: str) -> TaskModel:
-        return self._tasks[task_id]
+        return self._index()["tasks"][task_id]
 
-    @property
-    def _tasks(self) -> dict[str, TaskModel]:
-        cache = self.__dict__.get("_task_index")
-        if cache is None:
-            cache = {t.id: t for t in self.tasks}
-            object.__setattr__(self, "_task_index", cache)
-        return cache
+    def _index(self) -> dict:
+        """Lookup tables, built once per model (the model is immutable, so they never go stale)."""
+        index = self.__dict__.get("_lookup")
+        if index is None:
+            producers = {f"{t.instance}.{p}": t.id for t in self.tasks for p in t.produces}
+            into = {lk.target: lk for lk in self.links}
+            out_of: dict[str, list[LinkModel]] = {}
+            for lk in self.links:
+                out_of.setdefault(lk.source, []).append(lk)
+            index = {"tasks": {t.id: t for t in self.tasks}, "producers": producers, "into": into,
+                     "out_of": out_of}
+            object.__setattr__(self, "_lookup", index)
+        return index
 
     def link_into(self, port: str) -> LinkModel | None:
         """The connection into in-port ``inst.port`` (at most one: rule E211)."""
-        return next((lk for lk in self.links if lk.target == port), None)
+        return self._index()["into"].get(port)
+
+    def links_from(self, port: str) -> tuple[LinkModel, ...]:
+        """The connections out of out-port ``inst.port``, in source order."""
+        return tuple(self._index()["out_of"].get(port, ()))
 
     def producer(self, port: str) -> str | None:
         """The task id producing out-port ``inst.port``."""
-        inst, name = port.split(".", 1)
-        return next((t.id for t in self.tasks if t.instance == inst and name in t.produces), None)
+        return self._index()["producers"].get(port)
 
     @property
     def holes(self) -> tuple[TaskModel, ...]:
@@ -235,12 +244,17 @@ def build_system(scope: SystemScope) -> SystemModel:
         for task in comp.component.tasks:
             binding = scope.bindings[(inst.name.text, task.name.text)]
             tasks.append(_task_model(inst, task, binding, triggers))
-    links = tuple(_link_model(conn, tasks) for conn in system.connections)
-    model = SystemModel(system.name.text, tuple(CoreModel(c.name.text, c.policy.text if c.policy else
-                                                          "fixed_priority", c.span) for c in system.cores),
-                        tuple(tasks), links, (), system.span)
+    producers = {f"{t.instance}.{p}": t.id for t in tasks for p in t.produces}
+    readers: dict[str, list[str]] = {}
+    for t in tasks:
+        for r in t.reads:
+            readers.setdefault(f"{t.instance}.{r.port}", []).append(t.id)
+    links = tuple(_link_model(conn, producers, readers) for conn in system.connections)
+    cores = tuple(CoreModel(c.name.text, c.policy.text if c.policy else "fixed_priority", c.span)
+                  for c in system.cores)
+    model = SystemModel(system.name.text, cores, tuple(tasks), links, (), system.span)
     chains = tuple(_chain_model(ch, model, scope) for ch in system.chains)
-    return SystemModel(model.name, model.cores, model.tasks, links, chains, system.span)
+    return SystemModel(model.name, cores, model.tasks, links, chains, system.span)
 
 
 def _task_model(inst: s.Instance, task: s.Task, binding: s.TaskBinding, triggers) -> TaskModel:
@@ -269,14 +283,11 @@ def _task_model(inst: s.Instance, task: s.Task, binding: s.TaskBinding, triggers
     )
 
 
-def _link_model(conn: s.Connection, tasks: list[TaskModel]) -> LinkModel:
-    src_inst, src_port = conn.source.instance.text, conn.source.member.text
-    dst_inst, dst_port = conn.target.instance.text, conn.target.member.text
-    writer = next(t.id for t in tasks if t.instance == src_inst and src_port in t.produces)
-    readers = tuple(t.id for t in tasks if t.instance == dst_inst and t.reads_port(dst_port))
+def _link_model(conn: s.Connection, producers: dict[str, str], readers: dict[str, list[str]]) -> LinkModel:
     low = _seconds(conn.delay_min) or Fraction(0)
     high = _seconds(conn.delay_max) or Fraction(0)
-    return LinkModel(str(conn.source), str(conn.target), writer, readers, low, high, conn.span)
+    return LinkModel(str(conn.source), str(conn.target), producers[str(conn.source)],
+                     tuple(readers.get(str(conn.target), ())), low, high, conn.span)
 
 
 def chain_path(chain: s.Chain, model: SystemModel, scope: SystemScope):
@@ -290,7 +301,7 @@ def chain_path(chain: s.Chain, model: SystemModel, scope: SystemScope):
         prev_port = str(refs[i - 1])
         ref = refs[i]
         kind = scope.component_of[ref.instance.text].kind_of(ref.member.text)
-        outgoing = [lk for lk in model.links if lk.source == prev_port and lk.target.split(".")[0] == ref.instance.text]
+        outgoing = [lk for lk in model.links_from(prev_port) if lk.target.split(".")[0] == ref.instance.text]
         if kind == "out-port":
             reader = model.producer(str(ref))
             candidates = [lk for lk in outgoing if reader in lk.readers]

@@ -20,6 +20,7 @@ from .source import Span
 
 MAX_SYNTAX_ERRORS = 20
 MAX_NUMBER_LENGTH = 40
+MAX_EXPECTED_SHOWN = 6
 
 #: how terminals are named in messages
 _TOKEN_WORDS = {
@@ -80,6 +81,18 @@ def token_span(path: str, tok: Token) -> Span:
     return Span(path, line, col, end_line, end_col)
 
 
+def _number_before(text: str, token: Token):
+    """The number just before ``token`` (white space between), as (text, (line, col, end_line, end_col))."""
+    pos = token.start_pos if token.type != "$END" and token.start_pos is not None else len(text)
+    before = text[:pos].rstrip()
+    match = re.search(r"(?<![\w.])[0-9]+(\.[0-9]+)?(/[0-9]+)?$", before)
+    if match is None or "//" in before[before.rfind("\n", 0, match.start()) + 1:match.start()]:
+        return None
+    line = before.count("\n", 0, match.start()) + 1
+    col = match.start() - (before.rfind("\n", 0, match.start()) + 1) + 1
+    return match.group(0), (line, col, line, col + len(match.group(0)))
+
+
 def _syntax_help(expected: set[str], token: Token) -> str | None:
     if "UNIT" in expected:
         return "write a unit after the number, e.g. `10 ms` or `40 Hz`"
@@ -87,6 +100,8 @@ def _syntax_help(expected: set[str], token: Token) -> str | None:
         return f"`{token}` is a keyword of the language; choose another name"
     if "RBRACE" in expected and token.type == "$END":
         return "a `}` is missing: every `{` needs its `}`"
+    if token.type == "RBRACE" and "COMPONENT" in expected:
+        return "this `}` closes nothing: remove it, or add the `{` it belongs to"
     return None
 
 
@@ -96,6 +111,11 @@ def _report_unexpected(sink: DiagnosticSink, path: str, err: UnexpectedInput, te
         span = token_span(path, err.token)
         if err.token.type == "$END":
             span = _end_span(path, text)
+        number = _number_before(text, err.token) if "UNIT" in expected else None
+        if number is not None:  # a missing unit: point at the number that lacks it
+            sink.emit("E001", f"expected a unit after the number `{number[0]}`, found {_describe_found(err.token)}",
+                      Span(path, *number[1]), "this number needs a unit", help=_syntax_help(expected, err.token))
+            return
         sink.emit(
             "E001",
             f"expected {_describe_expected(expected)}, found {_describe_found(err.token)}",
@@ -107,12 +127,16 @@ def _report_unexpected(sink: DiagnosticSink, path: str, err: UnexpectedInput, te
         ch = text[err.pos_in_stream] if err.pos_in_stream < len(text) else ""
         shown = repr(ch)[1:-1] if ch.isprintable() else f"U+{ord(ch):04X}" if ch else "end of file"
         span = Span(path, err.line, err.column, err.line, err.column + 1)
-        allowed = set(err.allowed or ())
+        allowed = {n for n in err.allowed or () if not n.startswith("__IGNORE")}
         msg = f"unexpected character '{shown}'"
-        if allowed:
+        # the lexer's set is every token that may follow the previous one in *any* context: only a short
+        # list says something about this place
+        if allowed and len(allowed) <= MAX_EXPECTED_SHOWN:
             msg += f"; expected {_describe_expected(allowed)}"
-        sink.emit("E002", msg, span, "not part of the language",
-                  help="remove it; comments start with `//` or are enclosed in `/* */`")
+        near = sorted(w for n in allowed if (w := _literal_words().get(n, "")[1:-1]) and ch and w.startswith(ch))
+        help = (f"did you mean `{near[0]}`?" if near
+                else "remove it; comments start with `//` or are enclosed in `/* */`")
+        sink.emit("E002", msg, span, "not part of the language", help=help)
     else:  # pragma: no cover - lark raises only the two above from LALR
         sink.emit("E001", str(err).splitlines()[0], Span(path, 1, 1, 1, 2))
 

@@ -63,9 +63,10 @@ def _unknown(sink: DiagnosticSink, what: str, name: s.Name, candidates: Iterable
     sink.emit("E101", f"unknown {what} `{name.text}`{where}", name.span, f"no {what} of this name", help=help)
 
 
-def _duplicate(sink: DiagnosticSink, what: str, name: s.Name, first: s.Name) -> None:
-    sink.emit("E102", f"{what} `{name.text}` is declared more than once", name.span, "declared again here",
-              secondary=(Label(first.span, "first declared here"),), help=f"rename or remove one of the two")
+def _duplicate(sink: DiagnosticSink, what: str, name: s.Name, first: s.Name, *, message: str | None = None,
+               help: str = "rename or remove one of the two") -> None:
+    sink.emit("E102", message or f"{what} `{name.text}` is declared more than once", name.span,
+              "declared again here", secondary=(Label(first.span, "first declared here"),), help=help)
 
 
 def _scope_component(comp: s.Component, sink: DiagnosticSink) -> ComponentScope:
@@ -79,7 +80,9 @@ def _scope_component(comp: s.Component, sink: DiagnosticSink) -> ComponentScope:
     )
     for kind, name, node in sorted(entries, key=lambda e: (e[1].span.line, e[1].span.column)):
         if name.text in members:
-            _duplicate(sink, f"member of component `{comp.name.text}`", name, first[name.text])
+            _duplicate(sink, kind, name, first[name.text],
+                       message=f"`{name.text}` is declared more than once in component `{comp.name.text}`",
+                       help="ports, compounds and tasks of a component share one namespace: rename or remove one")
             continue
         members[name.text] = (kind, node)
         first[name.text] = name
@@ -89,18 +92,22 @@ def _scope_component(comp: s.Component, sink: DiagnosticSink) -> ComponentScope:
 
 
 def _expect_member(scope: ComponentScope, name: s.Name, kinds: tuple[MemberKind, ...], code: str,
-                   sink: DiagnosticSink, role: str) -> bool:
+                   sink: DiagnosticSink, role: str, user: str | None = None) -> bool:
+    """``name`` is a member of one of ``kinds``. ``role`` says what the name is used as ("trigger port");
+    ``user``, if given, says who uses it ("task `T` reads") for a message in those words."""
     kind = scope.kind_of(name.text)
     comp = scope.name
     if kind is None:
         hint = suggest(name.text, scope.names(*kinds))
         expected = " or ".join(kinds)
-        sink.emit(code, f"{role} `{name.text}` is not declared by component `{comp}`", name.span,
-                  f"no {expected} of this name",
-                  help=f"did you mean `{hint}`?" if hint else f"declare `{name.text}` as {expected} of `{comp}`")
+        message = (f"{user} `{name.text}`, but component `{comp}` declares no {expected} of that name" if user
+                   else f"{role} `{name.text}` is not declared by component `{comp}`")
+        sink.emit(code, message, name.span, f"no {expected} of this name",
+                  help=f"did you mean `{hint}`?" if hint
+                  else f"declare `{name.text}` as {_article(expected)} of `{comp}`")
         return False
     if kind not in kinds:
-        sink.emit("E107", f"`{name.text}` is {_article(kind)} of `{comp}`, but {role} must be "
+        sink.emit("E107", f"`{name.text}` is {_article(kind)} of `{comp}`, but {_article(role)} must be "
                   + " or ".join(_article(k) for k in kinds), name.span, f"this is {_article(kind)}",
                   help=_kind_help(kinds, scope, name.text))
         return False
@@ -132,9 +139,11 @@ def _check_component_refs(scope: ComponentScope, sink: DiagnosticSink) -> None:
             seen.add(member.text)
     for task in scope.component.tasks:
         for read in task.reads:
-            _expect_member(scope, read.port, ("in-port",), "E104", sink, f"in-port read by `{task.name.text}`")
+            _expect_member(scope, read.port, ("in-port",), "E104", sink, "port a task reads",
+                           user=f"task `{task.name.text}` reads")
         for out in task.produces:
-            _expect_member(scope, out, ("out-port",), "E104", sink, f"out-port produced by `{task.name.text}`")
+            _expect_member(scope, out, ("out-port",), "E104", sink, "port a task produces",
+                           user=f"task `{task.name.text}` produces")
 
 
 def _scope_system(system: s.System, components: dict[str, ComponentScope], sink: DiagnosticSink) -> SystemScope:
@@ -177,8 +186,9 @@ def _resolve_bindings(inst: s.Instance, scope: ComponentScope, cores, bindings, 
             continue
         key = (inst.name.text, binding.task.text)
         if key in bindings:
-            _duplicate(sink, f"binding of task `{inst.name.text}.{binding.task.text}`", binding.task,
-                       bindings[key].task)
+            _duplicate(sink, "binding", binding.task, bindings[key].task,
+                       message=f"task `{inst.name.text}.{binding.task.text}` is bound more than once",
+                       help="bind every task once: merge the two bindings")
             continue
         bindings[key] = binding
         if binding.core is not None and binding.core.text not in cores:

@@ -14,7 +14,7 @@ from . import syntax as s
 from .diagnostics import DiagnosticSink, Label
 from .model import SystemModel, chain_path
 from .resolve import ComponentScope, Resolution, SystemScope
-from .units import fmt_quantity, fmt_rate
+from .units import fmt_number, fmt_quantity, fmt_rate, fmt_time
 
 
 # ================================================================== components
@@ -66,7 +66,7 @@ def _ordered(low, high, role: str, sink: DiagnosticSink, span) -> bool:
     hv = high.base if isinstance(high, s.Quantity) else high.value
     if lv <= hv:
         return True
-    show = fmt_quantity if isinstance(low, s.Quantity) else (lambda n: str(n.value))
+    show = fmt_quantity if isinstance(low, s.Quantity) else (lambda n: fmt_number(n.value))
     sink.emit("E303", f"{role} is inverted: {show(low)} .. {show(high)} contains nothing", span,
               "lower bound above upper bound", help=f"write it as {show(high)} .. {show(low)}")
     return False
@@ -104,17 +104,26 @@ def _check_reads(task: s.Task, sink: DiagnosticSink) -> None:
         seen[read.port.text] = read
         for tol in (read.oversampling, read.undersampling):
             if tol is not None and tol.kind == "max" and tol.factor.value < 1:
-                sink.emit("E303", f"a sampling factor below 1 ({tol.factor.value}) allows nothing", tol.span,
-                          "factor below 1", help="use `forbidden`, or a factor of at least 1")
+                sink.emit("E303", f"a sampling factor below 1 ({fmt_number(tol.factor.value)}) allows nothing",
+                          tol.span, "factor below 1", help="use `forbidden`, or a factor of at least 1")
 
 
 def _check_producers(scope: ComponentScope, sink: DiagnosticSink) -> None:
     producers: dict[str, list[s.Task]] = {}
     for task in scope.component.tasks:
+        first: dict[str, s.Name] = {}
         for out in task.produces:
+            if out.text in first:
+                sink.emit("E102", f"task `{task.name.text}` produces `{out.text}` twice", out.span, "produced again",
+                          secondary=(Label(first[out.text].span, "first produced here"),),
+                          help=f"name `{out.text}` once")
+                continue
+            first[out.text] = out
             producers.setdefault(out.text, []).append(task)
     comp = scope.component.name.text
     for port in scope.component.out_ports:
+        if scope.get(port.name.text) is not port:  # a duplicate name, reported as E102
+            continue
         tasks = producers.get(port.name.text, [])
         if not tasks:
             sink.emit("E202", f"out-port `{port.name.text}` of `{comp}` is produced by no task", port.name.span,
@@ -161,7 +170,7 @@ def _check_binding(inst: s.Instance, task: s.Task, b: s.TaskBinding, comp: Compo
         sink.emit("E213", f"task {who} has no priority", b.task.span, "no `priority`",
                   help="add `priority N` (a larger number is a higher priority)")
     elif not b.priority.is_integer or b.priority.value < 0:
-        sink.emit("E309", f"priority of {who} must be a non-negative integer, found {b.priority.value}",
+        sink.emit("E309", f"priority of {who} must be a non-negative integer, found {fmt_number(b.priority.value)}",
                   b.priority.span, "not a priority", help="use a whole number such as `priority 3`")
     if b.core is None and inst.core is None:
         sink.emit("E214", f"task {who} has no core", b.task.span, "no core",
@@ -231,7 +240,8 @@ def _check_prescaler(p, sink: DiagnosticSink) -> bool:
         return ok and _ordered(p.low, p.high, "prescaler range", sink, p.span)
     if p.is_integer and p.value >= 1:
         return True
-    sink.emit("E304", f"prescaler must be a whole number of at least 1, found {p.value}", p.span, "invalid prescaler",
+    sink.emit("E304", f"prescaler must be a whole number of at least 1, found {fmt_number(p.value)}", p.span,
+              "invalid prescaler",
               help="`every 1` fires on every arrival, `every 10` on every tenth")
     return False
 
@@ -256,6 +266,9 @@ def _check_against_constraint(act: s.Activation, task: s.Task, who: str, sink: D
                   act.span, "hole on a fixed task", secondary=(Label(c.span, "the component fixes the rate"),),
                   help=f"bind it as its component requires, e.g. `{_fixed_binding_hint(c)}`")
         return
+    if isinstance(act, s.Timer) and isinstance(act.period, s.PeriodHole):
+        _check_hole_candidates(act.period, c, who, sink)
+        return
     rates = _binding_rates(act)
     if rates is None:
         return
@@ -272,6 +285,49 @@ def _check_against_constraint(act: s.Activation, task: s.Task, who: str, sink: D
         sink.emit("E305", f"task {who} would run at {given}, outside its activation constraint {_constraint_text(c)}",
                   act.span, f"gives {given}", secondary=(Label(c.span, "constraint declared here"),),
                   help=f"choose a rate within {_constraint_text(c)}")
+
+
+def _check_hole_candidates(h: s.PeriodHole, c: s.ActivationConstraint, who: str, sink: DiagnosticSink) -> None:
+    """E313: a period hole's range (and grid, ``low + k * step``) must hold a period within the constraint."""
+    if h.low is None or h.high is None or not _well_formed(c):
+        return
+    shortest, longest = sorted((h.low.seconds(), h.high.seconds()))
+    if c.max is not None:
+        shortest = max(shortest, 1 / c.max.hertz())
+    if c.min is not None:
+        longest = min(longest, 1 / c.min.hertz())
+    candidates = shortest <= longest
+    what, notes = f"{fmt_quantity(h.low)} .. {fmt_quantity(h.high)}", []
+    if candidates and h.step is not None:  # a grid of periods (validation made the range and step times)
+        start, step = h.low.seconds(), h.step.seconds()
+        first = -((start - shortest) // step)  # ceil((shortest - start) / step)
+        candidates = start + first * step <= longest
+        what += f" step {fmt_quantity(h.step)}"
+        notes.append(f"the constraint allows {fmt_time(shortest)} .. {fmt_time(longest)} of this range, but the "
+                     f"grid {fmt_quantity(h.low)}, {fmt_time(start + step)}, ... has no period there")
+    if candidates:
+        return
+    sink.emit("E313", f"task {who}: no period in `? in {what}` lies within its activation constraint "
+              f"{_constraint_text(c)}", h.span, "no candidate period",
+              secondary=(Label(c.span, "constraint declared here"),), notes=notes,
+              help=f"choose periods the constraint allows: {_allowed_periods(c)}")
+
+
+def _well_formed(c: s.ActivationConstraint) -> bool:
+    bounds = [q for q in (c.min, c.max) if q is not None]
+    if any(q.dimension != "frequency" or q.value <= 0 for q in bounds):
+        return False
+    return c.min is None or c.max is None or c.min.base <= c.max.base
+
+
+def _allowed_periods(c: s.ActivationConstraint) -> str:
+    if c.min is not None and c.max is not None:
+        if c.min == c.max:
+            return fmt_time(1 / c.max.hertz())
+        return f"{fmt_time(1 / c.max.hertz())} .. {fmt_time(1 / c.min.hertz())}"
+    if c.max is not None:
+        return f"at least {fmt_time(1 / c.max.hertz())}"
+    return f"at most {fmt_time(1 / c.min.hertz())}"
 
 
 def _is_hole(act: s.Activation) -> bool:
@@ -340,7 +396,8 @@ def _check_connections(scope: SystemScope, sink: DiagnosticSink) -> None:
         if conn.delay_max is not conn.delay_min:
             _dimension(conn.delay_max, "time", "delay", sink) and _positive(conn.delay_max, "delay", sink, True)
             if (conn.delay_min and conn.delay_max and conn.delay_min.dimension == conn.delay_max.dimension == "time"):
-                _ordered(conn.delay_min, conn.delay_max, "delay range", sink, conn.span)
+                _ordered(conn.delay_min, conn.delay_max, "delay range", sink,
+                         conn.delay_min.span.to(conn.delay_max.span))
     _check_unconnected(scope, incoming, sink)
 
 
@@ -453,10 +510,24 @@ def validate_chains(scope: SystemScope, model: SystemModel, sink: DiagnosticSink
         prev, ref = chain.refs[index - 1], chain.refs[index]
         if kind == "ambiguous":
             sink.emit("E209", f"chain `{chain.name.text}` ends at in-port `{ref}`, which "
-                      + " and ".join(f"`{d}`" for d in detail) + " all read", ref.span, "ambiguous end",
+                      + " and ".join(f"`{d}`" for d in detail) + (" both read" if len(detail) == 2 else " all read"),
+                      ref.span, "ambiguous end",
                       help=f"close the chain with the consuming task instead, e.g. `{detail[0]}`")
             continue
         notes = _reachability_notes(prev, model)
+        end = _port_node(scope, ref)
+        if isinstance(end, s.InPort) and kind == "unreachable":
+            start = _port_node(scope, prev)
+            fixes = []
+            if (isinstance(start, s.OutPort) and start.type.text == end.type.text
+                    and model.link_into(str(ref)) is None):
+                fixes.append(f"add `connect {prev} -> {ref}`")
+            if any(lk.source == str(prev) for lk in model.links):
+                fixes.append(f"end the chain at an in-port that `{prev}` is connected to")
+            sink.emit("E208", f"chain `{chain.name.text}`: `{ref}` is not reachable from `{prev}`", ref.span,
+                      "broken link", secondary=(Label(prev.span, "previous element"),), notes=notes,
+                      help=", or ".join(fixes) or "correct the chain, or the connections it follows")
+            continue
         if kind == "no-reader":
             sink.emit("E208", f"chain `{chain.name.text}`: no task reads `{ref}`", ref.span, "nobody reads this",
                       notes=notes, help="close the chain with an in-port that a task reads, or with the task")

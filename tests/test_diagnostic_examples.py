@@ -1,0 +1,202 @@
+"""Every diagnostic code has a section in specs/diagnostics.md whose minimal failing example reports it.
+
+For each ``## CODE title`` section the example's files are written into a temporary directory and run
+(``verify check``, or ``verify analyze`` for ``command=analyze``); the section's code must be among the
+diagnostics, and the rendered text must equal ``tests/golden/diagnostics/CODE.txt``. Run with
+``UPDATE_GOLDEN=1`` to (re)write the golden files, then read them as a user would.
+"""
+from __future__ import annotations
+
+import importlib
+import os
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+import pytest
+
+import verify
+from verify.api import SelectionError
+from verify.cli import main
+from verify.codes import CODES
+from verify.render import render_all_text
+
+from .conftest import ROOT
+
+SPEC = ROOT / "specs" / "diagnostics.md"
+GOLDEN = ROOT / "tests" / "golden" / "diagnostics"
+UPDATE = os.environ.get("UPDATE_GOLDEN") == "1"
+
+#: what a user must never see in a diagnostic
+FORBIDDEN = ("__ANON", "$END", "Token(", "Tree(", "Traceback", "Fraction(", "<none>", "None`", "NoneType")
+
+
+@dataclass(frozen=True)
+class Block:
+    name: str
+    text: str
+    encoding: str
+    command: str
+
+
+@dataclass(frozen=True)
+class Section:
+    code: str
+    title: str
+    body: str
+    blocks: tuple[Block, ...]
+
+    @property
+    def command(self) -> str:
+        return "analyze" if any(b.command == "analyze" for b in self.blocks) else "check"
+
+
+_FENCE = re.compile(r"^```vfy([^\n]*)\n(.*?)^```[ \t]*$", re.MULTILINE | re.DOTALL)
+
+
+def _blocks(body: str) -> tuple[Block, ...]:
+    blocks = []
+    for match in _FENCE.finditer(body):
+        attrs = dict(item.split("=", 1) for item in match.group(1).split())
+        blocks.append(Block(attrs.get("file", "main.vfy"), match.group(2), attrs.get("encoding", "utf-8"),
+                            attrs.get("command", "check")))
+    return tuple(blocks)
+
+
+def parse_spec(text: str) -> dict[str, Section]:
+    sections: dict[str, Section] = {}
+    for part in re.split(r"^## ", text, flags=re.MULTILINE)[1:]:
+        heading, _, body = part.partition("\n")
+        code, _, title = heading.strip().partition(" ")
+        assert code not in sections, f"two sections for {code}"
+        sections[code] = Section(code, title, body, _blocks(body))
+    return sections
+
+
+SECTIONS = parse_spec(SPEC.read_text(encoding="utf-8"))
+REQUIRED = sorted(c for c in CODES if not c.startswith(("E4", "E5")))
+
+
+def _timing():
+    try:
+        timing = importlib.import_module("verify.timing")
+    except ImportError:  # pragma: no cover - the package directory exists from the start
+        return None
+    return timing if hasattr(timing, "analyze") and hasattr(timing, "diagnostics_of") else None
+
+
+HAVE_TIMING = _timing() is not None
+
+
+def _params():
+    for code in sorted(SECTIONS):
+        marks = []
+        if SECTIONS[code].command == "analyze" and code != "E105":
+            marks.append(pytest.mark.xfail(not HAVE_TIMING, reason="verify.timing (analyze) is not written yet",
+                                           strict=False))
+        yield pytest.param(code, marks=marks, id=code)
+
+
+def run_example(section: Section, directory: Path):
+    """Write the example into ``directory`` and run its command: (diagnostics, sources)."""
+    for block in section.blocks:
+        (directory / block.name).write_bytes(block.text.encode(block.encoding))
+    result = verify.load(str(directory / section.blocks[0].name))
+    if section.command == "check" or not result.ok:
+        return list(result.diagnostics), result.sources
+    try:
+        model = result.system(None)
+    except SelectionError as err:
+        return [err.diagnostic], result.sources
+    timing = _timing()
+    return list(timing.diagnostics_of(timing.analyze(model))), result.sources
+
+
+# ------------------------------------------------------------------ the registry and the spec agree
+
+
+def test_every_code_has_a_section():
+    missing = [c for c in REQUIRED if c not in SECTIONS]
+    assert not missing, f"codes without a section in specs/diagnostics.md: {missing}"
+
+
+def test_every_section_is_a_registered_code_with_its_title():
+    for code, section in SECTIONS.items():
+        assert code in CODES, f"section for unknown code {code}"
+        assert section.title == CODES[code].title, f"{code}: heading must be `## {code} {CODES[code].title}`"
+
+
+def test_every_section_has_one_example():
+    for code, section in SECTIONS.items():
+        assert section.blocks, f"{code}: no ```vfy example"
+        names = [b.name for b in section.blocks]
+        assert len(set(names)) == len(names), f"{code}: two blocks for one file"
+        assert section.body.strip().split("```")[0].strip(), f"{code}: no explanation before the example"
+
+
+# ------------------------------------------------------------------ each example
+
+
+@pytest.mark.parametrize("code", _params())
+def test_example_reports_its_code(code, tmp_path):
+    section = SECTIONS[code]
+    diagnostics, sources = run_example(section, tmp_path)
+    codes = [d.code for d in diagnostics]
+    assert code in codes, f"{code}: the example reports {codes}"
+
+    prefix = str(tmp_path) + os.sep
+    text = render_all_text(diagnostics, sources).replace(prefix, "") + "\n"
+    for word in FORBIDDEN:
+        assert word not in text, f"{code}: the message shows `{word}`:\n{text}"
+    assert str(tmp_path) not in text
+    golden = GOLDEN / f"{code}.txt"
+    if UPDATE:
+        golden.parent.mkdir(parents=True, exist_ok=True)
+        golden.write_text(text, encoding="utf-8")
+    else:
+        assert golden.exists(), f"no golden file {golden}: run with UPDATE_GOLDEN=1 and read it"
+        assert text == golden.read_text(encoding="utf-8")
+
+
+@pytest.mark.parametrize("code", REQUIRED)
+def test_explain_prints_the_example(code, capsys):
+    section = SECTIONS.get(code)
+    if section is None:
+        pytest.fail(f"{code} has no section in specs/diagnostics.md")
+    assert main(["explain", code]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith(f"## {code} {CODES[code].title}\n")
+    for block in section.blocks:
+        assert block.text in out
+
+
+# ------------------------------------------------------------------ E313 beyond its example
+
+_HOLE = """component C {{
+  task T {{
+    wcet 1 ms
+    activation {constraint}
+  }}
+}}
+system S {{
+  core cpu
+  instance c : C on cpu {{
+    task T priority 1 timer {hole}
+  }}
+}}
+"""
+
+
+@pytest.mark.parametrize("constraint, hole, reported", [
+    ("1 Hz .. 10 Hz", "? in 10 ms .. 100 ms", False),  # 100 ms is allowed
+    ("1 Hz .. 10 Hz", "? in 20 Hz .. 50 Hz", True),  # a frequency range, all too fast
+    ("max 10 Hz", "? in 10 ms .. 50 ms", True),
+    ("min 30 Hz", "? in 40 ms .. 50 ms", True),
+    ("min 30 Hz", "? in 20 ms .. 50 ms", False),
+    ("1 Hz .. 10 Hz", "? in 50 ms .. 105 ms step 60 ms", True),  # the grid 50, 110 misses 100 .. 105
+    ("1 Hz .. 10 Hz", "? in 40 ms .. 100 ms step 30 ms", False),  # 40, 70, 100: 100 ms is allowed
+    ("1 Hz .. 10 Hz", "?", False),
+])
+def test_a_period_hole_needs_a_candidate(constraint, hole, reported):
+    result = verify.load_text(_HOLE.format(constraint=constraint, hole=hole), "m.vfy")
+    assert [d.code for d in result.diagnostics] == (["E313"] if reported else [])
