@@ -42,3 +42,8 @@ def test_holes_variant_has_holes():
     model = verify.load(str(EXAMPLES / "navigation" / "navigation-holes.vfy")).system()
     assert sorted(t.id for t in model.holes) == ["mapper.CurMapTask", "oa.OATask", "planner.PlannerTask"]
     assert not model.is_configured
+
+
+@pytest.mark.parametrize("path", EXAMPLE_FILES, ids=lambda p: p.name)
+def test_example_is_canonically_formatted(path):
+    assert main(["fmt", "--check", str(path)]) == 0

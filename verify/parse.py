@@ -296,7 +296,7 @@ class _Builder(Transformer):
 
     def _compound(self, meta, children, mode):
         name, *rest = children
-        constraint = rest.pop() if rest and isinstance(rest[-1], s.ActivationConstraint) else None
+        constraint = rest.pop()[1] if rest and isinstance(rest[-1], tuple) else None
         members = tuple(self._name(t) for t in rest if isinstance(t, Token) and t.type == "NAME")
         return s.CompoundPort(self._name(name), mode, members, constraint, self._span(meta))
 
