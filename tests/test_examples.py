@@ -47,3 +47,19 @@ def test_holes_variant_has_holes():
 @pytest.mark.parametrize("path", EXAMPLE_FILES, ids=lambda p: p.name)
 def test_example_is_canonically_formatted(path):
     assert main(["fmt", "--check", str(path)]) == 0
+
+
+def test_analyze_navigation_outline_and_chain_table(capsys):
+    path = str(EXAMPLES / "navigation" / "navigation.vfy")
+    assert main(["analyze", path]) == 0
+    out = capsys.readouterr().out
+    assert "mapper.CurMapTask" in out and "4 Hz = 40 Hz / 10" in out
+    assert "undersampled ×10" in out
+    for chain in ("reactive", "planning"):
+        assert chain in out
+
+
+def test_analyze_refuses_holes_with_a_located_error(capsys):
+    assert main(["analyze", str(EXAMPLES / "navigation" / "navigation-holes.vfy")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("error[E218]") == 3 and "navigation-holes.vfy:17:28" in err

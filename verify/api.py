@@ -81,6 +81,16 @@ class LoadResult:
         return self.models[name]
 
 
+def require_configured(model: SystemModel, command: str) -> list[Diagnostic]:
+    """E218 for every synthesis hole: ``analyze`` and ``prove`` need every activation bound."""
+    sink = DiagnosticSink()
+    for task in model.holes:
+        sink.emit("E218", f"`{command}` needs a configured system, but `{task.id}` has a synthesis hole",
+                  task.activation.activation.span, "left open for synthesis",
+                  help=f"run `synth` to fill the holes (`synth FILE -o configured.vfy`), then `{command}` the result")
+    return sink.items
+
+
 def _finish(project: Project, sink: DiagnosticSink) -> LoadResult:
     if not project.modules:
         return LoadResult(project, None, {}, tuple(sorted(sink.items, key=Diagnostic.sort_key)))

@@ -146,6 +146,10 @@ def cmd_analyze(args) -> int:
     system = _select(result, args)
     if system is None:
         return EXIT_INVALID
+    holes = api.require_configured(system, "analyze")
+    if holes:
+        _emit_diagnostics(api.LoadResult(result.project, result.resolution, {}, tuple(holes)), args.format)
+        return EXIT_INVALID
     from .timing import analyze, diagnostics_of
     from .timing.report import to_json, to_text
 

@@ -51,6 +51,7 @@ _ALL = [
     Code("E215", "trigger port is not read by the task"),
     Code("E216", "synthesis hole on a task whose rate is fixed"),
     Code("E217", "task has no worst-case execution time"),
+    Code("E218", "synthesis hole where a configured system is needed"),
     # E3xx: timing
     Code("E301", "best-case execution time exceeds worst case"),
     Code("E302", "time where a frequency is expected, or vice versa"),

@@ -1,0 +1,490 @@
+"""The timing analysis (verify/timing, specs/timing.md §5–§8): known answers, hand-computed bounds,
+diagnostics, the report formats, and a seeded cross-check against the reference simulator."""
+from __future__ import annotations
+
+import json
+import random
+from fractions import Fraction as F
+
+import jsonschema
+import pytest
+
+from verify import syntax as s
+from verify.model import (ChainModel, CoreModel, DataTriggered, Hole, HopModel, LinkModel, Periodic, ReadModel,
+                          SporadicSource, SystemModel, TaskModel)
+from verify.sim import KINDS, Scenario, chain_latencies, random_scenario, simulate
+from verify.timing import analyze, diagnostics_of
+from verify.timing.report import JSON_SCHEMA, SCHEMA, to_json, to_text
+
+MS = F(1, 1000)
+
+# ------------------------------------------------------------------ tiny model builders
+
+
+def read(port, over=None, under=None):
+    return ReadModel(port, False, over, under)
+
+
+def task(tid, act, *, prio=1, wcet=MS, bcet=None, core="c0", kind="preemptive", reads=(), produces=(),
+         min_rate=None, max_rate=None, changeable=True, wcrt=None, deadline=None):
+    inst, name = tid.split(".")
+    return TaskModel(id=tid, instance=inst, name=name, component=inst.upper(), kind=kind, core=core,
+                     priority=prio, bcet=wcet if bcet is None else bcet, wcet=wcet,
+                     reads=tuple(r if isinstance(r, ReadModel) else read(r) for r in reads),
+                     produces=tuple(produces), activation=act, min_rate=min_rate, max_rate=max_rate,
+                     changeable=changeable, wcrt_bound=wcrt, deadline=deadline)
+
+
+def timer(ms, phase=None):
+    return Periodic(F(ms) * MS, None if phase is None else F(phase) * MS)
+
+
+def trigger(port, k=1, members=None, mode="single"):
+    return DataTriggered(port, tuple(members or (port,)), mode, k)
+
+
+def link(source, target, tasks, dmin=F(0), dmax=None):
+    src_inst, src_port = source.split(".")
+    dst_inst, dst_port = target.split(".")
+    writer = next(t.id for t in tasks if t.instance == src_inst and src_port in t.produces)
+    readers = tuple(t.id for t in tasks if t.instance == dst_inst and t.reads_port(dst_port))
+    return LinkModel(source, target, writer, readers, dmin, dmin if dmax is None else dmax)
+
+
+def chain(name, ids, links, **specs):
+    hops = tuple(HopModel(a, b, next(lk for lk in links if lk.writer == a and b in lk.readers))
+                 for a, b in zip(ids, ids[1:]))
+    return ChainModel(name, tuple(ids), hops, **specs)
+
+
+def system(tasks, links=(), chains=()):
+    cores = tuple(dict.fromkeys(t.core for t in tasks))
+    return SystemModel("s", tuple(CoreModel(c) for c in cores), tuple(tasks), tuple(links), tuple(chains))
+
+
+def codes(result):
+    return [d.code for d in diagnostics_of(result)]
+
+
+def synchronous_worst_case(sysm, horizon):
+    """All timers released at 0, every job at its wcet: the critical instant of §6.2."""
+    return simulate(sysm, Scenario(horizon, {t.id: F(0) for t in sysm.tasks}))
+
+
+# ------------------------------------------------------------------ §6 response times: known answers
+
+
+def test_rta_known_answer_burns_wellings():
+    """Burns & Wellings, *Real-Time Systems and Programming Languages* (the response-time example
+    after Audsley et al. 1993): a (T 7, C 3), b (T 12, C 3), c (T 20, C 5) → R = 3, 6, 20."""
+    tasks = [task("x.a", timer(7), wcet=3 * MS, prio=3), task("x.b", timer(12), wcet=3 * MS, prio=2),
+             task("x.c", timer(20), wcet=5 * MS, prio=1)]
+    sysm = system(tasks)
+    result = analyze(sysm)
+    assert [result.task(t).wcrt for t in ("x.a", "x.b", "x.c")] == [3 * MS, 6 * MS, 20 * MS]
+    assert all(result.task(t).response.busy_jobs == 1 for t in ("x.a", "x.b", "x.c"))
+    assert result.core("c0").utilisation == F(3, 7) + F(3, 12) + F(5, 20)
+    assert codes(result) == []
+    trace = synchronous_worst_case(sysm, F(84) * MS)  # the hyperperiod
+    assert max(j.finish - j.release for j in trace.finished("x.c")) == 20 * MS
+
+
+def test_rta_arbitrary_deadline_busy_window():
+    """Lehoczky's arbitrary-deadline example (as in Tindell et al. 1994): τ1 (T 70, C 26) above
+    τ2 (T 100, C 62, D 200). The first job answers in 114, the worst is the fifth job: 118."""
+    tasks = [task("x.hi", timer(70), wcet=26 * MS, prio=2),
+             task("x.lo", timer(100), wcet=62 * MS, prio=1, deadline=200 * MS)]
+    sysm = system(tasks)
+    lo = analyze(sysm).task("x.lo").response
+    assert lo.wcrt == 118 * MS
+    assert (lo.critical_job, lo.busy_jobs) == (5, 7)
+    trace = synchronous_worst_case(sysm, F(700) * MS)
+    observed = [j.finish - j.release for j in trace.finished("x.lo")]
+    assert observed[0] == 114 * MS and max(observed) == 118 * MS == observed[4]
+
+
+def test_equal_priorities_interfere_both_ways():
+    result = analyze(system([task("x.a", timer(10), wcet=2 * MS), task("x.b", timer(10), wcet=3 * MS)]))
+    assert result.task("x.a").wcrt == result.task("x.b").wcrt == 5 * MS
+
+
+def test_bcrt_is_bcet_and_user_bound_replaces_wcrt():
+    tasks = [task("x.a", timer(10), wcet=4 * MS, bcet=MS, prio=2),
+             task("x.b", timer(10), wcet=2 * MS, prio=1, wcrt=3 * MS)]
+    result = analyze(system(tasks))
+    a, b = result.task("x.a"), result.task("x.b")
+    assert a.bcrt == MS and a.wcrt == 4 * MS
+    assert b.wcrt == 3 * MS and b.response.rule == "user bound" and b.response.wcrt_computed == 6 * MS
+    assert codes(result) == []
+
+
+def test_cooperative_sibling_blocks_and_simulator_agrees():
+    """A cooperative job waits for a lower-priority sibling that holds the instance's token (§6.3)."""
+    tasks = [task("x.hi", timer(10), wcet=MS, prio=2, kind="cooperative"),
+             task("x.lo", timer(20), wcet=3 * MS, prio=1, kind="cooperative")]
+    sysm = system(tasks)
+    hi = analyze(sysm).task("x.hi").response
+    assert hi.blocking >= 3 * MS and hi.wcrt >= 4 * MS
+    trace = simulate(sysm, Scenario(F(40) * MS, {"x.hi": MS, "x.lo": F(0)}))
+    observed = max(j.finish - j.release for j in trace.finished("x.hi"))
+    assert observed == 3 * MS <= hi.wcrt  # released at 1 ms, waits for lo until 3 ms, done at 4 ms
+
+
+def test_remote_cooperative_sibling_overtakes():
+    """Siblings on other cores may take the token whenever it is free and i's core is busy."""
+    tasks = [task("x.i", timer(100), wcet=2 * MS, prio=1, kind="cooperative", core="c0"),
+             task("y.h", timer(10), wcet=4 * MS, prio=2, core="c0"),
+             task("x.r", timer(20), wcet=MS, prio=1, kind="cooperative", core="c1")]
+    i = analyze(system(tasks)).task("x.i").response
+    assert "x.r" in i.interferers and i.blocking == MS
+    assert i.wcrt is not None and i.wcrt > 2 * MS + 4 * MS
+
+
+def test_causal_cap_for_a_task_triggered_by_its_own_output():
+    """A higher-priority task triggered by the analysed task's output interferes once per period,
+    not as often as its (large) activation jitter would suggest (§6.2, causal cap)."""
+    tasks = [task("x.low", timer(100), wcet=30 * MS, bcet=10 * MS, prio=1, produces=["out"]),
+             task("y.high", trigger("inp"), wcet=40 * MS, prio=2, reads=["inp"])]
+    sysm = system(tasks, [link("x.out", "y.inp", tasks)])
+    result = analyze(sysm)
+    assert result.task("x.low").wcrt == 70 * MS
+    assert result.task("y.high").wcrt == 40 * MS
+    assert codes(result) == []
+
+
+# ------------------------------------------------------------------ §5 rates and sampling
+
+
+def pipeline(k=10, **reader):
+    tasks = [task("laser.L", timer(25), wcet=MS, prio=2, produces=["scan"]),
+             task("map.M", trigger("scan", k), wcet=5 * MS, prio=1, reads=["scan"], **reader)]
+    return system(tasks, [link("laser.scan", "map.scan", tasks)])
+
+
+def test_prescaled_trigger_rate_is_exact():
+    result = analyze(pipeline(10))
+    m = result.task("map.M")
+    assert m.rate.low == m.rate.high == F(4)
+    assert m.activation.derivation == "40 Hz / 10"
+    sampling = result.sampling("map.scan")
+    assert (sampling.relation, sampling.undersampling, sampling.by_trigger) == ("undersampled", 10, True)
+    assert m.a_max == 250 * MS + (MS - MS)  # k·P⁺ + J⁺ + (R − B) + (d⁺ − d⁻), all jitter 0 here
+
+
+def test_trigger_rate_outside_constraint_is_e305_or_e306():
+    result = analyze(pipeline(10, max_rate=F(2)))
+    (d,) = diagnostics_of(result)
+    assert d.code == "E305" and "4 Hz (40 Hz / 10)" in d.message and "2 Hz" in d.message
+    fixed = analyze(pipeline(10, min_rate=F(5), max_rate=F(5), changeable=False))
+    assert codes(fixed) == ["E306"]
+    assert codes(analyze(pipeline(10, min_rate=F(1), max_rate=F(10)))) == []
+
+
+def compound(mode, k=1):
+    tasks = [task("a.A", timer(100), prio=3, produces=["o"]), task("b.B", timer(50), prio=2, produces=["o"]),
+             task("c.C", trigger("both", k, ("x", "y"), mode), prio=1, reads=["x", "y"])]
+    return system(tasks, [link("a.o", "c.x", tasks), link("b.o", "c.y", tasks)])
+
+
+def test_and_rate_is_the_slowest_member_and_or_rate_the_sum():
+    and_rate = analyze(compound("and")).task("c.C").rate
+    or_rate = analyze(compound("or")).task("c.C").rate
+    assert (and_rate.low, and_rate.high) == (F(10), F(10))
+    assert (or_rate.low, or_rate.high) == (F(30), F(30))
+    prescaled = analyze(compound("or", 3)).task("c.C")
+    assert prescaled.rate.low == F(10) and prescaled.activation.derivation == "(10 Hz + 20 Hz) / 3"
+
+
+def test_and_event_model_allows_close_events():
+    """Two AND events can be arbitrarily close (a fresh value waits for the other member): A⁻ = 0."""
+    c = analyze(compound("and")).task("c.C")
+    assert c.a_min == 0 and c.events.period_min == 100 * MS
+
+
+def test_or_maximum_distance_covers_a_member_that_starts_late():
+    """The fast member of an OR (10 ms, behind a 50 ms delay) delivers first at 51 ms; until then the
+    slow one (100 ms) paces the events, so A⁺ is not simply the fast member's 10 ms (§5.2)."""
+    tasks = [task("s.S", timer(10), prio=3, produces=["o"]), task("y.Y", timer(100), prio=2, produces=["o"]),
+             task("c.C", trigger("j", 1, ("x", "z"), "or"), prio=1, reads=["x", "z"])]
+    sysm = system(tasks, [link("s.o", "c.x", tasks, 50 * MS), link("y.o", "c.z", tasks)])
+    c = analyze(sysm).task("c.C")
+    trace = simulate(sysm, Scenario(F(1, 5), {"s.S": F(0), "y.Y": F(0)}))
+    releases = [j.release for j in trace.jobs["c.C"]]
+    gap = max(b - a for a, b in zip(releases, releases[1:]))
+    assert gap == 49 * MS and c.a_max >= gap and c.sampling_wait >= releases[0]
+
+
+def test_sporadic_rate_interval_and_sampling_in_the_worst_direction():
+    tasks = [task("s.S", SporadicSource(10 * MS, 40 * MS), prio=2, produces=["o"]),
+             task("r.R", timer(20), prio=1, reads=["i"])]
+    result = analyze(system(tasks, [link("s.o", "r.i", tasks)]))
+    assert (result.task("s.S").rate.low, result.task("s.S").rate.high) == (F(25), F(100))
+    sm = result.sampling("r.i")
+    assert sm.relation == "varies" and sm.oversampling == 2 and sm.undersampling == 2
+
+
+def sampled(reader_ms, writer_ms, **tol):
+    tasks = [task("w.W", timer(writer_ms), prio=2, produces=["o"]),
+             task("r.R", timer(reader_ms), prio=1, reads=[read("i", **tol)])]
+    return system(tasks, [link("w.o", "r.i", tasks)])
+
+
+def test_over_and_undersampling_factors():
+    over = analyze(sampled(25, 100)).sampling("r.i")
+    assert (over.relation, over.oversampling, over.undersampling) == ("oversampled", 4, None)
+    under = analyze(sampled(100, 40)).sampling("r.i")
+    assert (under.relation, under.undersampling) == ("undersampled", F(5, 2))
+    assert analyze(sampled(50, 50)).sampling("r.i").relation == "matched"
+
+
+def test_sampling_tolerance_violation_is_e310():
+    forbidden = analyze(sampled(25, 100, over=s.Tolerance("forbidden")))
+    (d,) = diagnostics_of(forbidden)
+    assert d.code == "E310" and "factor of 4" in d.message and "forbidden" in d.message
+    limited = analyze(sampled(25, 100, over=s.Tolerance("max", s.Number(F(3)))))
+    assert codes(limited) == ["E310"] and "at most 3" in diagnostics_of(limited)[0].message
+    assert codes(analyze(sampled(25, 100, over=s.Tolerance("max", s.Number(F(4)))))) == []
+    assert codes(analyze(sampled(25, 100, under=s.Tolerance("forbidden")))) == []
+    assert codes(analyze(sampled(100, 25, under=s.Tolerance("forbidden")))) == ["E310"]
+
+
+# ------------------------------------------------------------------ §6 diagnostics
+
+
+def test_utilisation_above_one_is_e311_with_fraction_and_percentage():
+    result = analyze(system([task("m.A", timer(50), wcet=40 * MS, prio=2),
+                             task("m.B", timer(100), wcet=30 * MS, prio=1)]))
+    assert result.core("c0").utilisation == F(11, 10)
+    e311 = [d for d in diagnostics_of(result) if d.code == "E311"]
+    assert len(e311) == 1 and "11/10" in e311[0].message and "110 %" in e311[0].message
+    assert "`m.A`" in e311[0].message and "`c0`" in e311[0].message
+    assert "E312" in codes(result) and result.task("m.B").wcrt is None
+
+
+def test_deadline_miss_is_e312_naming_core_and_task():
+    result = analyze(system([task("m.T", timer(100), wcet=20 * MS, deadline=10 * MS)]))
+    (d,) = diagnostics_of(result)
+    assert d.code == "E312" and "`m.T`" in d.message and "`c0`" in d.message
+    assert result.task("m.T").wcrt is None and not result.task("m.T").response.schedulable
+
+
+def test_analyze_never_raises_on_odd_systems():
+    tasks = [task("a.A", timer(10), wcet=20 * MS, prio=3, produces=["o"]),
+             task("b.B", trigger("x", members=("x", "y"), mode="or"), prio=2, reads=["x", "y"], produces=["o"]),
+             task("c.C", trigger("z"), prio=1, reads=["z"]),  # unconnected trigger: never activated
+             task("d.D", Hole(s.UnknownActivation()), prio=1, core="c1")]
+    links = [link("a.o", "b.x", tasks), link("b.o", "b.y", tasks)]  # b triggers itself through an OR
+    result = analyze(system(tasks, links, [chain("loop", ["a.A", "b.B"], links, reaction_time=MS)]))
+    assert result.task("b.B").rate is None and result.task("b.B").activation.in_cycle
+    assert result.task("c.C").events.silent and result.task("c.C").rate.high == 0
+    assert result.chain("loop").reaction_time.worst is None
+    assert not result.chain("loop").specs[0].ok and result.chain("loop").specs[0].margin is None
+    json.dumps(to_json(result))
+    assert "unbounded" in to_text(result)
+
+
+# ------------------------------------------------------------------ §7 chains
+
+
+def davare():
+    """Three timers on one core, no delays: reaction = Σ (Tᵢ + Rᵢ) (Davare et al. 2007)."""
+    tasks = [task("a.A", timer(10), wcet=MS, prio=3, produces=["o"]),
+             task("b.B", timer(20), wcet=2 * MS, prio=2, reads=["i"], produces=["o"]),
+             task("c.C", timer(50), wcet=3 * MS, prio=1, reads=["i"])]
+    links = [link("a.o", "b.i", tasks), link("b.o", "c.i", tasks)]
+    specs = dict(reaction_time=100 * MS, data_age=60 * MS, jitter=50 * MS)
+    return system(tasks, links, [chain("abc", ["a.A", "b.B", "c.C"], links, **specs)])
+
+
+def test_davare_all_timer_chain():
+    result = analyze(davare())
+    r = {t: result.task(t).wcrt for t in ("a.A", "b.B", "c.C")}
+    assert r == {"a.A": MS, "b.B": 3 * MS, "c.C": 6 * MS}  # c: 3 + ⌈6/10⌉·1 + ⌈6/20⌉·2 = 6
+    c = result.chain("abc")
+    assert c.reaction_time.worst == (10 + 1) * MS + (20 + 3) * MS + (50 + 6) * MS == 90 * MS
+    assert c.reaction_time_reduced.worst == 90 * MS - 10 * MS
+    assert c.data_age.worst == (10 + 1) * MS + (20 + 3) * MS + 6 * MS == 40 * MS
+    assert c.data_age_non_reduced.worst == 50 * MS
+    assert c.reaction_time.best == c.data_age.best == 6 * MS
+    assert c.jitter == 34 * MS and c.reaction_jitter == 84 * MS
+    margins = {sc.kind: sc.margin for sc in c.specs}
+    assert margins == {"reaction_time": 10 * MS, "data_age": 20 * MS, "jitter": 16 * MS}
+    rules = [(st.reaction.rule if st.reaction else None, st.data_age.rule if st.data_age else None)
+             for st in c.steps]
+    assert rules == [("first-task sampling", None),
+                     ("register sampling (Davare)", "register sampling (Davare)"),
+                     ("register sampling (Davare)", "register sampling (Davare)"),
+                     (None, "last-task response")]
+    assert c.steps[c.dominating_reaction].label == "b.B → c.C"
+    non_reduced = analyze(davare(), data_age="non-reduced").chain("abc")
+    assert non_reduced.data_age.worst == 50 * MS and non_reduced.specs[1].margin == 10 * MS
+
+
+def test_trigger_hops_with_prescaler_and_delay():
+    tasks = [task("l.L", timer(25), wcet=2 * MS, bcet=MS, prio=2, produces=["o"]),
+             task("m.M", trigger("i", 10), wcet=5 * MS, prio=1, reads=["i"])]
+    links = [link("l.o", "m.i", tasks, MS, 3 * MS)]
+    c = analyze(system(tasks, links, [chain("lm", ["l.L", "m.M"], links)])).chain("lm")
+    hop = c.steps[1]
+    assert hop.reaction.rule == "data trigger prescaler k=10"
+    # d⁺ 3 + δ⁺(L, 10) = 9·25 + (R − B) = 225 + 1, + R(M) 5 + 2 (L preempts once) = 236
+    assert dict(hop.reaction.parts)["δ⁺(l.L, 10)"] == 226 * MS
+    assert hop.reaction.value == 3 * MS + 226 * MS + 7 * MS
+    assert hop.data_age.rule == "data trigger prescaler k=10" and hop.data_age.value == 5 * MS
+    assert c.data_age.best == MS + MS + 5 * MS
+
+
+def test_and_join_and_or_member_rules():
+    def chained(mode):
+        sysm = compound(mode)
+        return analyze(system(sysm.tasks, sysm.links, [chain("ac", ["a.A", "c.C"], sysm.links)])).chain("ac")
+    and_hop, or_hop = chained("and").steps[1], chained("or").steps[1]
+    assert and_hop.reaction.rule in ("AND join", "register sampling (Davare)")
+    assert or_hop.reaction.rule == "data trigger k=1 (OR member)"
+    assert or_hop.data_age.rule == "register sampling (Davare)" and "another member" in or_hop.data_age.note
+
+
+def test_register_rule_when_triggered_by_another_port():
+    tasks = [task("a.A", timer(10), prio=3, produces=["o"]), task("b.B", timer(20), prio=2, produces=["o"]),
+             task("c.C", trigger("x"), prio=1, reads=["x", "y"])]
+    links = [link("a.o", "c.x", tasks), link("b.o", "c.y", tasks)]
+    c = analyze(system(tasks, links, [chain("bc", ["b.B", "c.C"], links)])).chain("bc")
+    assert c.steps[1].reaction.rule == "register sampling (Davare)" and "`x`" in c.steps[1].reaction.note
+
+
+# ------------------------------------------------------------------ §8 reports
+
+
+def test_json_report_shape_and_exact_numbers():
+    result = analyze(davare())
+    doc = to_json(result)
+    jsonschema.validate(doc, JSON_SCHEMA)
+    assert doc["schema"] == SCHEMA == "verify.analysis/1"
+    json.dumps(doc)  # no Fractions, no floats
+    assert "float" not in json.dumps(doc)
+    a = next(t for t in doc["tasks"] if t["id"] == "a.A")
+    assert a["activation"]["kind"] == "timer" and a["activation"]["period"] == {"exact": "1/100", "decimal": "0.01"}
+    assert a["wcrt"] == {"exact": "1/1000", "decimal": "0.001"} and a["core"] == "c0" and a["priority"] == 3
+    ch = doc["chains"][0]
+    assert [h["kind"] for h in ch["hops"]] == ["first", "hop", "hop", "last"]
+    assert ch["bounds"]["reaction_time"]["worst"] == {"exact": "9/100", "decimal": "0.09"}
+    assert ch["specs"][0]["margin"]["decimal"] == "0.01"
+    third = analyze(system([task("t.T", timer(30), wcet=MS)]))
+    assert to_json(third)["tasks"][0]["activation"]["rate"]["min"] == {"exact": "100/3", "decimal": None}
+    trig = to_json(analyze(pipeline(10)))["tasks"][1]["activation"]
+    assert (trig["kind"], trig["prescaler"], trig["trigger_port"]) == ("trigger", 10, "scan")
+    doc_bad = to_json(analyze(system([task("m.T", timer(100), wcet=20 * MS, deadline=10 * MS)])))
+    jsonschema.validate(doc_bad, JSON_SCHEMA)
+    assert doc_bad["tasks"][0]["wcrt"] is None
+
+
+def test_text_report_outline():
+    text = to_text(analyze(davare()))
+    assert "a.A" in text and "timer 10 ms: 100 Hz" in text
+    assert "undersampled ×2" in text and "oversampled" not in text.split("connections")[0]
+    assert "reaction time" in text and "90 ms" in text and "margin" in text
+    assert "register sampling (Davare)" in text and "dominates reaction time" in text
+    assert "undersampled ×10 (trigger prescaler)" in to_text(analyze(pipeline(10)))
+
+
+# ------------------------------------------------------------------ cross-check with the simulator
+
+
+def random_system(rng: random.Random) -> SystemModel:
+    """A small random configured system: timers, sporadic sources, data triggers (single, AND, OR,
+    prescaled), cooperative siblings, two cores, delays, and chains along the connections."""
+    cores = ["c0", "c1"][: rng.choice([1, 2])]
+    n = rng.randint(2, 6)
+    instance = [f"i{rng.randrange(n) if rng.random() < 0.3 else i}" for i in range(n)]
+    tasks, wiring = [], []
+    for i in range(n):
+        reads, sources = [], []
+        if i == 0 or rng.random() < 0.45:
+            period = F(rng.choice([10, 20, 25, 40, 50, 100])) * MS
+            act = (Periodic(period) if rng.random() < 0.75
+                   else SporadicSource(period, period * F(rng.randint(4, 8), 4)))
+        else:
+            mode, k = rng.choice(["single", "single", "and", "or"]), rng.choice([1, 1, 1, 2, 3])
+            members = (f"in0_{i}",) if mode == "single" else (f"in0_{i}", f"in1_{i}")
+            act = DataTriggered(members[0] if mode == "single" else f"trig_{i}", members, mode, k)
+            reads += members
+            sources += [(rng.randrange(i), m) for m in members]
+        if i > 0 and rng.random() < 0.5:
+            reads.append(f"reg_{i}")
+            sources.append((rng.randrange(i), f"reg_{i}"))
+        wcet = F(rng.randint(1, 8)) / rng.choice([1, 2, 4]) * MS
+        tasks.append(TaskModel(f"{instance[i]}.T{i}", instance[i], f"T{i}", "C",
+                               "cooperative" if rng.random() < 0.3 else "preemptive", rng.choice(cores),
+                               rng.randint(1, 8), wcet * F(rng.randint(0, 4), 4), wcet,
+                               tuple(read(p) for p in reads), (f"out_{i}",), act))
+        wiring.append(sources)
+    links = []
+    for t, sources in zip(tasks, wiring):
+        for w, port in sources:
+            dmin = F(rng.choice([0, 0, 1, 2])) * MS
+            links.append(LinkModel(f"{tasks[w].instance}.out_{w}", f"{t.instance}.{port}", tasks[w].id, (t.id,),
+                                   dmin, dmin + F(rng.choice([0, 0, 1, 3])) * MS))
+    chains = []
+    for c in range(3):
+        path, hops = [rng.choice(tasks).id], []
+        while len(path) < 5 and rng.random() < 0.8:
+            outs = [lk for lk in links if lk.writer == path[-1] and lk.readers[0] not in path]
+            if not outs:
+                break
+            lk = rng.choice(outs)
+            hops.append(HopModel(path[-1], lk.readers[0], lk))
+            path.append(lk.readers[0])
+        chains.append(ChainModel(f"ch{c}", tuple(path), tuple(hops)))
+    return SystemModel("random", tuple(CoreModel(c) for c in cores), tuple(tasks), tuple(links), tuple(chains))
+
+
+def bound_violations(sysm: SystemModel, trace) -> list:
+    result = analyze(sysm)
+    bad = []
+    for t in result.tasks:
+        for j in trace.finished(t.id):
+            if t.wcrt is not None and j.finish - j.release > t.wcrt or j.finish - j.release < t.bcrt:
+                bad.append(("response", t.id, j.index))
+        jobs = trace.jobs[t.id]
+        for x, y in zip(jobs, jobs[1:]):
+            gap = y.release - x.release
+            if t.a_max is not None and gap > t.a_max or t.a_min is not None and gap < t.a_min:
+                bad.append(("activation distance", t.id, y.index))
+    for ch in sysm.chains:
+        bounds, lat = result.chain(ch.name), chain_latencies(trace, ch)
+        for kind in KINDS:
+            bound, worst, best = bounds.bound(kind), lat.worst(kind), lat.best(kind)
+            if worst is not None and bound.worst is not None and worst.value > bound.worst:
+                bad.append((kind, ch.name, worst.explain(ch), bound.worst))
+            if best is not None and best.value < bound.best:
+                bad.append((kind + " best", ch.name, best.explain(ch), bound.best))
+    return bad
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_bounds_hold_in_simulation(seed):
+    rng = random.Random(seed)
+    sysm = random_system(rng)
+    for run in range(3):
+        scenario = random_scenario(sysm, random.Random(f"{seed}/{run}"), F(1))
+        if run == 1:  # every job at its wcet, every message at its largest delay
+            def slowest(src, dst, _i, links=sysm.links):
+                return next(lk.delay_max for lk in links if (lk.source, lk.target) == (src, dst))
+            scenario = Scenario(scenario.horizon, scenario.phases, None, slowest, None, scenario.counter_phase)
+        assert bound_violations(sysm, simulate(sysm, scenario)) == []
+
+
+def test_non_convergence_is_reported_not_raised(monkeypatch):
+    """With the round limit forced to 1, a WCRT that still changes (n.N sees m.M's jitter only in
+    the second round: 50 ms, then 57 ms) is made unbounded and reported."""
+    import verify.timing as timing
+    tasks = [task("l.L", timer(25), wcet=2 * MS, bcet=MS, prio=3, produces=["o"]),
+             task("m.M", trigger("i"), wcet=5 * MS, prio=2, reads=["i"]),
+             task("n.N", timer(100), wcet=36 * MS, prio=1)]
+    sysm = system(tasks, [link("l.o", "m.i", tasks)])
+    assert timing.analyze(sysm).task("n.N").wcrt == 57 * MS
+    monkeypatch.setattr(timing, "MAX_ROUNDS", 1)
+    result = timing.analyze(sysm)
+    assert not result.converged and result.task("n.N").wcrt is None
+    (d,) = diagnostics_of(result)
+    assert d.code == "E312" and "did not converge" in d.message

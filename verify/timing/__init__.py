@@ -1,0 +1,174 @@
+"""Timing analysis of a configured system (specs/timing.md §5–§7): rates, response times, chains.
+
+    result = analyze(system)                 # never raises on unschedulable input
+    result.task("laser.LaserTask").wcrt      # Fraction seconds, or None: unbounded
+    result.chain("reactive").reaction_time.worst
+    diagnostics_of(result)                   # E305/E306, E310, E311, E312
+
+Response times and the activation models of data-triggered tasks depend on each other (a triggered
+task inherits its writer's response-time jitter, and jitter raises interference), so the analysis
+iterates to the global fixed point of compositional performance analysis (Richter 2005; Henia et
+al. 2005): start with every response time at its best case (no jitter), compute event models, run
+the response-time analysis, repeat until nothing changes. Results are frozen dataclasses and never
+refer back into the model by mutation. ``None`` stands for "unbounded" everywhere.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from fractions import Fraction
+
+from ..diagnostics import Diagnostic, DiagnosticSink
+from ..model import SystemModel, TaskModel
+from .chains import Bound, ChainBounds, SpecCheck, Step, Term, Timing, chain_bounds
+from .rates import (ActivationInfo, EventModel, LinkSampling, RateInterval, activation_rates,
+                    check_sampling, check_trigger_constraints, event_models, sampling_relations,
+                    trigger_order)
+from .rta import CoreLoad, TaskResponse, check_response_times, check_utilisation, core_loads, response_times
+
+__all__ = ["ActivationInfo", "AnalysisResult", "Bound", "ChainBounds", "CoreLoad", "EventModel",
+           "LinkSampling", "RateInterval", "SpecCheck", "Step", "TaskResponse", "TaskTiming", "Term",
+           "analyze", "diagnostics_of"]
+
+MAX_ROUNDS = 200  # CPA global iterations before reporting non-convergence
+VARIANTS = ("reduced", "non-reduced")
+
+
+@dataclass(frozen=True)
+class TaskTiming:
+    """Everything the analysis knows about one task."""
+
+    id: str
+    core: str
+    priority: int
+    kind: str  # "preemptive" | "cooperative"
+    bcet: Fraction
+    wcet: Fraction
+    activation: ActivationInfo
+    events: EventModel
+    response: TaskResponse
+
+    @property
+    def rate(self) -> RateInterval | None:
+        return self.activation.rate
+
+    @property
+    def a_max(self) -> Fraction | None:
+        """A⁺: the longest time between consecutive activations."""
+        return self.events.a_max
+
+    @property
+    def a_min(self) -> Fraction | None:
+        """A⁻: the shortest time between consecutive activations."""
+        return self.events.a_min
+
+    @property
+    def sampling_wait(self) -> Fraction | None:
+        """W⁺ = max(A⁺, latest first activation)."""
+        return self.events.sampling_wait
+
+    @property
+    def wcrt(self) -> Fraction | None:
+        return self.response.wcrt
+
+    @property
+    def bcrt(self) -> Fraction:
+        return self.response.bcrt
+
+
+@dataclass(frozen=True)
+class AnalysisResult:
+    """The analysis of one system. ``converged`` is False if the CPA iteration hit ``MAX_ROUNDS``
+    (the tasks still changing are then reported unbounded, E312)."""
+
+    system: str
+    data_age_variant: str
+    tasks: tuple[TaskTiming, ...]
+    cores: tuple[CoreLoad, ...]
+    links: tuple[LinkSampling, ...]
+    chains: tuple[ChainBounds, ...]
+    diagnostics: tuple[Diagnostic, ...]
+    rounds: int
+    converged: bool
+
+    def task(self, task_id: str) -> TaskTiming:
+        return next(t for t in self.tasks if t.id == task_id)
+
+    def chain(self, name: str) -> ChainBounds:
+        return next(c for c in self.chains if c.name == name)
+
+    def core(self, name: str) -> CoreLoad:
+        return next(c for c in self.cores if c.core == name)
+
+    def sampling(self, target: str, reader: str | None = None) -> LinkSampling:
+        """The sampling relation of the connection into in-port ``target`` (for ``reader``)."""
+        return next(s for s in self.links if s.target == target and (reader is None or s.reader == reader))
+
+
+def analyze(system: SystemModel, *, data_age: str = "reduced") -> AnalysisResult:
+    """Analyse a configured system. ``data_age`` selects the variant checked against ``data_age`` and
+    ``jitter`` specs: "reduced" (from the first task's read, the default) or "non-reduced"."""
+    variant = data_age.replace("_", "-")
+    if variant not in VARIANTS:
+        raise ValueError(f"data_age must be one of {VARIANTS}, not {data_age!r}")
+    sink = DiagnosticSink()
+    infos = activation_rates(system)
+    order, _ = trigger_order(system)
+    events, responses, rounds, converged = _fixed_point(system, infos, order)
+    loads = core_loads(system, infos)
+    samplings = sampling_relations(system, infos)
+    timing = Timing(system, infos, events, responses)
+    chains = tuple(chain_bounds(timing, c, variant) for c in system.chains)
+    check_trigger_constraints(system, infos, sink)
+    check_sampling(system, samplings, sink)
+    check_utilisation(system, loads, infos, sink)
+    check_response_times(system, responses, sink)
+    tasks = tuple(_task_timing(t, infos[t.id], events[t.id], responses[t.id]) for t in system.tasks)
+    return AnalysisResult(system.name, variant, tasks, loads, samplings, chains,
+                          tuple(sorted(sink.items, key=Diagnostic.sort_key)), rounds, converged)
+
+
+def diagnostics_of(result: AnalysisResult) -> list[Diagnostic]:
+    """The diagnostics of an analysis, sorted by location."""
+    return list(result.diagnostics)
+
+
+def _task_timing(task: TaskModel, info: ActivationInfo, events: EventModel, response: TaskResponse) -> TaskTiming:
+    return TaskTiming(task.id, task.core, task.priority, task.kind, task.bcet, task.wcet, info, events, response)
+
+
+def _fixed_point(system: SystemModel, infos, order):
+    """CPA global iteration: event models from response times, response times from event models,
+    starting from R = bcet (zero jitter) until the WCRTs repeat (§6.5)."""
+    bcrt = {t.id: t.bcet for t in system.tasks}
+    wcrt: dict[str, Fraction | None] = {t.id: (t.wcrt_bound if t.wcrt_bound is not None else t.bcet)
+                                        for t in system.tasks}
+    for rounds in range(1, MAX_ROUNDS + 1):
+        events = event_models(system, infos, order, wcrt, bcrt)
+        responses = response_times(system, events, wcrt)
+        new = {tid: r.wcrt for tid, r in responses.items()}
+        if new == wcrt:
+            return events, responses, rounds, True
+        wcrt = new
+    return _give_up(system, infos, order, wcrt, responses, bcrt)
+
+
+def _give_up(system, infos, order, wcrt, responses, bcrt):
+    """Non-convergence (E312): every task whose WCRT still changes is made unbounded (None absorbs),
+    and the rest is recomputed until nothing changes; at most one more round per task."""
+    forced: set[str] = set()
+    for _ in range(len(system.tasks) + 1):
+        events = event_models(system, infos, order, wcrt, bcrt)
+        responses = {tid: (_unbounded(r) if tid in forced else r)
+                     for tid, r in response_times(system, events, wcrt).items()}
+        changed = {tid for tid, r in responses.items() if r.wcrt != wcrt[tid]}
+        if not changed:
+            break
+        forced |= changed
+        wcrt = {tid: (None if tid in forced else r.wcrt) for tid, r in responses.items()}
+    return events, responses, MAX_ROUNDS, not forced
+
+
+def _unbounded(r: TaskResponse) -> TaskResponse:
+    return TaskResponse(r.task, r.core, r.priority, r.bcrt, None, None, "unbounded", r.deadline,
+                        r.deadline_rule, r.blocking, r.hold, r.busy_jobs, r.critical_job, r.interferers,
+                        f"the global CPA iteration did not converge within {MAX_ROUNDS} rounds")

@@ -1,0 +1,379 @@
+"""End-to-end latency bounds of cause-effect chains (specs/timing.md §7).
+
+Every bound is a sum of per-step terms, each produced by one named rule:
+
+* "first-task sampling" (reaction time): ``W⁺₁ + R₁`` — a stimulus waits at most W⁺₁ for the next
+  activation of τ₁, whose job completes within R₁ (Davare et al. 2007).
+* per hop p → i, by how i takes the hop's value:
+  - "register sampling (Davare)": reaction ``d⁺ + W⁺ᵢ + Rᵢ``, data age ``d⁺ + A⁺ₚ + Rₚ``;
+  - "data trigger k=1" / "data trigger prescaler k": reaction ``d⁺ + δ⁺ₚ(k) + Rᵢ`` with
+    ``δ⁺ₚ(k)`` the span of k consecutive outputs of p (0 for k = 1), data age ``d⁺ + Rₚ``;
+  - "AND join": reaction ``d⁺ + (wait for the other members) + δ⁺_AND(k) + Rᵢ``, data age as
+    a register; an OR member is triggered for the reaction and a register for the data age;
+* "last-task response" (data age): ``Rₙ``.
+
+Reaction time is non-reduced (from the stimulus), data age reduced by default (from τ₁'s read,
+Günzel et al. 2024); the other variants follow by adding or removing τ₁'s sampling term. Best cases
+are ``Σ bcetᵢ + Σ d⁻``. ``None`` means unbounded. Dürr et al. 2019 and Becker et al. 2017 give the
+job-chain view these terms are derived from.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from fractions import Fraction
+from typing import Mapping
+
+from ..model import ChainModel, DataTriggered, HopModel, SystemModel
+from ..units import fmt_time
+from .rates import ActivationInfo, EventModel, arrival_model, combine_and
+from .rta import TaskResponse
+
+ZERO = Fraction(0)
+
+REGISTER = "register sampling (Davare)"
+FIRST = "first-task sampling"
+LAST = "last-task response"
+AND_JOIN = "AND join"
+
+
+def trigger_rule(k: int) -> str:
+    return "data trigger k=1" if k == 1 else f"data trigger prescaler k={k}"
+
+
+# ================================================================== results
+
+
+@dataclass(frozen=True)
+class Term:
+    """One contribution: ``value = Σ parts`` (None if a part is unbounded), produced by ``rule``."""
+
+    rule: str
+    value: Fraction | None
+    parts: tuple[tuple[str, Fraction | None], ...]
+    note: str = ""
+
+
+@dataclass(frozen=True)
+class Step:
+    """One line of a chain's breakdown: τ₁'s sampling, a hop, or τₙ's response.
+
+    ``reaction``/``data_age`` are the step's worst-case contributions (None: the step adds nothing
+    to that bound); ``best`` its best-case contribution (``bcet`` of the task reached, plus ``d⁻``).
+    """
+
+    kind: str  # "first" | "hop" | "last"
+    label: str
+    writer: str | None
+    reader: str
+    source: str | None
+    target: str | None
+    reaction: Term | None
+    data_age: Term | None
+    best: Fraction
+
+
+@dataclass(frozen=True)
+class Bound:
+    """A latency's worst and best case; ``jitter`` = worst − best."""
+
+    worst: Fraction | None
+    best: Fraction
+    rule: str
+
+    @property
+    def jitter(self) -> Fraction | None:
+        return None if self.worst is None else self.worst - self.best
+
+
+@dataclass(frozen=True)
+class SpecCheck:
+    """A chain spec against its bound: ``margin = spec − bound`` (negative: violated; None: unbounded)."""
+
+    kind: str  # "reaction_time" | "data_age" | "jitter"
+    spec: Fraction
+    bound: Fraction | None
+    variant: str
+
+    @property
+    def margin(self) -> Fraction | None:
+        return None if self.bound is None else self.spec - self.bound
+
+    @property
+    def ok(self) -> bool:
+        return self.bound is not None and self.bound <= self.spec
+
+
+@dataclass(frozen=True)
+class ChainBounds:
+    """All bounds of one chain. ``data_age`` and ``jitter`` follow ``data_age_variant``."""
+
+    name: str
+    tasks: tuple[str, ...]
+    steps: tuple[Step, ...]
+    reaction_time: Bound
+    reaction_time_reduced: Bound
+    data_age_reduced: Bound
+    data_age_non_reduced: Bound
+    data_age_variant: str
+    specs: tuple[SpecCheck, ...]
+    dominating_reaction: int | None
+    dominating_data_age: int | None
+    problem: str | None = None
+
+    def bound(self, kind: str) -> Bound:
+        """The bound of a latency kind as ``verify.sim.KINDS`` names it: "reaction_time",
+        "reaction_time_reduced", "data_age" (reduced) or "data_age_nonreduced"."""
+        return {"reaction_time": self.reaction_time, "reaction_time_reduced": self.reaction_time_reduced,
+                "data_age": self.data_age_reduced, "data_age_reduced": self.data_age_reduced,
+                "data_age_nonreduced": self.data_age_non_reduced,
+                "data_age_non_reduced": self.data_age_non_reduced}[kind]
+
+    @property
+    def data_age(self) -> Bound:
+        return self.data_age_reduced if self.data_age_variant == "reduced" else self.data_age_non_reduced
+
+    @property
+    def jitter(self) -> Fraction | None:
+        return self.data_age.jitter
+
+    @property
+    def reaction_jitter(self) -> Fraction | None:
+        return self.reaction_time.jitter
+
+
+# ================================================================== context
+
+
+@dataclass(frozen=True)
+class Timing:
+    """What the chain rules read: rates, event models and response times of every task."""
+
+    system: SystemModel
+    infos: Mapping[str, ActivationInfo]
+    events: Mapping[str, EventModel]
+    responses: Mapping[str, TaskResponse]
+
+    def R(self, task: str) -> Fraction | None:  # noqa: N802 - the paper's name
+        return self.responses[task].wcrt
+
+    def B(self, task: str) -> Fraction:  # noqa: N802
+        return self.responses[task].bcrt
+
+    def bcet(self, task: str) -> Fraction:
+        return self.system.task(task).bcet
+
+
+def _total(parts) -> Fraction | None:
+    values = [v for _, v in parts]
+    return None if any(v is None for v in values) else sum(values, ZERO)
+
+
+def _term(rule: str, parts, note: str = "") -> Term:
+    return Term(rule, _total(parts), tuple(parts), note)
+
+
+def _le(a: Term, b: Term) -> bool:
+    """a is at least as tight as b (unbounded is the loosest)."""
+    if a.value is None:
+        return b.value is None
+    return b.value is None or a.value <= b.value
+
+
+# ================================================================== per-step rules
+
+
+def delta_plus(t: Timing, writer: str, k: int) -> Fraction | None:
+    """δ⁺ₚ(k): from the completion of a job of p to the arrival of the k-th output counted from it,
+    less d⁺: 0 for k = 1, else ``δ⁺ₚ,act(k) + (Rₚ − Bₚ)`` (§7.3)."""
+    if k == 1:
+        return ZERO
+    span, r = t.events[writer].delta_plus(k), t.R(writer)
+    return None if span is None or r is None else span + r - t.B(writer)
+
+
+def first_step(t: Timing, task: str) -> Step:
+    """τ₁ samples the stimulus: reaction ``W⁺₁ + R₁`` (§7.2)."""
+    parts = ((f"W⁺({task})", t.events[task].sampling_wait), (f"R({task})", t.R(task)))
+    return Step("first", task, None, task, None, None, _term(FIRST, parts), None, t.bcet(task))
+
+
+def last_step(t: Timing, task: str) -> Step:
+    """τₙ's job completes within Rₙ of the read it starts with: data age ``Rₙ`` (§7.4)."""
+    return Step("last", task, None, task, None, None, None, _term(LAST, ((f"R({task})", t.R(task)),)), ZERO)
+
+
+def register_reaction(t: Timing, hop: HopModel) -> Term:
+    """``d⁺ + W⁺ᵢ + Rᵢ``: the value arrives within d⁺, the next activation of i within W⁺ᵢ, and that
+    job (which starts after the arrival, so reads the value or a newer one) completes within Rᵢ."""
+    i = hop.reader
+    return _term(REGISTER, (("d⁺", hop.link.delay_max), (f"W⁺({i})", t.events[i].sampling_wait),
+                            (f"R({i})", t.R(i))))
+
+
+def register_age(t: Timing, hop: HopModel) -> Term:
+    """``d⁺ + A⁺ₚ + Rₚ``: a read of i at time s sees at least the output of the last job of p
+    released by ``s − Rₚ − d⁺``, and that job was released after ``s − Rₚ − d⁺ − A⁺ₚ``."""
+    p = hop.writer
+    return _term(REGISTER, (("d⁺", hop.link.delay_max), (f"A⁺({p})", t.events[p].a_max), (f"R({p})", t.R(p))))
+
+
+def trigger_reaction(t: Timing, hop: HopModel, k: int, rule: str) -> Term:
+    """``d⁺ + δ⁺ₚ(k) + Rᵢ``: i is released at one of the k arrivals counted from this value's."""
+    p, i = hop.writer, hop.reader
+    return _term(rule, (("d⁺", hop.link.delay_max), (f"δ⁺({p}, {k})", delta_plus(t, p, k)), (f"R({i})", t.R(i))))
+
+
+def trigger_age(t: Timing, hop: HopModel, k: int) -> Term:
+    """``d⁺ + Rₚ``: every job of i is released by an arrival on this port and reads that value or a
+    newer one, whatever the prescaler."""
+    p = hop.writer
+    return _term(trigger_rule(k), (("d⁺", hop.link.delay_max), (f"R({p})", t.R(p))))
+
+
+def and_reaction(t: Timing, hop: HopModel, k: int) -> Term:
+    """``d⁺ + maxₘ W⁺ₘ + δ⁺_AND(k) + Rᵢ``: after this value arrives, the join fires once every other
+    member has a new arrival (each within its arrival stream's W⁺), then k − 1 further joins."""
+    info = t.infos[hop.reader]
+    member = hop.link.target.split(".", 1)[1]
+    arrivals, waits = [], []
+    for src in info.sources:
+        if src.writer is None or src.link is None:
+            arrivals.append(None)
+            if src.member != member:
+                waits.append(None)
+            continue
+        model = arrival_model(t.events[src.writer], t.R(src.writer), t.B(src.writer), src.link)
+        arrivals.append(model)
+        if src.member != member:
+            waits.append(model.sampling_wait)
+    wait = None if any(w is None for w in waits) else max(waits, default=ZERO)
+    join = None if any(a is None for a in arrivals) else combine_and(arrivals).delta_plus(k)
+    i = hop.reader
+    return _term(AND_JOIN, (("d⁺", hop.link.delay_max), ("wait for the other members", wait),
+                            (f"δ⁺_AND({k})", join), (f"R({i})", t.R(i))))
+
+
+def hop_step(t: Timing, hop: HopModel) -> Step:
+    """The rule that applies to a hop, chosen by how its reader is activated (§7.3)."""
+    act = t.system.task(hop.reader).activation
+    member = hop.link.target.split(".", 1)[1]
+    register_r, register_a = register_reaction(t, hop), register_age(t, hop)
+    reaction, age = register_r, register_a
+    if isinstance(act, DataTriggered) and member in act.members:
+        k = act.prescaler
+        if act.mode == "and":
+            candidate = and_reaction(t, hop, k)
+        else:
+            rule = trigger_rule(k) + (" (OR member)" if act.mode == "or" else "")
+            candidate = trigger_reaction(t, hop, k, rule)
+        if _le(candidate, register_r):
+            reaction = candidate
+        else:
+            reaction = Term(register_r.rule, register_r.value, register_r.parts,
+                            f"tighter here than {candidate.rule} ({fmt_time(candidate.value)})")
+        if act.mode == "single":
+            age = trigger_age(t, hop, k)
+        else:
+            age = Term(register_a.rule, register_a.value, register_a.parts,
+                       "the reader may be released by another member, so this value is read as a register")
+    elif isinstance(act, DataTriggered):
+        reaction = Term(register_r.rule, register_r.value, register_r.parts,
+                        f"`{hop.reader}` is triggered by `{act.port}`, not by this port")
+    label = f"{hop.writer} → {hop.reader}"
+    best = hop.link.delay_min + t.bcet(hop.reader)
+    return Step("hop", label, hop.writer, hop.reader, hop.link.source, hop.link.target, reaction, age, best)
+
+
+# ================================================================== chain totals
+
+
+def _sum_terms(terms: list[Term]) -> Fraction | None:
+    values = [x.value for x in terms]
+    return None if any(v is None for v in values) else sum(values, ZERO)
+
+
+def reaction_time(steps: tuple[Step, ...]) -> Fraction | None:
+    """Non-reduced reaction time: ``W⁺₁ + R₁ + Σ_hops reaction terms`` (§7.5)."""
+    return _sum_terms([s.reaction for s in steps if s.reaction is not None])
+
+
+def data_age(steps: tuple[Step, ...]) -> Fraction | None:
+    """Reduced data age: ``Σ_hops data-age terms + Rₙ`` (§7.5)."""
+    return _sum_terms([s.data_age for s in steps if s.data_age is not None])
+
+
+def _minus(a: Fraction | None, b: Fraction | None) -> Fraction | None:
+    return None if a is None or b is None else a - b
+
+
+def _plus(a: Fraction | None, b: Fraction | None) -> Fraction | None:
+    return None if a is None or b is None else a + b
+
+
+def _dominating(steps: tuple[Step, ...], attr: str) -> int | None:
+    best, index = None, None
+    for n, step in enumerate(steps):
+        term = getattr(step, attr)
+        if term is None:
+            continue
+        if term.value is None:
+            return n
+        if best is None or term.value > best:
+            best, index = term.value, n
+    return index
+
+
+def read_gap_min(t: Timing, task: str) -> Fraction:
+    """The least time between two consecutive reads (starts) of ``task``:
+    ``max(bcet, A⁻ − (R − bcet))`` — jobs of a task run one after another, and a start lies in
+    ``[r, r + R − bcet]``."""
+    bcet, a_min, r = t.bcet(task), t.events[task].a_min, t.R(task)
+    if a_min is None or r is None:
+        return bcet
+    return max(bcet, a_min - (r - bcet))
+
+
+def chain_bounds(t: Timing, chain: ChainModel, variant: str = "reduced") -> ChainBounds:
+    """Every bound of ``chain`` with its per-step breakdown and its margins (§7)."""
+    missing = [x for x in chain.tasks if x not in t.responses]
+    if missing or not chain.tasks or len(chain.hops) != len(chain.tasks) - 1:
+        return _broken(chain, variant, f"the chain refers to unknown tasks {missing}" if missing
+                       else "the chain's hops do not match its tasks")
+    first, last = chain.tasks[0], chain.tasks[-1]
+    steps = (first_step(t, first),) + tuple(hop_step(t, h) for h in chain.hops) + (last_step(t, last),)
+    best = sum((s.best for s in steps), ZERO)
+    wait, a_max = t.events[first].sampling_wait, t.events[first].a_max
+    reaction = reaction_time(steps)
+    age = data_age(steps)
+    bounds = dict(
+        reaction_time=Bound(reaction, best, "§7.5 W⁺₁ + R₁ + Σ hop reaction terms"),
+        reaction_time_reduced=Bound(_minus(reaction, wait), best, "§7.5 R₁ + Σ hop reaction terms"),
+        data_age_reduced=Bound(age, best, "§7.5 Σ hop data-age terms + Rₙ"),
+        data_age_non_reduced=Bound(_plus(age, a_max), best + read_gap_min(t, first),
+                                   "§7.5 reduced data age + A⁺₁"),
+    )
+    specs = _spec_checks(chain, bounds, variant)
+    return ChainBounds(chain.name, chain.tasks, steps, data_age_variant=variant, specs=specs,
+                       dominating_reaction=_dominating(steps, "reaction"),
+                       dominating_data_age=_dominating(steps, "data_age"), **bounds)
+
+
+def _spec_checks(chain: ChainModel, bounds: dict[str, Bound], variant: str) -> tuple[SpecCheck, ...]:
+    age = bounds["data_age_reduced" if variant == "reduced" else "data_age_non_reduced"]
+    checks = []
+    if chain.reaction_time is not None:
+        checks.append(SpecCheck("reaction_time", chain.reaction_time, bounds["reaction_time"].worst, "non-reduced"))
+    if chain.data_age is not None:
+        checks.append(SpecCheck("data_age", chain.data_age, age.worst, variant))
+    if chain.jitter is not None:
+        checks.append(SpecCheck("jitter", chain.jitter, age.jitter, f"data age ({variant})"))
+    return tuple(checks)
+
+
+def _broken(chain: ChainModel, variant: str, problem: str) -> ChainBounds:
+    unknown = Bound(None, ZERO, "not analysed")
+    bounds = dict(reaction_time=unknown, reaction_time_reduced=unknown, data_age_reduced=unknown,
+                  data_age_non_reduced=unknown)
+    return ChainBounds(chain.name, chain.tasks, (), data_age_variant=variant,
+                       specs=_spec_checks(chain, bounds, variant), dominating_reaction=None,
+                       dominating_data_age=None, problem=problem, **bounds)

@@ -1,0 +1,535 @@
+"""Activation rates, CPA event models and sampling relations (specs/timing.md §5).
+
+Three results per system, all exact:
+
+* ``ActivationInfo`` per task: the resolved activation and its **rate interval** in hertz (§5.1):
+  ``1/T`` for a timer, ``[1/a⁺, 1/a⁻]`` for a sporadic source, the writer's rate divided by the
+  prescaler for a data trigger, the minimum of the members for an AND compound, the sum for OR.
+* ``EventModel`` per task: the activation stream in the sense of compositional performance analysis
+  (Richter 2005; Henia et al. 2005, "SymTA/S"), as a period/jitter pair for the minimum distances
+  (``δ⁻(n) = max(0, (n−1)·P⁻ − J⁻)``, used for interference) and one for the maximum distances
+  (``δ⁺(n) = (n−1)·P⁺ + J⁺``, used for sampling waits), plus a bound ``F`` on the first activation
+  (§5.2). Event models of data-triggered tasks depend on response times; the façade iterates.
+* ``LinkSampling`` per connection and reader: over-, undersampled or matched, with the factor (§5.3).
+
+``None`` always means "not bounded" (an unknown rate in a trigger cycle, a jitter that depends on an
+unbounded response time); a task that is never activated has a ``silent`` event model.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from fractions import Fraction
+from typing import Mapping
+
+import networkx as nx
+
+from ..diagnostics import DiagnosticSink, Label
+from ..model import DataTriggered, LinkModel, Periodic, SporadicSource, SystemModel, TaskModel
+from ..units import fmt_number, fmt_rate, fmt_time
+
+ZERO = Fraction(0)
+
+
+# ================================================================== rate intervals (§5.1)
+
+
+@dataclass(frozen=True)
+class RateInterval:
+    """Long-run activation frequencies in hertz, ``low <= high``."""
+
+    low: Fraction
+    high: Fraction
+
+    @property
+    def is_point(self) -> bool:
+        return self.low == self.high
+
+    def divided(self, k: int) -> RateInterval:
+        return RateInterval(self.low / k, self.high / k)
+
+    def __str__(self) -> str:
+        if self.is_point:
+            return fmt_rate(self.low)
+        return f"{fmt_rate(self.low)} .. {fmt_rate(self.high)}"
+
+
+@dataclass(frozen=True)
+class Source:
+    """One member of a data trigger: the in-port, the connection into it and its writer task."""
+
+    member: str  # local in-port name
+    port: str  # "inst.port"
+    writer: str | None  # None: the in-port is not connected
+    link: LinkModel | None
+
+
+@dataclass(frozen=True)
+class ActivationInfo:
+    """The resolved activation of one task and its rate (§5.1).
+
+    ``kind`` is "timer", "sporadic", "trigger" or "hole"; ``rate`` is None when it is not bounded
+    (a task in a trigger cycle, or downstream of one, or a hole). ``derivation`` shows how the rate
+    was computed, e.g. ``"40 Hz / 10"``.
+    """
+
+    task: str
+    kind: str
+    rate: RateInterval | None
+    derivation: str
+    period: Fraction | None = None  # timer
+    phase: Fraction | None = None  # timer, when fixed
+    interarrival: tuple[Fraction, Fraction] | None = None  # sporadic (a⁻, a⁺)
+    trigger_port: str | None = None  # local port or compound name
+    mode: str | None = None  # "single" | "and" | "or"
+    prescaler: int | None = None
+    sources: tuple[Source, ...] = ()
+    in_cycle: bool = False
+
+
+def trigger_sources(system: SystemModel, task: TaskModel) -> tuple[Source, ...]:
+    """The members of ``task``'s data trigger with the connection into each (``model.link_into``)."""
+    act = task.activation
+    if not isinstance(act, DataTriggered):
+        return ()
+    out = []
+    for member in act.members:
+        port = f"{task.instance}.{member}"
+        link = system.link_into(port)
+        out.append(Source(member, port, link.writer if link else None, link))
+    return tuple(out)
+
+
+def trigger_order(system: SystemModel) -> tuple[tuple[str, ...], frozenset[str]]:
+    """All task ids with every writer of a trigger member before the triggered task, and the set of
+    tasks that lie on a trigger cycle (validation only lets cycles through an OR with a live member)."""
+    graph = nx.DiGraph()
+    graph.add_nodes_from(t.id for t in system.tasks)
+    for t in system.tasks:
+        for src in trigger_sources(system, t):
+            if src.writer is not None:
+                graph.add_edge(src.writer, t.id)
+    cyclic: set[str] = set()
+    for comp in nx.strongly_connected_components(graph):
+        if len(comp) > 1 or any(graph.has_edge(n, n) for n in comp):
+            cyclic |= comp
+    condensed = nx.condensation(graph)
+    position = {t.id: i for i, t in enumerate(system.tasks)}
+    order: list[str] = []
+    for scc in nx.lexicographical_topological_sort(condensed, key=lambda n: min(
+            position[m] for m in condensed.nodes[n]["members"])):
+        order.extend(sorted(condensed.nodes[scc]["members"], key=position.__getitem__))
+    return tuple(order), frozenset(cyclic)
+
+
+def activation_rates(system: SystemModel) -> dict[str, ActivationInfo]:
+    """The rate of every task, propagated in trigger order (§5.1)."""
+    order, cyclic = trigger_order(system)
+    infos: dict[str, ActivationInfo] = {}
+    for tid in order:
+        infos[tid] = _activation_info(system, system.task(tid), infos, tid in cyclic)
+    return infos
+
+
+def _activation_info(system: SystemModel, task: TaskModel, known: Mapping[str, ActivationInfo],
+                     in_cycle: bool) -> ActivationInfo:
+    act = task.activation
+    if isinstance(act, Periodic):
+        rate = Fraction(1) / act.period
+        return ActivationInfo(task.id, "timer", RateInterval(rate, rate), f"timer {fmt_time(act.period)}",
+                              period=act.period, phase=act.phase)
+    if isinstance(act, SporadicSource):
+        rate = RateInterval(1 / act.max_interarrival, 1 / act.min_interarrival)
+        return ActivationInfo(task.id, "sporadic", rate,
+                              f"sporadic {fmt_time(act.min_interarrival)} .. {fmt_time(act.max_interarrival)}",
+                              interarrival=(act.min_interarrival, act.max_interarrival))
+    if isinstance(act, DataTriggered):
+        sources = trigger_sources(system, task)
+        rate, text = _trigger_rate(act, sources, known, in_cycle)
+        return ActivationInfo(task.id, "trigger", rate, text, trigger_port=act.port, mode=act.mode,
+                              prescaler=act.prescaler, sources=sources, in_cycle=in_cycle)
+    return ActivationInfo(task.id, "hole", None, "not bounded: unresolved synthesis hole")
+
+
+def _trigger_rate(act: DataTriggered, sources: tuple[Source, ...], known: Mapping[str, ActivationInfo],
+                  in_cycle: bool) -> tuple[RateInterval | None, str]:
+    """Writer rate / k (single), min of members (AND), sum of members (OR), then / prescaler."""
+    if in_cycle:
+        return None, "not bounded: the trigger depends on its own output (trigger cycle)"
+    rates: list[RateInterval | None] = []
+    for src in sources:
+        if src.writer is None:
+            rates.append(RateInterval(ZERO, ZERO))
+        else:
+            rates.append(known[src.writer].rate)
+    parts = [("0 Hz (unconnected)" if s.writer is None else str(r) if r is not None else "unbounded")
+             for s, r in zip(sources, rates)]
+    if any(r is None for r in rates):
+        return None, "not bounded: a writer's rate is not bounded"
+    if act.mode == "and":
+        combined = RateInterval(min(r.low for r in rates), min(r.high for r in rates))
+        text = f"min({', '.join(parts)})"
+    elif act.mode == "or":
+        combined = RateInterval(sum((r.low for r in rates), ZERO), sum((r.high for r in rates), ZERO))
+        text = " + ".join(parts)
+    else:
+        combined, text = rates[0], parts[0]
+    if act.prescaler != 1:
+        text = f"({text}) / {act.prescaler}" if act.mode == "or" else f"{text} / {act.prescaler}"
+    return combined.divided(act.prescaler), text
+
+
+# ================================================================== event models (§5.2)
+
+
+@dataclass(frozen=True)
+class EventModel:
+    """A CPA event model (Richter 2005; Henia et al. 2005: the periodic-with-jitter model), exact.
+
+    Minimum distances ``δ⁻(n) = max(0, (n−1)·period_min − jitter_min)`` bound how densely
+    activations come (interference, ``η⁺``); maximum distances ``δ⁺(n) = (n−1)·period_max +
+    jitter_max`` bound how long a task may wait for its next activation. ``first_max`` bounds the
+    first activation. Any field None: not bounded. ``silent``: the task is never activated.
+    """
+
+    period_min: Fraction | None
+    jitter_min: Fraction | None
+    period_max: Fraction | None
+    jitter_max: Fraction | None
+    first_max: Fraction | None
+    silent: bool = False
+
+    def eta_plus(self, window: Fraction) -> int | None:
+        """``η⁺(Δ) = ⌈(Δ + J⁻)/P⁻⌉``: most activations in a half-open window of length Δ (§5.2)."""
+        if self.silent or window <= 0:
+            return 0
+        if self.period_min is None or self.jitter_min is None:
+            return None
+        return math.ceil((window + self.jitter_min) / self.period_min)
+
+    def delta_min(self, n: int) -> Fraction | None:
+        """``δ⁻(n)``: least distance from the first to the n-th of n consecutive activations."""
+        if n <= 1:
+            return ZERO
+        if self.silent:
+            return None  # never: no second activation
+        if self.period_min is None or self.jitter_min is None:
+            return ZERO
+        return max(ZERO, (n - 1) * self.period_min - self.jitter_min)
+
+    def delta_plus(self, n: int) -> Fraction | None:
+        """``δ⁺(n)``: greatest distance from the first to the n-th of n consecutive activations."""
+        if n <= 1:
+            return ZERO
+        if self.silent or self.period_max is None or self.jitter_max is None:
+            return None
+        return (n - 1) * self.period_max + self.jitter_max
+
+    @property
+    def a_max(self) -> Fraction | None:
+        """A⁺ = δ⁺(2): the longest time between two consecutive activations."""
+        return self.delta_plus(2)
+
+    @property
+    def a_min(self) -> Fraction | None:
+        """A⁻ = δ⁻(2): the shortest time between two consecutive activations."""
+        return self.delta_min(2)
+
+    @property
+    def sampling_wait(self) -> Fraction | None:
+        """W⁺ = max(A⁺, F): from any instant t ≥ 0, the next activation after t comes within W⁺."""
+        if self.a_max is None or self.first_max is None:
+            return None
+        return max(self.a_max, self.first_max)
+
+
+SILENT = EventModel(None, None, None, None, None, silent=True)
+UNBOUNDED = EventModel(None, None, None, None, None)
+
+
+def _add(a: Fraction | None, b: Fraction | None) -> Fraction | None:
+    return None if a is None or b is None else a + b
+
+
+def source_event_model(task: TaskModel) -> EventModel:
+    """Timer ``(T, 0, T, 0)``, first release at the phase (< T); sporadic ``(a⁻, 0, a⁺, 0)``, first
+    release before a⁺ (§3)."""
+    act = task.activation
+    if isinstance(act, Periodic):
+        first = act.phase if act.phase is not None else act.period
+        return EventModel(act.period, ZERO, act.period, ZERO, first)
+    if isinstance(act, SporadicSource):
+        return EventModel(act.min_interarrival, ZERO, act.max_interarrival, ZERO, act.max_interarrival)
+    return UNBOUNDED
+
+
+def output_jitter(wcrt: Fraction | None, bcrt: Fraction, link: LinkModel) -> Fraction | None:
+    """The jitter a link adds to its writer's activation stream: ``(R − B) + (d⁺ − d⁻)`` (CPA output
+    model, Henia et al. 2005 §3.2; FIFO delivery keeps every arrival in ``[r + B + d⁻, r + R + d⁺]``)."""
+    if wcrt is None:
+        return None
+    return (wcrt - bcrt) + (link.delay_max - link.delay_min)
+
+
+def arrival_model(writer: EventModel, wcrt: Fraction | None, bcrt: Fraction, link: LinkModel) -> EventModel:
+    """The arrivals on ``link.target`` of the values its writer produces (one per writer job)."""
+    if writer.silent:
+        return SILENT
+    extra = output_jitter(wcrt, bcrt, link)
+    first = _add(_add(writer.first_max, wcrt), link.delay_max)
+    return EventModel(writer.period_min, _add(writer.jitter_min, extra), writer.period_max,
+                      _add(writer.jitter_max, extra), first)
+
+
+def combine_or(members: list[EventModel]) -> EventModel:
+    """Every arrival on any member is an event (§3). ``η⁺`` of the union is at most the sum of the
+    members' ``η⁺``, which the period ``P = 1/Σ(1/Pₘ)`` with jitter ``P·(Σ Jₘ/Pₘ + M − 1)`` covers
+    (§5.2); the maximum distances are those of one member m (the one with the smallest W⁺), with
+    ``max(0, Fₘ − P⁺ₘ)`` more jitter in case m starts after the first OR event."""
+    live = [m for m in members if not m.silent]
+    if not live:
+        return SILENT
+    if len(live) == 1:
+        return live[0]
+    if any(m.period_min is None or m.jitter_min is None for m in live):
+        period = jitter = None
+    else:
+        period = 1 / sum((1 / m.period_min for m in live), ZERO)
+        jitter = period * (sum((m.jitter_min / m.period_min for m in live), ZERO) + len(live) - 1)
+    bounded = [m for m in live if m.sampling_wait is not None]
+    best = min(bounded, key=lambda m: (m.sampling_wait, m.period_max)) if bounded else None
+    firsts = [m.first_max for m in live if m.first_max is not None]
+    jitter_max = None if best is None else best.jitter_max + max(ZERO, best.first_max - best.period_max)
+    return EventModel(period, jitter, best.period_max if best else None, jitter_max,
+                      min(firsts) if firsts else None)
+
+
+def combine_and(members: list[EventModel]) -> EventModel:
+    """An event needs a fresh value on every member (§3). n events span at least n−1 arrivals of each
+    member, so ``δ⁻(n) ≥ δ⁻ₘ(n−1)``: period Pₘ, jitter Jₘ + Pₘ of the slowest member; after an event
+    the next comes once every member has a new arrival: ``δ⁺(n) ≤ (n−1)·maxₘ A⁺ₘ`` (§5.2)."""
+    if not members or any(m.silent for m in members):
+        return SILENT
+    known = [m for m in members if m.period_min is not None and m.jitter_min is not None]
+    slowest = max(known, key=lambda m: (m.period_min, -m.jitter_min)) if known else None
+    gaps = [m.a_max for m in members]
+    gap = None if any(g is None for g in gaps) else max(gaps)
+    firsts = [m.first_max for m in members]
+    first = None if any(f is None for f in firsts) else max(firsts)
+    return EventModel(slowest.period_min if slowest else None,
+                      slowest.jitter_min + slowest.period_min if slowest else None,
+                      gap, ZERO if gap is not None else None, first)
+
+
+def first_of_k(stream: EventModel, members: list[EventModel], mode: str, k: int) -> Fraction | None:
+    """The latest time of the k-th event of a trigger stream (the prescaler counter may start at 0)."""
+    if k == 1 or stream.first_max is None:
+        return stream.first_max
+    if mode == "or":
+        bounds = [_add(m.first_max, m.delta_plus(k)) for m in members if not m.silent]
+        bounds = [b for b in bounds if b is not None]
+        return min(bounds) if bounds else None
+    return _add(stream.first_max, stream.delta_plus(k))
+
+
+def prescaled(stream: EventModel, k: int, first: Fraction | None) -> EventModel:
+    """Every k-th event: ``δ(n) = δ_stream((n−1)·k + 1)``, i.e. periods times k, jitters unchanged."""
+    if stream.silent or k == 1:
+        return stream if k == 1 else SILENT
+    mul = lambda p: None if p is None else p * k  # noqa: E731
+    return EventModel(mul(stream.period_min), stream.jitter_min, mul(stream.period_max),
+                      stream.jitter_max, first)
+
+
+def trigger_stream(members: list[EventModel], mode: str) -> EventModel:
+    """The activation-event stream of a data trigger before its prescaler."""
+    if mode == "and":
+        return combine_and(members)
+    if mode == "or":
+        return combine_or(members)
+    return members[0] if members else SILENT
+
+
+def event_models(system: SystemModel, infos: Mapping[str, ActivationInfo], order: tuple[str, ...],
+                 wcrt: Mapping[str, Fraction | None], bcrt: Mapping[str, Fraction]) -> dict[str, EventModel]:
+    """The activation event model of every task, given response-time estimates (§5.2)."""
+    models: dict[str, EventModel] = {}
+    for tid in order:
+        info = infos[tid]
+        task = system.task(tid)
+        if info.kind in ("timer", "sporadic"):
+            models[tid] = source_event_model(task)
+        elif info.kind == "trigger" and not info.in_cycle:
+            arrivals = member_arrivals(info, models, wcrt, bcrt)
+            stream = trigger_stream(arrivals, info.mode or "single")
+            k = info.prescaler or 1
+            models[tid] = prescaled(stream, k, first_of_k(stream, arrivals, info.mode or "single", k))
+        else:
+            models[tid] = UNBOUNDED
+    return models
+
+
+def member_arrivals(info: ActivationInfo, models: Mapping[str, EventModel],
+                    wcrt: Mapping[str, Fraction | None], bcrt: Mapping[str, Fraction]) -> list[EventModel]:
+    """The arrival stream on every member of ``info``'s trigger (SILENT for an unconnected one)."""
+    out = []
+    for src in info.sources:
+        if src.writer is None or src.link is None:
+            out.append(SILENT)
+        else:
+            out.append(arrival_model(models.get(src.writer, UNBOUNDED), wcrt.get(src.writer),
+                                     bcrt[src.writer], src.link))
+    return out
+
+
+# ================================================================== sampling (§5.3)
+
+
+@dataclass(frozen=True)
+class LinkSampling:
+    """How ``reader`` samples the values of ``link``: its activation rate against the writer's.
+
+    ``oversampling`` = reader rate / writer rate and ``undersampling`` = writer rate / reader rate,
+    each in its worst direction over the rate intervals (reader fastest against writer slowest, and
+    vice versa); a factor is reported only when it exceeds 1, and None inside a flag that is True
+    means "unbounded" (a writer or reader that may stop). A reader triggered by this very in-port
+    (not a compound) is matched, or undersampled by exactly its prescaler (``by_trigger``).
+    """
+
+    source: str
+    target: str
+    writer: str
+    reader: str
+    writer_rate: RateInterval | None
+    reader_rate: RateInterval | None
+    relation: str  # "matched" | "oversampled" | "undersampled" | "varies" | "unknown"
+    oversampled: bool
+    oversampling: Fraction | None
+    undersampled: bool
+    undersampling: Fraction | None
+    by_trigger: bool = False
+
+
+def sampling_relations(system: SystemModel, infos: Mapping[str, ActivationInfo]) -> tuple[LinkSampling, ...]:
+    """Every (connection, reader) pair, in connection order."""
+    return tuple(_sampling(system, link, reader, infos) for link in system.links for reader in link.readers)
+
+
+def _ratio(num: Fraction, den: Fraction) -> Fraction | None:
+    return None if den == 0 else num / den
+
+
+def _sampling(system: SystemModel, link: LinkModel, reader: str,
+              infos: Mapping[str, ActivationInfo]) -> LinkSampling:
+    w, r = infos[link.writer].rate, infos[reader].rate
+    act = system.task(reader).activation
+    member = link.target.split(".", 1)[1]
+    if isinstance(act, DataTriggered) and act.mode == "single" and act.port == member:
+        k = Fraction(act.prescaler)
+        return LinkSampling(link.source, link.target, link.writer, reader, w, r,
+                            "matched" if k == 1 else "undersampled", False, None, k > 1,
+                            k if k > 1 else None, by_trigger=True)
+    if w is None or r is None:
+        return LinkSampling(link.source, link.target, link.writer, reader, w, r, "unknown",
+                            False, None, False, None)
+    over, under = _ratio(r.high, w.low), _ratio(w.high, r.low)
+    is_over = over is None or over > 1
+    is_under = under is None or under > 1
+    if r.high == 0:
+        is_over = False  # a reader that never runs samples nothing
+    if w.high == 0:
+        is_under = False
+    relation = {(False, False): "matched", (True, False): "oversampled",
+                (False, True): "undersampled", (True, True): "varies"}[(is_over, is_under)]
+    return LinkSampling(link.source, link.target, link.writer, reader, w, r, relation,
+                        is_over, over if is_over else None, is_under, under if is_under else None)
+
+
+def _factor_text(value: Fraction | None) -> str:
+    return "an unbounded factor" if value is None else f"a factor of {fmt_number(value)}"
+
+
+def _tolerance_violation(tol, flagged: bool, factor: Fraction | None) -> str | None:
+    """The tolerance's wording if a flagged factor violates it, else None."""
+    if tol is None or not flagged or tol.kind == "ok":
+        return None
+    if tol.kind == "forbidden":
+        return "forbidden"
+    limit = tol.factor.value if tol.factor is not None else None
+    if limit is None:
+        return None
+    if factor is None or factor > limit:
+        return f"at most {fmt_number(limit)}"
+    return None
+
+
+def _rates_text(s: LinkSampling, direction: str) -> str:
+    if s.by_trigger:
+        return f"triggered by this port with prescaler {fmt_number(s.undersampling)}"
+    w, r = s.writer_rate, s.reader_rate
+    if direction == "over":
+        text = f"reader {fmt_rate(r.high)} / writer {fmt_rate(w.low)}"
+    else:
+        text = f"writer {fmt_rate(w.high)} / reader {fmt_rate(r.low)}"
+    if not (w.is_point and r.is_point):
+        text += "; rate intervals compared in their worst direction"
+    return text
+
+
+def check_sampling(system: SystemModel, samplings: tuple[LinkSampling, ...], sink: DiagnosticSink) -> None:
+    """E310: a read whose over- or undersampling exceeds its tolerance (§5.3)."""
+    for s in samplings:
+        task = system.task(s.reader)
+        port = s.target.split(".", 1)[1]
+        read = next((rd for rd in task.reads if rd.port == port), None)
+        if read is None:
+            continue
+        for direction, tol, flagged, factor in (("over", read.oversampling, s.oversampled, s.oversampling),
+                                                ("under", read.undersampling, s.undersampled, s.undersampling)):
+            allowed = _tolerance_violation(tol, flagged, factor)
+            if allowed is None:
+                continue
+            link = system.link_into(s.target)
+            secondary = (Label(link.span, f"`{s.writer}` writes here"),) if link else ()
+            if tol.span is not None and getattr(tol.span, "line", 0):
+                secondary += (Label(tol.span, "the tolerance"),)
+            sink.emit("E310", f"`{s.reader}` reads `{port}` {direction}sampled by {_factor_text(factor)} "
+                      f"({_rates_text(s, direction)}); its {direction}sampling tolerance is {allowed}",
+                      task.span, f"{direction}samples `{port}`", secondary=secondary,
+                      notes=(f"writer `{s.writer}` runs at {s.writer_rate or 'an unbounded rate'}, reader "
+                             f"`{s.reader}` at {s.reader_rate or 'an unbounded rate'}",),
+                      help="change the reader's or the writer's rate, or relax the tolerance")
+
+
+def check_trigger_constraints(system: SystemModel, infos: Mapping[str, ActivationInfo],
+                              sink: DiagnosticSink) -> None:
+    """E305/E306: a data-triggered task whose propagated rate leaves its activation constraint.
+    (Timer and sporadic bindings are checked by validation.)"""
+    for task in system.tasks:
+        info = infos[task.id]
+        if info.kind != "trigger" or info.rate is None:
+            continue
+        if task.min_rate is None and task.max_rate is None:
+            continue
+        low_ok = task.min_rate is None or info.rate.low >= task.min_rate
+        high_ok = task.max_rate is None or info.rate.high <= task.max_rate
+        if low_ok and high_ok:
+            continue
+        code = "E305" if task.changeable else "E306"
+        where = (f"below its minimum activation rate {fmt_rate(task.min_rate)}" if not low_ok
+                 else f"above its maximum activation rate {fmt_rate(task.max_rate)}")
+        sink.emit(code, f"`{task.id}` is activated at {info.rate} ({info.derivation}), {where}",
+                  task.span, f"activated at {info.rate}",
+                  notes=(f"the constraint is {_constraint_text(task)}",),
+                  help="change the prescaler or the writer's rate"
+                  + ("" if task.changeable else "; the component fixes this rate"))
+
+
+def _constraint_text(task: TaskModel) -> str:
+    low = fmt_rate(task.min_rate) if task.min_rate is not None else None
+    high = fmt_rate(task.max_rate) if task.max_rate is not None else None
+    if task.min_rate is not None and task.min_rate == task.max_rate:
+        return f"{low} fixed" if not task.changeable else low
+    if low and high:
+        return f"{low} .. {high}"
+    return f"min {low}" if low else f"max {high}"

@@ -1,0 +1,376 @@
+"""Render an ``AnalysisResult``: a versioned JSON document and the outline text view.
+
+JSON (``to_json``), schema ``"verify.analysis/1"`` (the JSON Schema is ``JSON_SCHEMA``; specs/timing.md
+§8 describes every field). Every exact number is an object ``{"exact": "1/30", "decimal": null}``:
+``exact`` is the rational as ``p/q`` (or an integer), ``decimal`` its finite decimal expansion when one
+exists (``"0.025"``), else null. No floats. Times are seconds, rates hertz, factors unitless. A
+number that is not bounded is ``null``.
+
+Text (``to_text``): the outline of the system — every task with its rate and response times, every
+connection marked over- or undersampled with its factor — then a chain table (worst/best reaction
+time and data age, jitter, spec, margin, dominating hop) and each chain's per-step breakdown naming
+the rule that produced each term.
+"""
+from __future__ import annotations
+
+from fractions import Fraction
+
+from ..units import fmt_number, fmt_time
+from . import AnalysisResult, TaskTiming
+from .chains import Bound, ChainBounds, Step, Term
+from .rates import EventModel, LinkSampling, RateInterval
+from .rta import CoreLoad, percent
+
+SCHEMA = "verify.analysis/1"
+
+
+# ================================================================== JSON
+
+
+def exact(value: Fraction | int | None) -> dict | None:
+    """``{"exact": "p/q", "decimal": "0.25" | null}``, or None (unbounded)."""
+    if value is None:
+        return None
+    value = Fraction(value)
+    text = str(value.numerator) if value.denominator == 1 else f"{value.numerator}/{value.denominator}"
+    decimal = fmt_number(value)
+    return {"exact": text, "decimal": None if "/" in decimal else decimal}
+
+
+def _interval(rate: RateInterval | None) -> dict | None:
+    return None if rate is None else {"min": exact(rate.low), "max": exact(rate.high)}
+
+
+def _activation(t: TaskTiming) -> dict:
+    a = t.activation
+    return {
+        "kind": a.kind,
+        "period": exact(a.period),
+        "phase": exact(a.phase),
+        "interarrival": None if a.interarrival is None else {"min": exact(a.interarrival[0]),
+                                                             "max": exact(a.interarrival[1])},
+        "rate": _interval(a.rate),
+        "rate_derivation": a.derivation,
+        "trigger_port": a.trigger_port,
+        "mode": a.mode,
+        "prescaler": a.prescaler,
+        "sources": [{"member": s.member, "port": s.port, "writer": s.writer,
+                     "connection": s.link.source if s.link else None} for s in a.sources],
+        "in_trigger_cycle": a.in_cycle,
+    }
+
+
+def _events(e: EventModel) -> dict:
+    return {
+        "silent": e.silent,
+        "period_min": exact(e.period_min), "jitter_min": exact(e.jitter_min),
+        "period_max": exact(e.period_max), "jitter_max": exact(e.jitter_max),
+        "first_max": exact(e.first_max),
+        "a_min": exact(e.a_min), "a_max": exact(e.a_max), "sampling_wait": exact(e.sampling_wait),
+    }
+
+
+def _task(t: TaskTiming) -> dict:
+    r = t.response
+    return {
+        "id": t.id, "core": t.core, "priority": t.priority, "kind": t.kind,
+        "bcet": exact(t.bcet), "wcet": exact(t.wcet),
+        "activation": _activation(t),
+        "event_model": _events(t.events),
+        "bcrt": exact(r.bcrt), "wcrt": exact(r.wcrt), "wcrt_computed": exact(r.wcrt_computed),
+        "wcrt_rule": r.rule, "bcrt_rule": "bcet",
+        "deadline": exact(r.deadline), "deadline_rule": r.deadline_rule,
+        "blocking": exact(r.blocking), "hold": exact(r.hold),
+        "busy_window_jobs": r.busy_jobs, "critical_job": r.critical_job,
+        "interferers": list(r.interferers),
+        "schedulable": r.schedulable, "failure": r.failure,
+    }
+
+
+def _core(c: CoreLoad) -> dict:
+    return {"name": c.core, "utilisation": exact(c.utilisation),
+            "percent": None if c.utilisation is None else percent(c.utilisation),
+            "overloaded": c.overloaded, "tasks": list(c.tasks)}
+
+
+def _link(s: LinkSampling) -> dict:
+    return {
+        "source": s.source, "target": s.target, "writer": s.writer, "reader": s.reader,
+        "writer_rate": _interval(s.writer_rate), "reader_rate": _interval(s.reader_rate),
+        "relation": s.relation, "by_trigger": s.by_trigger,
+        "oversampled": s.oversampled, "oversampling_factor": exact(s.oversampling),
+        "undersampled": s.undersampled, "undersampling_factor": exact(s.undersampling),
+    }
+
+
+def _term(term: Term | None) -> dict | None:
+    if term is None:
+        return None
+    return {"rule": term.rule, "value": exact(term.value), "note": term.note or None,
+            "parts": [{"name": n, "value": exact(v)} for n, v in term.parts]}
+
+
+def _step(n: int, s: Step) -> dict:
+    return {"index": n, "kind": s.kind, "label": s.label, "writer": s.writer, "reader": s.reader,
+            "source": s.source, "target": s.target, "reaction_time": _term(s.reaction),
+            "data_age": _term(s.data_age), "best": exact(s.best)}
+
+
+def _bound(b: Bound) -> dict:
+    return {"worst": exact(b.worst), "best": exact(b.best), "jitter": exact(b.jitter), "rule": b.rule}
+
+
+def _chain(c: ChainBounds) -> dict:
+    return {
+        "name": c.name, "tasks": list(c.tasks), "problem": c.problem,
+        "hops": [_step(n, s) for n, s in enumerate(c.steps)],
+        "bounds": {"reaction_time": _bound(c.reaction_time),
+                   "reaction_time_reduced": _bound(c.reaction_time_reduced),
+                   "data_age_reduced": _bound(c.data_age_reduced),
+                   "data_age_non_reduced": _bound(c.data_age_non_reduced)},
+        "data_age_variant": c.data_age_variant,
+        "specs": [{"kind": s.kind, "variant": s.variant, "spec": exact(s.spec), "bound": exact(s.bound),
+                   "margin": exact(s.margin), "ok": s.ok} for s in c.specs],
+        "dominating": {"reaction_time": c.dominating_reaction, "data_age": c.dominating_data_age},
+    }
+
+
+def to_json(result: AnalysisResult) -> dict:
+    """The analysis as a JSON-ready dict following ``JSON_SCHEMA`` (schema "verify.analysis/1")."""
+    return {
+        "schema": SCHEMA,
+        "system": result.system,
+        "data_age_variant": result.data_age_variant,
+        "converged": result.converged,
+        "rounds": result.rounds,
+        "cores": [_core(c) for c in result.cores],
+        "tasks": [_task(t) for t in result.tasks],
+        "links": [_link(s) for s in result.links],
+        "chains": [_chain(c) for c in result.chains],
+        "diagnostics": [{"code": d.code, "severity": d.severity.value, "message": d.message,
+                         "file": d.span.file, "line": d.span.line, "column": d.span.column}
+                        for d in result.diagnostics],
+    }
+
+
+_NUM = {"oneOf": [{"type": "null"}, {"type": "object", "required": ["exact", "decimal"],
+                                      "additionalProperties": False,
+                                      "properties": {"exact": {"type": "string", "pattern": r"^-?\d+(/\d+)?$"},
+                                                     "decimal": {"type": ["string", "null"]}}}]}
+_STR = {"type": ["string", "null"]}
+_INTERVAL = {"oneOf": [{"type": "null"}, {"type": "object", "required": ["min", "max"],
+                                           "properties": {"min": _NUM, "max": _NUM}}]}
+_TERM = {"oneOf": [{"type": "null"}, {"type": "object", "required": ["rule", "value", "parts"],
+                                       "properties": {"rule": {"type": "string"}, "value": _NUM, "note": _STR,
+                                                      "parts": {"type": "array", "items": {
+                                                          "type": "object", "required": ["name", "value"],
+                                                          "properties": {"name": {"type": "string"},
+                                                                         "value": _NUM}}}}}]}
+_BOUND = {"type": "object", "required": ["worst", "best", "jitter", "rule"],
+          "properties": {"worst": _NUM, "best": _NUM, "jitter": _NUM, "rule": {"type": "string"}}}
+
+
+def _obj(required: dict, **extra) -> dict:
+    return {"type": "object", "required": sorted(required), "properties": required, **extra}
+
+
+JSON_SCHEMA: dict = _obj({
+    "schema": {"const": SCHEMA},
+    "system": {"type": "string"},
+    "data_age_variant": {"enum": ["reduced", "non-reduced"]},
+    "converged": {"type": "boolean"},
+    "rounds": {"type": "integer"},
+    "cores": {"type": "array", "items": _obj({"name": {"type": "string"}, "utilisation": _NUM, "percent": _STR,
+                                              "overloaded": {"type": "boolean"},
+                                              "tasks": {"type": "array", "items": {"type": "string"}}})},
+    "tasks": {"type": "array", "items": _obj({
+        "id": {"type": "string"}, "core": {"type": "string"}, "priority": {"type": "integer"},
+        "kind": {"enum": ["preemptive", "cooperative"]}, "bcet": _NUM, "wcet": _NUM,
+        "activation": _obj({"kind": {"enum": ["timer", "sporadic", "trigger", "hole"]}, "period": _NUM,
+                            "phase": _NUM, "rate": _INTERVAL, "rate_derivation": {"type": "string"},
+                            "trigger_port": _STR, "mode": _STR,
+                            "prescaler": {"type": ["integer", "null"]},
+                            "sources": {"type": "array"}, "interarrival": {"type": ["object", "null"]},
+                            "in_trigger_cycle": {"type": "boolean"}}),
+        "event_model": _obj({k: _NUM for k in ("period_min", "jitter_min", "period_max", "jitter_max",
+                                               "first_max", "a_min", "a_max", "sampling_wait")}
+                            | {"silent": {"type": "boolean"}}),
+        "bcrt": _NUM, "wcrt": _NUM, "wcrt_computed": _NUM, "wcrt_rule": {"type": "string"},
+        "bcrt_rule": {"type": "string"}, "deadline": _NUM, "deadline_rule": {"type": "string"},
+        "blocking": _NUM, "hold": _NUM, "busy_window_jobs": {"type": ["integer", "null"]},
+        "critical_job": {"type": ["integer", "null"]}, "interferers": {"type": "array"},
+        "schedulable": {"type": "boolean"}, "failure": _STR})},
+    "links": {"type": "array", "items": _obj({
+        "source": {"type": "string"}, "target": {"type": "string"}, "writer": {"type": "string"},
+        "reader": {"type": "string"}, "writer_rate": _INTERVAL, "reader_rate": _INTERVAL,
+        "relation": {"enum": ["matched", "oversampled", "undersampled", "varies", "unknown"]},
+        "by_trigger": {"type": "boolean"}, "oversampled": {"type": "boolean"}, "oversampling_factor": _NUM,
+        "undersampled": {"type": "boolean"}, "undersampling_factor": _NUM})},
+    "chains": {"type": "array", "items": _obj({
+        "name": {"type": "string"}, "tasks": {"type": "array", "items": {"type": "string"}}, "problem": _STR,
+        "hops": {"type": "array", "items": _obj({
+            "index": {"type": "integer"}, "kind": {"enum": ["first", "hop", "last"]},
+            "label": {"type": "string"}, "writer": _STR, "reader": {"type": "string"}, "source": _STR,
+            "target": _STR, "reaction_time": _TERM, "data_age": _TERM, "best": _NUM})},
+        "bounds": _obj({k: _BOUND for k in ("reaction_time", "reaction_time_reduced", "data_age_reduced",
+                                            "data_age_non_reduced")}),
+        "data_age_variant": {"enum": ["reduced", "non-reduced"]},
+        "specs": {"type": "array", "items": _obj({
+            "kind": {"enum": ["reaction_time", "data_age", "jitter"]}, "variant": {"type": "string"},
+            "spec": _NUM, "bound": _NUM, "margin": _NUM, "ok": {"type": "boolean"}})},
+        "dominating": _obj({"reaction_time": {"type": ["integer", "null"]},
+                            "data_age": {"type": ["integer", "null"]}})})},
+    "diagnostics": {"type": "array", "items": _obj({"code": {"type": "string"}, "severity": {"type": "string"},
+                                                    "message": {"type": "string"}},)},
+}, **{"$schema": "https://json-schema.org/draft/2020-12/schema", "title": SCHEMA})
+
+
+# ================================================================== text
+
+
+def _t(value: Fraction | None) -> str:
+    return fmt_time(value)
+
+
+def _rate_text(t: TaskTiming) -> str:
+    a = t.activation
+    if a.kind == "timer":
+        how = f"timer {fmt_time(a.period)}" + (f" phase {fmt_time(a.phase)}" if a.phase is not None else "")
+    elif a.kind == "sporadic":
+        how = f"sporadic {fmt_time(a.interarrival[0])} .. {fmt_time(a.interarrival[1])}"
+    elif a.kind == "trigger":
+        how = f"trigger {a.trigger_port}" + (f" every {a.prescaler}" if a.prescaler != 1 else "")
+    else:
+        how = "synthesis hole"
+    writers = [s.writer for s in a.sources if s.writer]
+    source = " from " + ", ".join(writers) if writers else ""
+    if a.rate is None:
+        return f"{how}: rate {a.derivation}{source}"
+    rate = str(a.rate)
+    derived = "" if a.kind in ("timer", "sporadic") or a.derivation == rate else f" = {a.derivation}"
+    return f"{how}: {rate}{derived}{source}"
+
+
+def _task_line(t: TaskTiming) -> str:
+    r = t.response
+    wcrt = _t(r.wcrt) + (f" ({r.rule})" if r.wcrt is not None else f" ({r.failure or 'unbounded'})")
+    line = (f"  {t.id}  [{t.core}, priority {t.priority}{', cooperative' if t.kind == 'cooperative' else ''}]"
+            f"  {_rate_text(t)}\n"
+            f"      C {_t(t.bcet)} .. {_t(t.wcet)}   R {_t(r.bcrt)} .. {wcrt}   A⁺ {_t(t.a_max)}"
+            f"   deadline {_t(r.deadline)}")
+    if r.blocking:
+        line += f"   blocking {_t(r.blocking)}"
+    return line
+
+
+def _link_line(s: LinkSampling) -> str:
+    if s.relation == "matched":
+        what = "matched" + (" (triggered by this port)" if s.by_trigger else "")
+    elif s.relation == "unknown":
+        what = "rates not bounded"
+    else:
+        parts = []
+        if s.oversampled:
+            parts.append(f"oversampled ×{'∞' if s.oversampling is None else fmt_number(s.oversampling)}")
+        if s.undersampled:
+            parts.append(f"undersampled ×{'∞' if s.undersampling is None else fmt_number(s.undersampling)}")
+        what = " or ".join(parts)
+        if s.by_trigger:
+            what += " (trigger prescaler)"
+        elif not (s.writer_rate and s.reader_rate and s.writer_rate.is_point and s.reader_rate.is_point):
+            what += " (worst direction of the rate intervals)"
+    w = "?" if s.writer_rate is None else str(s.writer_rate)
+    r = "?" if s.reader_rate is None else str(s.reader_rate)
+    return f"  {s.source} -> {s.target}  ({s.writer} {w} → {s.reader} {r}): {what}"
+
+
+def _spec_cell(c: ChainBounds, kind: str) -> tuple[str, str]:
+    check = next((s for s in c.specs if s.kind == kind), None)
+    if check is None:
+        return "-", "-"
+    margin = "unbounded" if check.margin is None else _t(check.margin)
+    if check.margin is not None and check.margin < 0:
+        margin += " VIOLATED"
+    return f"<= {_t(check.spec)}", margin
+
+
+def _dominating(c: ChainBounds, index: int | None) -> str:
+    if index is None:
+        return "-"
+    return c.steps[index].label
+
+
+def _chain_rows(c: ChainBounds) -> list[list[str]]:
+    age = c.data_age
+    rows = []
+    for name, bound, kind, dom in (("reaction time", c.reaction_time, "reaction_time", c.dominating_reaction),
+                                   (f"data age ({c.data_age_variant})", age, "data_age", c.dominating_data_age)):
+        spec, margin = _spec_cell(c, kind)
+        rows.append([c.name, name, _t(bound.worst), _t(bound.best), _t(bound.jitter), spec, margin,
+                     _dominating(c, dom), bound.rule])
+    if any(s.kind == "jitter" for s in c.specs):
+        spec, margin = _spec_cell(c, "jitter")
+        rows.append([c.name, f"jitter ({c.data_age_variant})", _t(c.jitter), "", "", spec, margin, "",
+                     "§7.5 worst − best data age"])
+    return rows
+
+
+def _table(rows: list[list[str]]) -> list[str]:
+    widths = [max(len(r[i]) for r in rows) for i in range(len(rows[0]))]
+    return ["  " + "  ".join(cell.ljust(w) for cell, w in zip(row, widths)).rstrip() for row in rows]
+
+
+def _term_text(term: Term) -> str:
+    parts = " + ".join(f"{name} {_t(value)}" for name, value in term.parts)
+    note = f"; {term.note}" if term.note else ""
+    return f"{_t(term.value)} by {term.rule}: {parts}{note}"
+
+
+def _breakdown(c: ChainBounds) -> list[str]:
+    lines = [f"  chain {c.name}: " + " -> ".join(c.tasks)]
+    if c.problem:
+        return lines + [f"    not analysed: {c.problem}"]
+    for n, step in enumerate(c.steps):
+        marks = []
+        if n == c.dominating_reaction:
+            marks.append("dominates reaction time")
+        if n == c.dominating_data_age:
+            marks.append("dominates data age")
+        head = f"    [{n}] {step.label}" + (f"  ({', '.join(marks)})" if marks else "")
+        lines.append(head)
+        if step.reaction is not None:
+            lines.append(f"        reaction  {_term_text(step.reaction)}")
+        if step.data_age is not None:
+            lines.append(f"        data age  {_term_text(step.data_age)}")
+        lines.append(f"        best      {_t(step.best)}")
+    lines.append(f"    reaction time {_t(c.reaction_time.worst)} (reduced {_t(c.reaction_time_reduced.worst)}), "
+                 f"data age {_t(c.data_age_reduced.worst)} reduced / {_t(c.data_age_non_reduced.worst)} "
+                 f"non-reduced, best {_t(c.reaction_time.best)}")
+    return lines
+
+
+def to_text(result: AnalysisResult) -> str:
+    """The outline view: tasks with rates and response times, connections with sampling factors,
+    the chain table and each chain's breakdown with the rule behind every term."""
+    out = [f"system {result.system}  (analysis {SCHEMA}; data age {result.data_age_variant}; "
+           f"{'converged' if result.converged else 'NOT converged'} after {result.rounds} round"
+           f"{'s' if result.rounds != 1 else ''})", "", "cores"]
+    for c in result.cores:
+        u = "unbounded" if c.utilisation is None else f"{fmt_number(c.utilisation)} ({percent(c.utilisation)})"
+        out.append(f"  {c.core}  utilisation {u}{'  OVERLOADED' if c.overloaded else ''}: " + ", ".join(c.tasks))
+    out += ["", "tasks"] + [_task_line(t) for t in result.tasks]
+    if result.links:
+        out += ["", "connections"] + [_link_line(s) for s in result.links]
+    if result.chains:
+        header = ["chain", "latency", "worst", "best", "jitter", "spec", "margin", "dominating hop", "rule"]
+        rows = [header] + [row for c in result.chains for row in _chain_rows(c)]
+        out += ["", "chains"] + _table(rows)
+        for c in result.chains:
+            out += [""] + _breakdown(c)
+    if result.diagnostics:
+        out += ["", f"{len(result.diagnostics)} problem{'s' if len(result.diagnostics) != 1 else ''}: "
+                + ", ".join(sorted({d.code for d in result.diagnostics}))]
+    return "\n".join(out)
+
+
+__all__ = ["JSON_SCHEMA", "SCHEMA", "exact", "to_json", "to_text"]

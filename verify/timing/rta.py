@@ -1,0 +1,431 @@
+"""Response-time analysis per core: fixed-priority preemptive with jitter (specs/timing.md §6).
+
+The worst case is the level-i busy window with q jobs (Lehoczky 1990; Tindell et al. 1994; in CPA
+form Richter 2005), specs/timing.md §6.2:
+
+    w(q) = q·(Cᵢ+βᵢ) + Σ_{j ∈ hp(i)} min(η⁺ⱼ(w), capⱼ(q))·Cⱼ + Σ_{s ∈ remote(i)} η⁺ₛ(w)·Eₛ
+    Rᵢ   = max_{1 ≤ q ≤ Q} (w(q) − δ⁻ᵢ(q)),   Q = min { q : w(q) ≤ δ⁻ᵢ(q+1) }
+
+with ``η⁺ⱼ(Δ) = ⌈(Δ + Jⱼ)/Pⱼ⌉`` (Joseph & Pandya 1986; Audsley et al. 1993; jitter: Tindell 1994).
+``hp(i)`` holds the other tasks of i's core with priority ≥ i's; ``capⱼ`` bounds a task that only
+runs because i completed (§6.2). Cooperative tasks of one instance are sequenced (§1, §6.3): ``βᵢ``
+is the longest hold ``Eₛ`` of a sibling that may hold the token when a job of i is released, remote
+siblings may take the token while i's core is busy, and a sibling waiting for the token suspends
+itself, which its lower-priority neighbours see as extra release jitter ``Rₛ − Cₛ`` (suspension as
+jitter: Bletsas et al. 2018; Chen et al., *Many suspensions, many problems*, 2019). The best case
+is ``bcet`` (§6.4).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from fractions import Fraction
+from typing import Mapping
+
+from ..diagnostics import DiagnosticSink, Label
+from ..model import DataTriggered, Hole, SystemModel, TaskModel
+from ..units import fmt_number, fmt_time
+from .rates import ActivationInfo, EventModel
+
+ZERO = Fraction(0)
+MAX_JOBS = 1000  # jobs per busy window before giving up
+MAX_STEPS = 100_000  # fixed-point steps per task
+
+
+# ================================================================== results
+
+
+@dataclass(frozen=True)
+class CoreLoad:
+    """The utilisation ``Σ wcet · (highest activation rate)`` of one core; None if some rate is not
+    bounded."""
+
+    core: str
+    utilisation: Fraction | None
+    tasks: tuple[str, ...]
+
+    @property
+    def overloaded(self) -> bool:
+        return self.utilisation is not None and self.utilisation > 1
+
+
+@dataclass(frozen=True)
+class TaskResponse:
+    """Response-time bounds of one task, measured from its release (§6).
+
+    ``wcrt`` is the bound every later step uses: the user's ``wcrt`` bound if given (rule "user
+    bound"), else ``wcrt_computed``; None when no bound was found within the deadline (``failure``
+    says why). ``blocking`` is the per-job cooperative blocking ``βᵢ``; ``busy_jobs`` the number of
+    jobs Q in the longest busy window; ``critical_job`` the q that gave the maximum.
+    """
+
+    task: str
+    core: str
+    priority: int
+    bcrt: Fraction
+    wcrt: Fraction | None
+    wcrt_computed: Fraction | None
+    rule: str
+    deadline: Fraction | None
+    deadline_rule: str
+    blocking: Fraction | None
+    hold: Fraction | None  # Eᵢ: start to completion, what a sibling waits for
+    busy_jobs: int | None
+    critical_job: int | None
+    interferers: tuple[str, ...]
+    failure: str | None = None
+
+    @property
+    def schedulable(self) -> bool:
+        return self.wcrt is not None and (self.deadline is None or self.wcrt <= self.deadline)
+
+
+# ================================================================== utilisation
+
+
+def core_loads(system: SystemModel, infos: Mapping[str, ActivationInfo]) -> tuple[CoreLoad, ...]:
+    """Per core: ``U = Σ Cᵢ · fᵢ⁺`` with fᵢ⁺ the upper end of the task's rate interval (§6.1)."""
+    loads = []
+    for core in _cores(system):
+        tasks = system.tasks_on(core)
+        rates = [infos[t.id].rate for t in tasks]
+        total = None if any(r is None for r in rates) else sum(
+            (t.wcet * r.high for t, r in zip(tasks, rates)), ZERO)
+        loads.append(CoreLoad(core, total, tuple(t.id for t in tasks)))
+    return tuple(loads)
+
+
+def _cores(system: SystemModel) -> list[str]:
+    names = [c.name for c in system.cores]
+    names += [t.core for t in system.tasks if t.core not in names and not names.count(t.core)]
+    return list(dict.fromkeys(names))
+
+
+def percent(value: Fraction) -> str:
+    """A utilisation as a percentage, exact or rounded to two decimals (marked ≈)."""
+    exact = value * 100
+    shown = round(exact, 2)
+    return f"{'' if shown == exact else '≈'}{fmt_number(Fraction(shown))} %"
+
+
+def ratio(value: Fraction) -> str:
+    """An exact fraction as ``p/q`` (or an integer)."""
+    return str(value.numerator) if value.denominator == 1 else f"{value.numerator}/{value.denominator}"
+
+
+def check_utilisation(system: SystemModel, loads: tuple[CoreLoad, ...], infos: Mapping[str, ActivationInfo],
+                      sink: DiagnosticSink) -> None:
+    """E311: a core whose utilisation exceeds 1."""
+    spans = {c.name: c.span for c in system.cores}
+    for load in loads:
+        if not load.overloaded:
+            continue
+        shares = [f"`{t}` {fmt_number(system.task(t).wcet * infos[t].rate.high)}" for t in load.tasks]
+        secondary = tuple(Label(system.task(t).span, f"`{t}` on `{load.core}`") for t in load.tasks)
+        sink.emit("E311", f"core `{load.core}` is utilised {ratio(load.utilisation)} "
+                  f"({percent(load.utilisation)}) by " + ", ".join(f"`{t}`" for t in load.tasks),
+                  spans.get(load.core, system.task(load.tasks[0]).span), "utilisation above 1",
+                  secondary=secondary, notes=("shares (wcet × highest rate): " + ", ".join(shares),),
+                  help="move tasks to another core, lower their rates or their execution times")
+
+
+# ================================================================== one core
+
+
+@dataclass(frozen=True)
+class Interferer:
+    """A stream of demand: ``η⁺(Δ) · cost`` with ``η⁺(Δ) = ⌈(Δ + jitter)/period⌉``, capped for the
+    q-th job's window by ``causal_cap(q)`` when every activation of the stream descends from the
+    analysed task's own completions (§6.2)."""
+
+    task: str
+    cost: Fraction | None
+    period: Fraction | None
+    jitter: Fraction | None
+    silent: bool = False
+    prescalers: tuple[int, ...] | None = None  # causal path back to the analysed task, nearest last
+    carry: int | None = None
+
+    def demand(self, window: Fraction, q: int = 1) -> Fraction | None:
+        if self.silent or window <= 0:
+            return ZERO
+        cap = self.causal_cap(q)
+        if self.cost is None or self.period is None or self.jitter is None:
+            return None if cap is None else cap * self.cost
+        count = -((-(window + self.jitter)) // self.period)
+        return (count if cap is None else min(count, cap)) * self.cost
+
+    def causal_cap(self, q: int) -> int | None:
+        """At most ``q − 1 + carry`` completions of the analysed task can cause releases in its
+        q-job busy window; every prescaler on the way divides them (rounded up)."""
+        if self.prescalers is None or self.carry is None:
+            return None
+        n = q - 1 + self.carry
+        for k in reversed(self.prescalers):
+            n = -((-n) // k)
+        return n
+
+    def rate(self) -> Fraction | None:
+        if self.silent:
+            return ZERO
+        if self.cost is None or self.period is None:
+            return None
+        return self.cost / self.period
+
+
+def causal_path(system: SystemModel, source: TaskModel, target: TaskModel,
+                estimates: Mapping[str, Fraction | None]) -> tuple[tuple[int, ...], Fraction] | None:
+    """If every activation of ``source`` is caused by a completion of ``target`` through single-port
+    data triggers: the prescalers on the way (from ``source`` back) and the largest latency L⁺ from
+    a completion of ``target`` to the release it causes (Σ d⁺ + Σ R of the tasks in between)."""
+    prescalers: list[int] = []
+    latency, seen, current = ZERO, {source.id}, source
+    while True:
+        act = current.activation
+        if not isinstance(act, DataTriggered) or act.mode != "single":
+            return None
+        link = system.link_into(f"{current.instance}.{act.port}")
+        if link is None:
+            return None
+        prescalers.append(act.prescaler)
+        latency += link.delay_max
+        if link.writer == target.id:
+            return tuple(prescalers), latency
+        if link.writer in seen or estimates.get(link.writer) is None:
+            return None
+        seen.add(link.writer)
+        latency += estimates[link.writer]
+        current = system.task(link.writer)
+
+
+def carry_in(task: TaskModel, events: EventModel, response: Fraction | None, latency: Fraction) -> int | None:
+    """Completions of ``task`` in a closed interval of length L⁺ before its busy window:
+    ``⌊(L⁺ + J⁻ + R − B)/P⁻⌋ + 1`` (completions lie in ``[r + B, r + R]``)."""
+    if events.silent:
+        return 0
+    if events.period_min is None or events.jitter_min is None or response is None:
+        return None
+    return int((latency + events.jitter_min + response - bcrt(task)) // events.period_min) + 1
+
+
+def siblings(system: SystemModel, task: TaskModel) -> tuple[TaskModel, ...]:
+    """The other cooperative tasks of ``task``'s instance (empty unless ``task`` is cooperative)."""
+    if task.kind != "cooperative":
+        return ()
+    return tuple(t for t in system.tasks if t.instance == task.instance and t.kind == "cooperative"
+                 and t.id != task.id)
+
+
+def higher_priority(system: SystemModel, task: TaskModel) -> tuple[TaskModel, ...]:
+    """hp(i): the other tasks of i's core with priority ≥ i's (equal priorities interfere)."""
+    return tuple(t for t in system.tasks_on(task.core) if t.id != task.id and t.priority >= task.priority)
+
+
+def suspension_jitter(system: SystemModel, task: TaskModel, response: Fraction | None) -> Fraction | None:
+    """A cooperative task with siblings may wait for the token: extra jitter ``R − C`` (§6.3)."""
+    if not siblings(system, task):
+        return ZERO
+    if response is None:
+        return None
+    return max(ZERO, response - task.wcet)
+
+
+def interferer(system: SystemModel, task: TaskModel, events: EventModel, response: Fraction | None,
+               cost: Fraction | None) -> Interferer:
+    jitter = events.jitter_min
+    if jitter is not None:
+        extra = suspension_jitter(system, task, response)
+        jitter = None if extra is None else jitter + extra
+    return Interferer(task.id, cost, events.period_min, jitter, events.silent)
+
+
+class Budget:
+    """The fixed-point steps left for one task (all its busy-window jobs together)."""
+
+    def __init__(self, steps: int = MAX_STEPS):
+        self.left = steps
+
+    def take(self) -> bool:
+        self.left -= 1
+        return self.left >= 0
+
+
+def least_fixed_point(base: Fraction, start: Fraction, streams: list[Interferer],
+                      limit: Fraction | None, q: int = 1,
+                      budget: Budget | None = None) -> tuple[Fraction | None, str | None]:
+    """The least w ≥ start with ``w = base + Σ demand(w)`` (iterated from ``start``, which must not
+    exceed it), or None with a reason: the demand is unbounded, w exceeds ``limit``, the streams'
+    utilisation is at least 1 (no fixed point), or the step budget runs out."""
+    load = _load([s for s in streams if s.prescalers is None or s.carry is None])
+    if limit is None and load is None:
+        return None, "the interference is not bounded"
+    if load is not None and load >= 1 and base > 0:
+        # w ↦ base + Σ⌈(w + J)/P⌉·C ≥ base + U·w > w: no fixed point exists
+        return None, f"the interfering utilisation is {ratio(load)} (at least 1)"
+    w, budget = start, budget or Budget()
+    while budget.take():
+        if limit is not None and w > limit:
+            return None, "it exceeds the deadline"
+        demand = [s.demand(w, q) for s in streams]
+        if any(d is None for d in demand):
+            bad = next(s.task for s, d in zip(streams, demand) if d is None)
+            return None, f"the activations of `{bad}` are not bounded"
+        new = base + sum(demand, ZERO)
+        if new == w:
+            return w, None
+        w = new
+    return None, f"no fixed point within {MAX_STEPS} iteration steps"
+
+
+def _load(streams: list[Interferer]) -> Fraction | None:
+    rates = [s.rate() for s in streams]
+    return None if any(r is None for r in rates) else sum(rates, ZERO)
+
+
+def hold_time(system: SystemModel, task: TaskModel, events: Mapping[str, EventModel],
+              estimates: Mapping[str, Fraction | None], deadline: Fraction | None) -> Fraction | None:
+    """Eᵢ: from the start of a job to its completion, ``w = Cᵢ + Σ_{hp(i)} η⁺ⱼ(w)·Cⱼ`` (no own backlog,
+    no token wait): how long a cooperative job holds its instance's token."""
+    streams = [interferer(system, j, events[j.id], estimates.get(j.id), j.wcet) for j in higher_priority(system, task)]
+    value, _ = least_fixed_point(task.wcet, task.wcet, streams, deadline)
+    return value
+
+
+@dataclass(frozen=True)
+class Demand:
+    """Everything the busy window of one task needs."""
+
+    cost: Fraction
+    blocking: Fraction
+    streams: list[Interferer]
+    own: EventModel
+
+
+def wcrt(d: Demand, deadline: Fraction | None) -> tuple[Fraction | None, int | None, int | None, str | None]:
+    """The WCRT ``Rᵢ = max_{q ≤ Q} (w(q) − δ⁻ᵢ(q))`` over the level-i busy window of §6.2 (Joseph &
+    Pandya 1986; Lehoczky 1990; Tindell et al. 1994): returns (R, Q, critical q, failure)."""
+    if not d.own.silent and (d.own.period_min is None or d.own.jitter_min is None):
+        return None, None, None, ("its activations are not bounded" if d.own.period_min is None else
+                                  "its activation jitter is not bounded (a writer upstream has no WCRT bound)")
+    own = Interferer("", d.cost + d.blocking, d.own.period_min, ZERO, d.own.silent)
+    if deadline is None and _load(d.streams + [own]) is not None and _load(d.streams + [own]) >= 1:
+        return None, None, None, "the utilisation of its level is 1 or more and it has no deadline"
+    best: tuple[Fraction, int] | None = None
+    w, budget = ZERO, Budget()
+    for q in range(1, MAX_JOBS + 1):
+        offset = d.own.delta_min(q)
+        limit = None if deadline is None else deadline + offset
+        w, why = least_fixed_point(q * (d.cost + d.blocking), w + d.cost + d.blocking, d.streams, limit, q, budget)
+        if w is None:
+            return None, q, None, why
+        if best is None or w - offset > best[0]:
+            best = (w - offset, q)
+        following = d.own.delta_min(q + 1)
+        if following is None or w <= following:
+            return best[0], q, best[1], None
+    return None, MAX_JOBS, None, f"the busy window does not close within {MAX_JOBS} jobs"
+
+
+def deadline_of(task: TaskModel, events: EventModel) -> tuple[Fraction | None, str]:
+    if task.deadline is not None:
+        return task.deadline, "given"
+    if events.a_max is not None:
+        return events.a_max, "A⁺ (max inter-activation)"
+    return None, "none (A⁺ not bounded)"
+
+
+def response_time(system: SystemModel, task: TaskModel, events: Mapping[str, EventModel],
+                  estimates: Mapping[str, Fraction | None]) -> TaskResponse:
+    """WCRT and BCRT of one task, given every task's event model and the current WCRT estimates."""
+    deadline, deadline_rule = deadline_of(task, events[task.id])
+    hp = higher_priority(system, task)
+    streams = [causally_capped(system, task, j, events, estimates) for j in hp]
+    hold = hold_time(system, task, events, estimates, deadline)
+    blocking, remote = cooperative_blocking(system, task, events, estimates)
+    names = tuple(j.id for j in hp) + tuple(s.task for s in remote)
+    if blocking is None:
+        computed, q, crit, failure = None, None, None, "a cooperative sibling's hold time is not bounded"
+    else:
+        computed, q, crit, failure = wcrt(Demand(task.wcet, blocking, streams + remote,
+                                                        events[task.id]), deadline)
+    if isinstance(task.activation, Hole):
+        failure = "its activation is an unresolved synthesis hole (run `synth` first)"
+    if task.wcrt_bound is not None:
+        used, rule = task.wcrt_bound, "user bound"
+    else:
+        used = computed
+        rule = f"busy window, {q} job{'s' if q != 1 else ''}" if computed is not None else "unbounded"
+    return TaskResponse(task.id, task.core, task.priority, bcrt(task), used, computed, rule, deadline,
+                        deadline_rule, blocking, hold, q, crit, names, failure)
+
+
+def causally_capped(system: SystemModel, task: TaskModel, j: TaskModel, events: Mapping[str, EventModel],
+                    estimates: Mapping[str, Fraction | None]) -> Interferer:
+    """j's demand on ``task``'s busy window, capped when j only runs because ``task`` completed."""
+    stream = interferer(system, j, events[j.id], estimates.get(j.id), j.wcet)
+    path = causal_path(system, j, task, estimates)
+    if path is None:
+        return stream
+    carry = carry_in(task, events[task.id], estimates.get(task.id), path[1])
+    return Interferer(stream.task, stream.cost, stream.period, stream.jitter, stream.silent, path[0], carry)
+
+
+def cooperative_blocking(system: SystemModel, task: TaskModel, events: Mapping[str, EventModel],
+                         estimates: Mapping[str, Fraction | None]) -> tuple[Fraction | None, list[Interferer]]:
+    """(βᵢ, remote sibling streams). βᵢ = max Eₛ over siblings that may hold the token when a job of i
+    is released: every remote sibling and every local one of lower priority (a local sibling of
+    higher or equal priority is already in hp(i)). Remote siblings can also take the token while
+    i's core is busy, once per activation: demand ``η⁺ₛ(w)·Eₛ`` (§6.3)."""
+    sibs = siblings(system, task)
+    if not sibs:
+        return ZERO, []
+    holds = {s.id: hold_time(system, s, events, estimates, deadline_of(s, events[s.id])[0]) for s in sibs}
+    blockers = [s for s in sibs if s.core != task.core or s.priority < task.priority]
+    values = [holds[s.id] for s in blockers]
+    blocking = None if any(v is None for v in values) else max(values, default=ZERO)
+    remote = [token_stream(s, events[s.id], estimates.get(s.id), holds[s.id]) for s in sibs if s.core != task.core]
+    return blocking, remote
+
+
+def token_stream(sibling: TaskModel, events: EventModel, response: Fraction | None,
+                 hold: Fraction | None) -> Interferer:
+    """How often a remote sibling can hold the token: every job holds it within ``[r, r + R]``, so
+    jobs released up to R before a window can still hold it in the window: jitter ``J⁻ + R``."""
+    jitter = None if events.jitter_min is None or response is None else events.jitter_min + response
+    return Interferer(sibling.id, hold, events.period_min, jitter, events.silent)
+
+
+def bcrt(task: TaskModel) -> Fraction:
+    """The best-case response time: ``bcet`` — a job completes no earlier than its release plus its
+    execution time, which is at least ``bcet`` (§6.4)."""
+    return task.bcet
+
+
+def response_times(system: SystemModel, events: Mapping[str, EventModel],
+                   estimates: Mapping[str, Fraction | None]) -> dict[str, TaskResponse]:
+    """One round of RTA for every task (the façade iterates to the CPA fixed point)."""
+    return {t.id: response_time(system, t, events, estimates) for t in system.tasks}
+
+
+# ================================================================== diagnostics
+
+
+def check_response_times(system: SystemModel, responses: Mapping[str, TaskResponse],
+                         sink: DiagnosticSink) -> None:
+    """E312: no response-time bound within the deadline (tasks with a user bound are trusted)."""
+    for task in system.tasks:
+        r = responses[task.id]
+        if task.wcrt_bound is not None or r.wcrt is not None:
+            continue
+        deadline = (f"its deadline {fmt_time(r.deadline)} ({r.deadline_rule})" if r.deadline is not None
+                    else "any deadline (it has none)")
+        reason = r.failure or "no bound"
+        notes = [f"higher-or-equal-priority tasks on `{r.core}`: "
+                 + (", ".join(f"`{t}`" for t in r.interferers) or "none")]
+        if r.blocking:
+            notes.append(f"cooperative blocking per job: {fmt_time(r.blocking)}")
+        sink.emit("E312", f"no response-time bound for `{task.id}` on core `{r.core}` within {deadline}: "
+                  f"{reason}", task.span, "may miss its deadline",
+                  secondary=tuple(Label(system.task(t).span, "interferes") for t in r.interferers)[:3],
+                  notes=tuple(notes),
+                  help="give it a higher priority, move higher-priority tasks to another core, "
+                  "or relax the deadline")
