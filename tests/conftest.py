@@ -31,3 +31,15 @@ def write(tmp_path):
 
 def in_ci() -> bool:
     return os.environ.get("CI", "").lower() in ("1", "true", "yes")
+
+
+def pytest_terminal_summary(terminalreporter):
+    """Report the tightness of the analytic bounds against the simulator (tests/test_bounds_vs_simulation)."""
+    import sys
+
+    module = sys.modules.get("tests.test_bounds_vs_simulation")
+    lines = module.tightness_summary() if module else []
+    if lines:
+        terminalreporter.section("tightness of the analytic bounds (simulated worst / bound)")
+        for line in lines:
+            terminalreporter.write_line(line)
