@@ -13,7 +13,7 @@ from verify.cli import main
 from .conftest import EXAMPLES
 
 NAV = str(EXAMPLES / "navigation" / "navigation.vfy")
-BROKEN = "component A { task T { wcet 1 ms } }\nsystem S { instance a : Lazer }\n"
+BROKEN = "component Laser { task T { wcet 1 ms } }\nsystem S { instance a : Lazer }\n"
 
 
 def test_check_json_schema(write, capsys):
@@ -23,7 +23,7 @@ def test_check_json_schema(write, capsys):
     assert doc["schema"] == "verify.diagnostics/1"
     (d,) = doc["diagnostics"]
     assert d["code"] == "E101" and d["severity"] == "error" and d["line"] == 2 and d["column"] == 25
-    assert d["help"] == "did you mean `A`?" and d["spec"] == "specs/diagnostics.md#e101"
+    assert d["help"] == "did you mean `Laser`?" and d["spec"] == "specs/diagnostics.md#e101"
     assert doc["summary"] == {"errors": 1, "warnings": 0}
 
 
