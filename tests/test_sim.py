@@ -6,10 +6,12 @@ from fractions import Fraction as F
 
 import pytest
 
-from verify.model import (ChainModel, CoreModel, DataTriggered, HopModel, LinkModel, Periodic, ReadModel,
+from verify.model import (ChainModel, CoreModel, DataTriggered, HopModel, Periodic, ReadModel,
                           SporadicSource, SystemModel, TaskModel)
 from verify.sim import (Scenario, ScenarioError, SimulationError, chain_latencies, random_scenario,
                         simulate)
+
+from .builders import link
 
 # ------------------------------------------------------------------ tiny model builders
 
@@ -21,14 +23,6 @@ def task(tid, act, *, prio=1, wcet=F(1, 10), bcet=None, core="c0", kind="preempt
                      priority=prio, bcet=wcet if bcet is None else bcet, wcet=wcet,
                      reads=tuple(ReadModel(p, False, None, None) for p in reads),
                      produces=tuple(produces), activation=act)
-
-
-def link(source, target, tasks, dmin=F(0), dmax=None):
-    src_inst, src_port = source.split(".")
-    dst_inst, dst_port = target.split(".")
-    writer = next(t.id for t in tasks if t.instance == src_inst and src_port in t.produces)
-    readers = tuple(t.id for t in tasks if t.instance == dst_inst and t.reads_port(dst_port))
-    return LinkModel(source, target, writer, readers, dmin, dmin if dmax is None else dmax)
 
 
 def system(tasks, links=(), chain_tasks=()):

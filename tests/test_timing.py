@@ -16,6 +16,8 @@ from verify.sim import KINDS, Scenario, chain_latencies, random_scenario, simula
 from verify.timing import analyze, diagnostics_of
 from verify.timing.report import JSON_SCHEMA, SCHEMA, to_json, to_text
 
+from .builders import link
+
 MS = F(1, 1000)
 
 # ------------------------------------------------------------------ tiny model builders
@@ -41,14 +43,6 @@ def timer(ms, phase=None):
 
 def trigger(port, k=1, members=None, mode="single"):
     return DataTriggered(port, tuple(members or (port,)), mode, k)
-
-
-def link(source, target, tasks, dmin=F(0), dmax=None):
-    src_inst, src_port = source.split(".")
-    dst_inst, dst_port = target.split(".")
-    writer = next(t.id for t in tasks if t.instance == src_inst and src_port in t.produces)
-    readers = tuple(t.id for t in tasks if t.instance == dst_inst and t.reads_port(dst_port))
-    return LinkModel(source, target, writer, readers, dmin, dmin if dmax is None else dmax)
 
 
 def chain(name, ids, links, **specs):

@@ -18,6 +18,7 @@ from . import syntax as s
 from .diagnostics import Diagnostic, DiagnosticSink
 from .parse import parse_text
 from .source import Span
+from .units import fmt_number
 
 INDENT = "  "
 
@@ -77,28 +78,10 @@ def collect_comments(text: str) -> list[Comment]:
 
 
 def format_number(value: Fraction | int) -> str:
-    """``10``, ``37.5`` (terminating decimals, exact) or ``100/3``; never a float."""
+    """``10``, ``37.5`` (terminating decimals, exact) or ``100/3``; never a float, never negative."""
     if isinstance(value, float) or value < 0:
         raise ValueError(f"cannot write {value!r}: numbers are exact and not negative")
-    value = Fraction(value)
-    num, den = value.numerator, value.denominator
-    if den == 1:
-        return str(num)
-    digits = _decimal_digits(den)
-    if digits is None:
-        return f"{num}/{den}"
-    whole, frac = divmod(num * 10**digits // den, 10**digits)
-    return f"{whole}.{frac:0{digits}d}"
-
-
-def _decimal_digits(den: int) -> int | None:
-    """How many decimals 1/den needs, or None when its expansion does not terminate."""
-    twos = fives = 0
-    while den % 2 == 0:
-        den, twos = den // 2, twos + 1
-    while den % 5 == 0:
-        den, fives = den // 5, fives + 1
-    return max(twos, fives) if den == 1 else None
+    return fmt_number(Fraction(value))
 
 
 def format_quantity(q: s.Quantity) -> str:

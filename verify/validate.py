@@ -140,20 +140,25 @@ def _check_producers(scope: ComponentScope, sink: DiagnosticSink) -> None:
 # ================================================================== systems
 
 
-def validate_system(scope: SystemScope, sink: DiagnosticSink) -> None:
+def _instance_tasks(scope: SystemScope):
+    """Every (instance, component scope, task definition, binding or None), in source order."""
     for inst in scope.system.instances:
         comp = scope.component_of.get(inst.name.text)
         if comp is None:
             continue
         for task in comp.component.tasks:
-            binding = scope.bindings.get((inst.name.text, task.name.text))
-            if binding is None:
-                sink.emit("E207", f"task `{inst.name.text}.{task.name.text}` has no activation binding",
-                          inst.name.span, "instance declared here",
-                          help=f"add `task {task.name.text} priority 1 timer 100 ms` (or a trigger) "
-                               f"to the body of instance `{inst.name.text}`")
-                continue
-            _check_binding(inst, task, binding, comp, sink)
+            yield inst, comp, task, scope.bindings.get((inst.name.text, task.name.text))
+
+
+def validate_system(scope: SystemScope, sink: DiagnosticSink) -> None:
+    for inst, comp, task, binding in _instance_tasks(scope):
+        if binding is None:
+            sink.emit("E207", f"task `{inst.name.text}.{task.name.text}` has no activation binding",
+                      inst.name.span, "instance declared here",
+                      help=f"add `task {task.name.text} priority 1 timer 100 ms` (or a trigger) "
+                           f"to the body of instance `{inst.name.text}`")
+            continue
+        _check_binding(inst, task, binding, comp, sink)
     _check_connections(scope, sink)
     _check_trigger_sources(scope, sink)
     for chain in scope.system.chains:
@@ -402,22 +407,17 @@ def _check_connections(scope: SystemScope, sink: DiagnosticSink) -> None:
 
 
 def _check_unconnected(scope: SystemScope, incoming: dict[str, s.Connection], sink: DiagnosticSink) -> None:
-    for inst in scope.system.instances:
-        comp = scope.component_of.get(inst.name.text)
-        if comp is None:
-            continue
-        for task in comp.component.tasks:
-            binding = scope.bindings.get((inst.name.text, task.name.text))
-            act = binding.activation if binding else None
-            if isinstance(act, s.Trigger):
-                _check_trigger_connected(inst, act, comp, incoming, sink)
-            for read in task.reads:
-                if not read.optional and f"{inst.name.text}.{read.port.text}" not in incoming:
-                    sink.emit("E206", f"in-port `{inst.name.text}.{read.port.text}` is required by "
-                              f"`{task.name.text}` but not connected", inst.name.span, "instance declared here",
-                              secondary=(Label(read.port.span, "read as required here"),),
-                              help=f"add `connect SOURCE.port -> {inst.name.text}.{read.port.text}`, "
-                                   f"or mark the read `optional` in component `{comp.name}`")
+    for inst, comp, task, binding in _instance_tasks(scope):
+        act = binding.activation if binding else None
+        if isinstance(act, s.Trigger):
+            _check_trigger_connected(inst, act, comp, incoming, sink)
+        for read in task.reads:
+            if not read.optional and f"{inst.name.text}.{read.port.text}" not in incoming:
+                sink.emit("E206", f"in-port `{inst.name.text}.{read.port.text}` is required by "
+                          f"`{task.name.text}` but not connected", inst.name.span, "instance declared here",
+                          secondary=(Label(read.port.span, "read as required here"),),
+                          help=f"add `connect SOURCE.port -> {inst.name.text}.{read.port.text}`, "
+                               f"or mark the read `optional` in component `{comp.name}`")
 
 
 def _check_trigger_connected(inst, act: s.Trigger, comp: ComponentScope, incoming, sink: DiagnosticSink) -> None:
