@@ -12,6 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from .diagnostics import Diagnostic, DiagnosticSink, Label, has_errors
+from .gcpause import paused_gc
 from .loader import Project, load_project, project_from_text
 from .model import SystemModel, build_system
 from .resolve import Resolution, resolve
@@ -123,13 +124,15 @@ def _clean(scope, sink: DiagnosticSink) -> bool:
 
 def load(path: str) -> LoadResult:
     """Load, resolve and validate the project rooted at ``path`` (imports followed)."""
-    sink = DiagnosticSink()
-    project = load_project(path, sink)
-    return _finish(project, sink)
+    with paused_gc():
+        sink = DiagnosticSink()
+        project = load_project(path, sink)
+        return _finish(project, sink)
 
 
 def load_text(text: str, path: str = "<text>") -> LoadResult:
     """The same for text in memory (one file; imports are not followed)."""
-    sink = DiagnosticSink()
-    project = project_from_text(text, path, sink)
-    return _finish(project, sink)
+    with paused_gc():
+        sink = DiagnosticSink()
+        project = project_from_text(text, path, sink)
+        return _finish(project, sink)

@@ -6,16 +6,18 @@ in the language's own words: never ``__ANON_0`` or ``$END``. The transformer onl
 """
 from __future__ import annotations
 
+import dataclasses
 import functools
 import re
 from fractions import Fraction
 from importlib import resources
 
-from lark import Lark, Token, Transformer, Tree, v_args
-from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken, VisitError
+from lark import Lark, Token, Tree
+from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken
 
 from . import syntax as s
 from .diagnostics import DiagnosticSink
+from .lalr import FastParser, Tok, Unparsable, position
 from .source import Span
 
 MAX_SYNTAX_ERRORS = 20
@@ -179,7 +181,21 @@ def _end_span(path: str, text: str) -> Span:
 
 
 def parse_text(text: str, path: str, sink: DiagnosticSink) -> s.Module | None:
-    """Parse ``text``; report syntax errors into ``sink``. Returns None when the text has any."""
+    """Parse ``text``; report syntax errors into ``sink``. Returns None when the text has any.
+
+    The fast path (``verify.lalr``) decides valid input; anything it does not accept — every syntax
+    error, a number error (E005), or a lexical corner it leaves to Lark — is parsed again by Lark with
+    error recovery, which gives the reports. Both build the tree with the same ``_Builder``."""
+    fast = _fast_parser()
+    if fast is not None:
+        try:
+            return fast.parse(text, _Builder(path, DiagnosticSink(), text).callbacks())
+        except (Unparsable, _NumberError):
+            pass
+    return _parse_with_lark(text, path, sink)
+
+
+def _parse_with_lark(text: str, path: str, sink: DiagnosticSink) -> s.Module | None:
     errors: list[UnexpectedInput] = []
     last_line = [-1]
 
@@ -207,11 +223,48 @@ def parse_text(text: str, path: str, sink: DiagnosticSink) -> s.Module | None:
     if errors or tree is None:
         return None
     try:
-        return _Builder(path, sink).transform(tree)
-    except VisitError as err:
-        if isinstance(err.orig_exc, _NumberError):
-            return None
-        raise
+        return _Builder(path, sink, text).transform(tree)
+    except _NumberError:
+        return None
+
+
+@functools.lru_cache(maxsize=1)
+def _fast_parser() -> FastParser | None:
+    return FastParser.build(_parser())
+
+
+def _plain_frozen(cls, names: tuple[str, ...]) -> bool:
+    """``cls`` is a frozen dataclass with exactly these fields, an instance ``__dict__`` and no
+    ``__post_init__``: an instance is fully described by its ``__dict__``."""
+    return (dataclasses.is_dataclass(cls) and cls.__dataclass_params__.frozen
+            and tuple(f.name for f in dataclasses.fields(cls)) == names
+            and not hasattr(cls, "__post_init__") and "__slots__" not in cls.__dict__)
+
+
+def _direct_constructors():
+    """Constructors of ``Span`` and ``syntax.Name`` that fill the instance ``__dict__`` in one step.
+
+    A frozen dataclass's ``__init__`` sets each field with a Python-level ``object.__setattr__``
+    call; a 10,000-task file has about 400,000 spans and 150,000 names, and this saves a tenth of the
+    parse. The instances are the same (same class, same ``__dict__``). If either class stops being a
+    plain frozen dataclass with these fields, its own constructor is used."""
+    new, set_dict = object.__new__, object.__setattr__
+    span, name = Span, s.Name
+    if _plain_frozen(Span, ("file", "line", "column", "end_line", "end_column")):
+        def span(file, line, column, end_line, end_column):
+            obj = new(Span)
+            set_dict(obj, "__dict__", {"file": file, "line": line, "column": column, "end_line": end_line,
+                                       "end_column": end_column})
+            return obj
+    if _plain_frozen(s.Name, ("text", "span")):
+        def name(text, span):
+            obj = new(s.Name)
+            set_dict(obj, "__dict__", {"text": text, "span": span})
+            return obj
+    return span, name
+
+
+_new_span, _new_name = _direct_constructors()
 
 
 class _NumberError(Exception):
@@ -219,64 +272,95 @@ class _NumberError(Exception):
 
 
 def parse_number(tok: Token, path: str, sink: DiagnosticSink) -> Fraction:
-    text = str(tok)
-    span = token_span(path, tok)
+    """The exact value of a NUMBER token (E005 into ``sink`` and ``_NumberError`` if it has none)."""
+    return _exact(str(tok), lambda: token_span(path, tok), sink)
+
+
+def _exact(text: str, where, sink: DiagnosticSink) -> Fraction:
+    """The value of NUMBER ``text``; ``where()`` gives its span for a report."""
+    if text.isdigit() and len(text) <= MAX_NUMBER_LENGTH:  # the common case, without the regex of Fraction(str)
+        return Fraction(int(text))
     if len(text) > MAX_NUMBER_LENGTH:
         sink.emit("E005", f"number has {len(text)} characters; at most {MAX_NUMBER_LENGTH} are allowed",
-                  span, "too long", help="use a larger unit, e.g. `2 s` instead of `2000000000 ns`")
+                  where(), "too long", help="use a larger unit, e.g. `2 s` instead of `2000000000 ns`")
         raise _NumberError
     if "/" in text:
         num, den = text.split("/")
         if Fraction(den) == 0:
-            sink.emit("E005", "division by zero in a rational number", span, "denominator is 0",
+            sink.emit("E005", "division by zero in a rational number", where(), "denominator is 0",
                       help="write a non-zero denominator, e.g. `100/3 ms`")
             raise _NumberError
         return Fraction(num) / Fraction(den)
     return Fraction(text)
 
 
-def _meta_span(path: str, meta) -> Span:
-    if getattr(meta, "empty", True):
-        return Span(path, 1, 1, 1, 1)
-    return Span(path, meta.line, meta.column, meta.end_line, meta.end_column)
+class _Builder:
+    """Builds ``verify.syntax`` nodes; collects repeated clauses for validation to report.
 
+    One method per rule (its alias or name), called with the rule's start and end positions
+    (``lalr.position``; None for an empty rule) and its children as Lark's tree would hold them: nodes built by these
+    methods and the tokens the rule keeps (:class:`Tok`). ``verify.lalr`` calls them while parsing;
+    ``transform`` applies them to a Lark tree (the error-recovering path)."""
 
-@v_args(meta=True)
-class _Builder(Transformer):
-    """Builds ``verify.syntax`` nodes; collects repeated clauses for validation to report."""
-
-    def __init__(self, path: str, sink: DiagnosticSink):
-        super().__init__()
+    def __init__(self, path: str, sink: DiagnosticSink, text: str):
         self.path = path
         self.sink = sink
+        self._numbers: dict[str, Fraction] = {}
+
+    def callbacks(self) -> dict:
+        return {name: getattr(self, name) for name in _fast_parser().callback_names()}
+
+    def transform(self, tree: Tree):
+        """The value of a Lark tree (built with positions), bottom-up as Lark's Transformer does."""
+        children = [self.transform(c) if isinstance(c, Tree) else
+                    Tok(c.type, c.value, position(c.line, c.column), position(c.end_line, c.end_column))
+                    for c in tree.children]
+        meta = tree.meta
+        if meta.empty:
+            return getattr(self, tree.data)(None, None, children)
+        return getattr(self, tree.data)(position(meta.line, meta.column), position(meta.end_line, meta.end_column),
+                                        children)
 
     # ---------------------------------------------------------------- helpers
-    def _span(self, meta) -> Span:
-        return _meta_span(self.path, meta)
+    def _span(self, start: int | None, end: int | None) -> Span:
+        """The span between two positions (``lalr.position``); the file's first position if empty."""
+        if start is None:
+            return Span(self.path, 1, 1, 1, 1)
+        return _new_span(self.path, start >> 32, start & 0xFFFFFFFF, end >> 32, end & 0xFFFFFFFF)
 
-    def _name(self, tok: Token) -> s.Name:
-        return s.Name(str(tok), token_span(self.path, tok))
+    def _tspan(self, tok: Tok) -> Span:
+        return self._span(tok.start, tok.end)
 
-    def _number(self, tok: Token) -> s.Number:
-        return s.Number(parse_number(tok, self.path, self.sink), token_span(self.path, tok))
+    def _name(self, tok: Tok) -> s.Name:
+        start, end = tok.start, tok.end
+        return _new_name(tok.text, _new_span(self.path, start >> 32, start & 0xFFFFFFFF, end >> 32, end & 0xFFFFFFFF))
+
+    def _value(self, tok: Tok) -> Fraction:
+        value = self._numbers.get(tok.text)
+        if value is None:
+            value = self._numbers[tok.text] = _exact(tok.text, lambda: self._tspan(tok), self.sink)
+        return value
+
+    def _number(self, tok: Tok) -> s.Number:
+        return s.Number(self._value(tok), self._tspan(tok))
 
     # ---------------------------------------------------------------- file
-    def start(self, meta, items):
+    def start(self, start, end, items):
         imports = tuple(i for i in items if isinstance(i, s.Import))
         comps = tuple(i for i in items if isinstance(i, s.Component))
         systems = tuple(i for i in items if isinstance(i, s.System))
-        return s.Module(self.path, imports, comps, systems, self._span(meta))
+        return s.Module(self.path, imports, comps, systems, self._span(start, end))
 
-    def import_decl(self, meta, children):
-        return s.Import(str(children[0])[1:-1], self._span(meta))
+    def import_decl(self, start, end, children):
+        return s.Import(children[0].text[1:-1], self._span(start, end))
 
     # ---------------------------------------------------------------- quantities
-    def quantity(self, meta, children):
+    def quantity(self, start, end, children):
         num, unit = children
-        return s.Quantity(parse_number(num, self.path, self.sink), str(unit), self._span(meta))
+        return s.Quantity(self._value(num), unit.text, self._span(start, end))
 
     # ---------------------------------------------------------------- components
-    def component(self, meta, children):
+    def component(self, start, end, children):
         name, *members, rbrace = children
         return s.Component(
             self._name(name),
@@ -284,117 +368,116 @@ class _Builder(Transformer):
             tuple(m for m in members if isinstance(m, s.OutPort)),
             tuple(m for m in members if isinstance(m, s.CompoundPort)),
             tuple(m for m in members if isinstance(m, s.Task)),
-            self._span(meta),
-            token_span(self.path, rbrace),
+            self._span(start, end),
+            self._tspan(rbrace),
         )
 
-    def in_port(self, meta, children):
-        return s.InPort(self._name(children[0]), self._name(children[1]), self._span(meta))
+    def in_port(self, start, end, children):
+        return s.InPort(self._name(children[0]), self._name(children[1]), self._span(start, end))
 
-    def out_port(self, meta, children):
-        return s.OutPort(self._name(children[0]), self._name(children[1]), self._span(meta))
+    def out_port(self, start, end, children):
+        return s.OutPort(self._name(children[0]), self._name(children[1]), self._span(start, end))
 
-    def _compound(self, meta, children, mode):
+    def _compound(self, start, end, children, mode):
         name, *rest = children
         constraint = rest.pop()[1] if rest and isinstance(rest[-1], tuple) else None
-        members = tuple(self._name(t) for t in rest if isinstance(t, Token) and t.type == "NAME")
-        return s.CompoundPort(self._name(name), mode, members, constraint, self._span(meta))
+        members = tuple(self._name(t) for t in rest if isinstance(t, Tok) and t.type == "NAME")
+        return s.CompoundPort(self._name(name), mode, members, constraint, self._span(start, end))
 
-    def compound_and(self, meta, children):
-        return self._compound(meta, children, "and")
+    def compound_and(self, start, end, children):
+        return self._compound(start, end, children, "and")
 
-    def compound_or(self, meta, children):
-        return self._compound(meta, children, "or")
+    def compound_or(self, start, end, children):
+        return self._compound(start, end, children, "or")
 
-    def preemptive(self, meta, children):
+    def preemptive(self, start, end, children):
         return "preemptive"
 
-    def cooperative(self, meta, children):
+    def cooperative(self, start, end, children):
         return "cooperative"
 
-    def task(self, meta, children):
+    def task(self, start, end, children):
         name, *clauses, rbrace = children
         kind = "preemptive"
         if clauses and isinstance(clauses[0], str):
             kind = clauses.pop(0)
         fields: dict = {"reads": [], "produces": []}
         repeated: list[Span] = []
-        for tag, value, span in clauses:
+        for tag, value, where in clauses:
             if tag in ("reads", "produces"):
                 fields[tag].extend(value)
             elif tag in fields:
-                repeated.append(span)
+                repeated.append(self._span(*where))
             else:
                 fields[tag] = value
         return s.Task(
             self._name(name), kind, tuple(fields.pop("reads")), tuple(fields.pop("produces")),
-            span=self._span(meta), repeated=tuple(repeated), end=token_span(self.path, rbrace), **fields,
+            span=self._span(start, end), repeated=tuple(repeated), end=self._tspan(rbrace), **fields,
         )
 
-    def reads(self, meta, children):
+    def reads(self, start, end, children):
         port, *options = children
         opts: dict = {}
         for key, value in options:
             opts[key] = value
-        read = s.Read(self._name(port), span=self._span(meta), **opts)
-        return ("reads", [read], self._span(meta))
+        read = s.Read(self._name(port), span=self._span(start, end), **opts)
+        return ("reads", [read], (start, end))
 
-    def optional(self, meta, children):
+    def optional(self, start, end, children):
         return ("optional", True)
 
-    def required(self, meta, children):
+    def required(self, start, end, children):
         return ("optional", False)
 
-    def oversampling(self, meta, children):
+    def oversampling(self, start, end, children):
         return ("oversampling", children[0])
 
-    def undersampling(self, meta, children):
+    def undersampling(self, start, end, children):
         return ("undersampling", children[0])
 
-    def tol_ok(self, meta, children):
-        return s.Tolerance("ok", None, self._span(meta))
+    def tol_ok(self, start, end, children):
+        return s.Tolerance("ok", None, self._span(start, end))
 
-    def tol_forbidden(self, meta, children):
-        return s.Tolerance("forbidden", None, self._span(meta))
+    def tol_forbidden(self, start, end, children):
+        return s.Tolerance("forbidden", None, self._span(start, end))
 
-    def tol_max(self, meta, children):
-        return s.Tolerance("max", self._number(children[0]), self._span(meta))
+    def tol_max(self, start, end, children):
+        return s.Tolerance("max", self._number(children[0]), self._span(start, end))
 
-    def produces(self, meta, children):
-        return ("produces", [self._name(t) for t in children], self._span(meta))
+    def produces(self, start, end, children):
+        return ("produces", [self._name(t) for t in children], (start, end))
 
-    def bcet(self, meta, children):
-        return ("bcet", children[0], self._span(meta))
+    def bcet(self, start, end, children):
+        return ("bcet", children[0], (start, end))
 
-    def wcet(self, meta, children):
-        return ("wcet", children[0], self._span(meta))
+    def wcet(self, start, end, children):
+        return ("wcet", children[0], (start, end))
 
-    def act_constraint(self, meta, children):
+    def act_constraint(self, start, end, children):
         (low, high), *rest = children
         changeable = rest[0] if rest else True
-        constraint = s.ActivationConstraint(low, high, changeable, self._span(meta))
-        return ("constraint", constraint, self._span(meta))
+        return ("constraint", s.ActivationConstraint(low, high, changeable, self._span(start, end)), (start, end))
 
-    def bounds_range(self, meta, children):
+    def bounds_range(self, start, end, children):
         return (children[0], children[1])
 
-    def bounds_exact(self, meta, children):
+    def bounds_exact(self, start, end, children):
         return (children[0], children[0])
 
-    def bounds_min(self, meta, children):
+    def bounds_min(self, start, end, children):
         return (children[0], None)
 
-    def bounds_max(self, meta, children):
+    def bounds_max(self, start, end, children):
         return (None, children[0])
 
-    def fixed(self, meta, children):
+    def fixed(self, start, end, children):
         return False
 
-    def changeable(self, meta, children):
+    def changeable(self, start, end, children):
         return True
 
     # ---------------------------------------------------------------- systems
-    def system(self, meta, children):
+    def system(self, start, end, children):
         name, *members, rbrace = children
         return s.System(
             self._name(name),
@@ -402,117 +485,114 @@ class _Builder(Transformer):
             tuple(m for m in members if isinstance(m, s.Instance)),
             tuple(m for m in members if isinstance(m, s.Connection)),
             tuple(m for m in members if isinstance(m, s.Chain)),
-            self._span(meta),
-            token_span(self.path, rbrace),
+            self._span(start, end),
+            self._tspan(rbrace),
         )
 
-    def core(self, meta, children):
+    def core(self, start, end, children):
         policy = self._name(children[1]) if len(children) > 1 else None
-        return s.Core(self._name(children[0]), policy, self._span(meta))
+        return s.Core(self._name(children[0]), policy, self._span(start, end))
 
-    def instance(self, meta, children):
+    def instance(self, start, end, children):
         name, comp, *rest = children
         core = None
         bindings: tuple = ()
-        end = None
+        body_end = None
         for r in rest:
-            if isinstance(r, Token):
+            if isinstance(r, Tok):
                 core = self._name(r)
             else:
-                bindings, end = r
-        return s.Instance(self._name(name), self._name(comp), core, bindings, self._span(meta), end)
+                bindings, body_end = r
+        return s.Instance(self._name(name), self._name(comp), core, bindings, self._span(start, end), body_end)
 
-    def instance_body(self, meta, children):
+    def instance_body(self, start, end, children):
         *bindings, rbrace = children
-        return tuple(bindings), token_span(self.path, rbrace)
+        return tuple(bindings), self._tspan(rbrace)
 
-    def binding(self, meta, children):
+    def binding(self, start, end, children):
         name, *clauses = children
         fields: dict = {"activations": []}
         repeated: list[Span] = []
-        for tag, value, span in clauses:
+        for tag, value, where in clauses:
             if tag == "activations":
                 fields[tag].append(value)
             elif tag in fields:
-                repeated.append(span)
+                repeated.append(self._span(*where))
             else:
                 fields[tag] = value
         fields["activations"] = tuple(fields["activations"])
-        return s.TaskBinding(self._name(name), span=self._span(meta), repeated=tuple(repeated), **fields)
+        return s.TaskBinding(self._name(name), span=self._span(start, end), repeated=tuple(repeated), **fields)
 
-    def priority(self, meta, children):
-        return ("priority", self._number(children[0]), self._span(meta))
+    def priority(self, start, end, children):
+        return ("priority", self._number(children[0]), (start, end))
 
-    def task_core(self, meta, children):
-        return ("core", self._name(children[0]), self._span(meta))
+    def task_core(self, start, end, children):
+        return ("core", self._name(children[0]), (start, end))
 
-    def wcrt(self, meta, children):
-        return ("wcrt", children[0], self._span(meta))
+    def wcrt(self, start, end, children):
+        return ("wcrt", children[0], (start, end))
 
-    def deadline(self, meta, children):
-        return ("deadline", children[0], self._span(meta))
+    def deadline(self, start, end, children):
+        return ("deadline", children[0], (start, end))
 
-    def timer(self, meta, children):
+    def timer(self, start, end, children):
         phase = children[1] if len(children) > 1 else None
-        return ("activations", s.Timer(children[0], phase, self._span(meta)), self._span(meta))
+        return ("activations", s.Timer(children[0], phase, self._span(start, end)), (start, end))
 
-    def period_hole(self, meta, children):
+    def period_hole(self, start, end, children):
         low, high, step = (list(children) + [None, None, None])[:3]
-        return s.PeriodHole(low, high, step, self._span(meta))
+        return s.PeriodHole(low, high, step, self._span(start, end))
 
-    def trigger(self, meta, children):
+    def trigger(self, start, end, children):
         port = self._name(children[0])
         prescaler = children[1] if len(children) > 1 else s.Number(Fraction(1))
-        return ("activations", s.Trigger(port, prescaler, self._span(meta)), self._span(meta))
+        return ("activations", s.Trigger(port, prescaler, self._span(start, end)), (start, end))
 
-    def prescaler_number(self, meta, children):
+    def prescaler_number(self, start, end, children):
         return self._number(children[0])
 
-    def prescaler_hole(self, meta, children):
+    def prescaler_hole(self, start, end, children):
         if children:
-            return s.PrescalerHole(self._number(children[0]), self._number(children[1]), self._span(meta))
-        return s.PrescalerHole(span=self._span(meta))
+            return s.PrescalerHole(self._number(children[0]), self._number(children[1]), self._span(start, end))
+        return s.PrescalerHole(span=self._span(start, end))
 
-    def sporadic(self, meta, children):
-        return ("activations", s.Sporadic(children[0], children[1], self._span(meta)), self._span(meta))
+    def sporadic(self, start, end, children):
+        return ("activations", s.Sporadic(children[0], children[1], self._span(start, end)), (start, end))
 
-    def unknown_activation(self, meta, children):
-        return ("activations", s.UnknownActivation(self._span(meta)), self._span(meta))
+    def unknown_activation(self, start, end, children):
+        return ("activations", s.UnknownActivation(self._span(start, end)), (start, end))
 
-    def connection(self, meta, children):
+    def connection(self, start, end, children):
         src, dst, *delay = children
         low, high = delay[0] if delay else (None, None)
-        return s.Connection(src, dst, low, high, self._span(meta))
+        return s.Connection(src, dst, low, high, self._span(start, end))
 
-    def delay_exact(self, meta, children):
+    def delay_exact(self, start, end, children):
         return (children[0], children[0])
 
-    def delay_range(self, meta, children):
+    def delay_range(self, start, end, children):
         return (children[0], children[1])
 
-    def chain(self, meta, children):
+    def chain(self, start, end, children):
         name, *rest = children
         refs = tuple(r for r in rest if isinstance(r, s.PortRef))
-        specs, end = (), None
+        specs, body_end = (), None
         if rest and isinstance(rest[-1], tuple):
-            specs, end = rest[-1]
-        return s.Chain(self._name(name), refs, specs, self._span(meta), end)
+            specs, body_end = rest[-1]
+        return s.Chain(self._name(name), refs, specs, self._span(start, end), body_end)
 
-    def chain_body(self, meta, children):
+    def chain_body(self, start, end, children):
         *specs, rbrace = children
-        return tuple(specs), token_span(self.path, rbrace)
+        return tuple(specs), self._tspan(rbrace)
 
-    def spec_reaction_time(self, meta, children):
-        return s.Spec("reaction_time", children[0], self._span(meta))
+    def spec_reaction_time(self, start, end, children):
+        return s.Spec("reaction_time", children[0], self._span(start, end))
 
-    def spec_data_age(self, meta, children):
-        return s.Spec("data_age", children[0], self._span(meta))
+    def spec_data_age(self, start, end, children):
+        return s.Spec("data_age", children[0], self._span(start, end))
 
-    def spec_jitter(self, meta, children):
-        return s.Spec("jitter", children[0], self._span(meta))
+    def spec_jitter(self, start, end, children):
+        return s.Spec("jitter", children[0], self._span(start, end))
 
-    def port_ref(self, meta, children):
-        return s.PortRef(self._name(children[0]), self._name(children[1]), self._span(meta))
-
-    def __default__(self, data, children, meta):  # pragma: no cover - every rule has a method
-        return Tree(data, children, meta)
+    def port_ref(self, start, end, children):
+        return s.PortRef(self._name(children[0]), self._name(children[1]), self._span(start, end))

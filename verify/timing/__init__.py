@@ -18,7 +18,9 @@ from dataclasses import dataclass
 from fractions import Fraction
 
 from ..diagnostics import Diagnostic, DiagnosticSink
+from ..gcpause import paused_gc
 from ..model import SystemModel, TaskModel
+from . import fastrta
 from .chains import Bound, ChainBounds, SpecCheck, Step, Term, Timing, chain_bounds
 from .rates import (ActivationInfo, EventModel, LinkSampling, RateInterval, activation_rates,
                     check_sampling, check_trigger_constraints, event_models, sampling_relations,
@@ -110,10 +112,15 @@ def analyze(system: SystemModel, *, data_age: str = "reduced") -> AnalysisResult
     variant = data_age.replace("_", "-")
     if variant not in VARIANTS:
         raise ValueError(f"data_age must be one of {VARIANTS}, not {data_age!r}")
+    with paused_gc():
+        return _analyze(system, variant)
+
+
+def _analyze(system: SystemModel, variant: str) -> AnalysisResult:
     sink = DiagnosticSink()
-    infos = activation_rates(system)
-    order, _ = trigger_order(system)
-    events, responses, rounds, converged = _fixed_point(system, infos, order)
+    order = trigger_order(system)
+    infos = activation_rates(system, order)
+    events, responses, rounds, converged = _fixed_point(system, infos, order[0])
     loads = core_loads(system, infos)
     samplings = sampling_relations(system, infos)
     timing = Timing(system, infos, events, responses)
@@ -138,28 +145,32 @@ def _task_timing(task: TaskModel, info: ActivationInfo, events: EventModel, resp
 
 def _fixed_point(system: SystemModel, infos, order):
     """CPA global iteration: event models from response times, response times from event models,
-    starting from R = bcet (zero jitter) until the WCRTs repeat (§6.5)."""
+    starting from R = bcet (zero jitter) until the WCRTs repeat (§6.5). Each round is
+    ``rta.response_times``, computed by ``fastrta``; only the last one's ``TaskResponse``s are built."""
+    static = fastrta.Static(system)
     bcrt = {t.id: t.bcet for t in system.tasks}
     wcrt: dict[str, Fraction | None] = {t.id: (t.wcrt_bound if t.wcrt_bound is not None else t.bcet)
                                         for t in system.tasks}
+    memo: dict = {}
+    analysed = None
     for rounds in range(1, MAX_ROUNDS + 1):
-        events = event_models(system, infos, order, wcrt, bcrt)
-        responses = response_times(system, events, wcrt)
-        new = {tid: r.wcrt for tid, r in responses.items()}
+        events = event_models(system, infos, order, wcrt, bcrt, memo)
+        analysed = fastrta.Round(static, events, wcrt, analysed)
+        new = analysed.wcrts()
         if new == wcrt:
-            return events, responses, rounds, True
+            return events, analysed.responses(), rounds, True
         wcrt = new
-    return _give_up(system, infos, order, wcrt, responses, bcrt)
+    return _give_up(system, infos, order, wcrt, None, bcrt, static)
 
 
-def _give_up(system, infos, order, wcrt, responses, bcrt):
+def _give_up(system, infos, order, wcrt, responses, bcrt, static):
     """Non-convergence (E312): every task whose WCRT still changes is made unbounded (None absorbs),
     and the rest is recomputed until nothing changes; at most one more round per task."""
     forced: set[str] = set()
     for _ in range(len(system.tasks) + 1):
         events = event_models(system, infos, order, wcrt, bcrt)
         responses = {tid: (_unbounded(r) if tid in forced else r)
-                     for tid, r in response_times(system, events, wcrt).items()}
+                     for tid, r in fastrta.response_times(system, events, wcrt, static).items()}
         changed = {tid for tid, r in responses.items() if r.wcrt != wcrt[tid]}
         if not changed:
             break

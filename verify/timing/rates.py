@@ -17,18 +17,38 @@ unbounded response time); a task that is never activated has a ``silent`` event 
 """
 from __future__ import annotations
 
+import heapq
 import math
 from dataclasses import dataclass
+from functools import cached_property
 from fractions import Fraction
 from typing import Mapping
 
-import networkx as nx
 
 from ..diagnostics import DiagnosticSink, Label
 from ..model import DataTriggered, LinkModel, Periodic, SporadicSource, SystemModel, TaskModel
 from ..units import fmt_number, fmt_rate, fmt_time
 
 ZERO = Fraction(0)
+
+
+def exact_sum(values) -> Fraction:
+    """``sum(values, Fraction(0))`` for Fractions and ints, computed on one common denominator with a
+    single normalisation at the end (a ``Fraction`` addition costs two gcds and a new object)."""
+    return ratio_sum(v.as_integer_ratio() for v in values)
+
+
+def ratio_sum(pairs) -> Fraction:
+    """Σ n/d over (n, d) pairs (d > 0), exactly."""
+    num, den = 0, 1
+    for n, d in pairs:
+        if d == den:
+            num += n
+        else:
+            common = math.lcm(den, d)
+            num = num * (common // den) + n * (common // d)
+            den = common
+    return Fraction(num, den)
 
 
 # ================================================================== rate intervals (§5.1)
@@ -102,42 +122,119 @@ def trigger_sources(system: SystemModel, task: TaskModel) -> tuple[Source, ...]:
 
 def trigger_order(system: SystemModel) -> tuple[tuple[str, ...], frozenset[str]]:
     """All task ids with every writer of a trigger member before the triggered task, and the set of
-    tasks that lie on a trigger cycle (validation only lets cycles through an OR with a live member)."""
-    graph = nx.DiGraph()
-    graph.add_nodes_from(t.id for t in system.tasks)
-    for t in system.tasks:
+    tasks that lie on a trigger cycle (validation only lets cycles through an OR with a live member).
+
+    The order is the lexicographical topological order of the trigger graph's strongly connected
+    components, each keyed by its first member in system order, members in system order (as
+    ``networkx.lexicographical_topological_sort`` of ``networkx.condensation`` gives it)."""
+    tasks = system.tasks
+    position = {t.id: i for i, t in enumerate(tasks)}
+    successors: list[list[int]] = [[] for _ in tasks]
+    for i, t in enumerate(tasks):
         for src in trigger_sources(system, t):
             if src.writer is not None:
-                graph.add_edge(src.writer, t.id)
-    cyclic: set[str] = set()
-    for comp in nx.strongly_connected_components(graph):
-        if len(comp) > 1 or any(graph.has_edge(n, n) for n in comp):
-            cyclic |= comp
-    condensed = nx.condensation(graph)
-    position = {t.id: i for i, t in enumerate(system.tasks)}
-    order: list[str] = []
-    for scc in nx.lexicographical_topological_sort(condensed, key=lambda n: min(
-            position[m] for m in condensed.nodes[n]["members"])):
-        order.extend(sorted(condensed.nodes[scc]["members"], key=position.__getitem__))
-    return tuple(order), frozenset(cyclic)
+                successors[position[src.writer]].append(i)
+    order, cyclic = graph_order(successors)
+    return tuple(tasks[i].id for i in order), frozenset(tasks[i].id for i in cyclic)
 
 
-def activation_rates(system: SystemModel) -> dict[str, ActivationInfo]:
-    """The rate of every task, propagated in trigger order (§5.1)."""
-    order, cyclic = trigger_order(system)
+def graph_order(successors: list[list[int]]) -> tuple[list[int], set[int]]:
+    """``trigger_order`` of a graph on the nodes 0..n−1 (in system order)."""
+    component = _strongly_connected(successors)
+    members: dict[int, list[int]] = {}
+    for i, c in enumerate(component):
+        members.setdefault(c, []).append(i)  # in system order
+    cyclic = {i for ms in members.values() if len(ms) > 1 for i in ms}
+    cyclic |= {w for w, succ in enumerate(successors) if w in succ}
+    indegree = dict.fromkeys(members, 0)
+    edges: dict[int, set[int]] = {c: set() for c in members}
+    for w, succ in enumerate(successors):
+        for i in succ:
+            a, b = component[w], component[i]
+            if a != b and b not in edges[a]:
+                edges[a].add(b)
+                indegree[b] += 1
+    ready = [(ms[0], c) for c, ms in members.items() if not indegree[c]]
+    heapq.heapify(ready)
+    order: list[int] = []
+    while ready:
+        _, c = heapq.heappop(ready)
+        order.extend(members[c])
+        for b in edges[c]:
+            indegree[b] -= 1
+            if not indegree[b]:
+                heapq.heappush(ready, (members[b][0], b))
+    return order, cyclic
+
+
+def _strongly_connected(successors: list[list[int]]) -> list[int]:
+    """The strongly connected component of every node (Tarjan's algorithm, iterative)."""
+    n = len(successors)
+    index = [-1] * n
+    low = [0] * n
+    component = [-1] * n
+    on_stack = [False] * n
+    stack: list[int] = []
+    counter = 0
+    for root in range(n):
+        if index[root] >= 0:
+            continue
+        work = [(root, 0)]
+        while work:
+            v, k = work.pop()
+            if k == 0:
+                index[v] = low[v] = counter
+                counter += 1
+                stack.append(v)
+                on_stack[v] = True
+            succ = successors[v]
+            while k < len(succ):
+                u = succ[k]
+                k += 1
+                if index[u] < 0:
+                    work.append((v, k))
+                    work.append((u, 0))
+                    break
+                if on_stack[u]:
+                    low[v] = min(low[v], index[u])
+            else:
+                if low[v] == index[v]:
+                    while True:
+                        u = stack.pop()
+                        on_stack[u] = False
+                        component[u] = v
+                        if u == v:
+                            break
+                if work:
+                    parent = work[-1][0]
+                    low[parent] = min(low[parent], low[v])
+    return component
+
+
+def activation_rates(system: SystemModel, order: tuple[tuple[str, ...], frozenset[str]] | None = None
+                     ) -> dict[str, ActivationInfo]:
+    """The rate of every task, propagated in trigger order (§5.1); ``order``: ``trigger_order(system)``
+    if already known."""
+    order, cyclic = order or trigger_order(system)
     infos: dict[str, ActivationInfo] = {}
+    timers: dict = {}  # period -> (rate interval, derivation): a system has few distinct periods
     for tid in order:
-        infos[tid] = _activation_info(system, system.task(tid), infos, tid in cyclic)
+        infos[tid] = _activation_info(system, system.task(tid), infos, tid in cyclic, timers)
     return infos
 
 
 def _activation_info(system: SystemModel, task: TaskModel, known: Mapping[str, ActivationInfo],
-                     in_cycle: bool) -> ActivationInfo:
+                     in_cycle: bool, timers: dict | None = None) -> ActivationInfo:
     act = task.activation
     if isinstance(act, Periodic):
-        rate = Fraction(1) / act.period
-        return ActivationInfo(task.id, "timer", RateInterval(rate, rate), f"timer {fmt_time(act.period)}",
-                              period=act.period, phase=act.phase)
+        key = act.period.as_integer_ratio()
+        found = timers.get(key) if timers is not None else None
+        if found is None:
+            rate = Fraction(1) / act.period
+            found = (RateInterval(rate, rate), f"timer {fmt_time(act.period)}")
+            if timers is not None:
+                timers[key] = found
+        return ActivationInfo(task.id, "timer", found[0], found[1], period=act.period, phase=act.phase)
     if isinstance(act, SporadicSource):
         rate = RateInterval(1 / act.max_interarrival, 1 / act.min_interarrival)
         return ActivationInfo(task.id, "sporadic", rate,
@@ -223,19 +320,21 @@ class EventModel:
             return ZERO
         if self.silent or self.period_max is None or self.jitter_max is None:
             return None
-        return (n - 1) * self.period_max + self.jitter_max
+        span = self.period_max if n == 2 else (n - 1) * self.period_max
+        return span + self.jitter_max if self.jitter_max else span  # (Fraction arithmetic is slow)
 
-    @property
+    # the derived bounds below are read many times (deadlines, every chain step): computed once
+    @cached_property
     def a_max(self) -> Fraction | None:
         """A⁺ = δ⁺(2): the longest time between two consecutive activations."""
         return self.delta_plus(2)
 
-    @property
+    @cached_property
     def a_min(self) -> Fraction | None:
         """A⁻ = δ⁻(2): the shortest time between two consecutive activations."""
         return self.delta_min(2)
 
-    @property
+    @cached_property
     def sampling_wait(self) -> Fraction | None:
         """W⁺ = max(A⁺, F): from any instant t ≥ 0, the next activation after t comes within W⁺."""
         if self.a_max is None or self.first_max is None:
@@ -351,19 +450,37 @@ def trigger_stream(members: list[EventModel], mode: str) -> EventModel:
 
 
 def event_models(system: SystemModel, infos: Mapping[str, ActivationInfo], order: tuple[str, ...],
-                 wcrt: Mapping[str, Fraction | None], bcrt: Mapping[str, Fraction]) -> dict[str, EventModel]:
-    """The activation event model of every task, given response-time estimates (§5.2)."""
+                 wcrt: Mapping[str, Fraction | None], bcrt: Mapping[str, Fraction],
+                 memo: dict | None = None) -> dict[str, EventModel]:
+    """The activation event model of every task, given response-time estimates (§5.2).
+
+    ``memo``, kept by the caller across CPA rounds, lets a task keep last round's model *object* when
+    nothing it depends on changed (the values are the same either way), so that what is derived from
+    it (``a_max`` and the like, ``fastrta``'s per-task data) need not be computed again."""
     models: dict[str, EventModel] = {}
     for tid in order:
         info = infos[tid]
-        task = system.task(tid)
         if info.kind in ("timer", "sporadic"):
-            models[tid] = source_event_model(task)
+            model = memo.get(tid) if memo is not None else None
+            if model is None:
+                model = source_event_model(system.task(tid))
+                if memo is not None:
+                    memo[tid] = model
+            models[tid] = model
         elif info.kind == "trigger" and not info.in_cycle:
+            if memo is not None:
+                key = [(models.get(src.writer), wcrt.get(src.writer)) for src in info.sources if src.writer]
+                last = memo.get(tid)
+                if last is not None and len(last[0]) == len(key) and all(
+                        a[0] is b[0] and a[1] == b[1] for a, b in zip(last[0], key)):
+                    models[tid] = last[1]
+                    continue
             arrivals = member_arrivals(info, models, wcrt, bcrt)
             stream = trigger_stream(arrivals, info.mode or "single")
             k = info.prescaler or 1
             models[tid] = prescaled(stream, k, first_of_k(stream, arrivals, info.mode or "single", k))
+            if memo is not None:
+                memo[tid] = (key, models[tid])
         else:
             models[tid] = UNBOUNDED
     return models
