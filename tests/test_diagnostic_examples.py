@@ -1,7 +1,7 @@
 """Every diagnostic code has a section in specs/diagnostics.md whose minimal failing example reports it.
 
 For each ``## CODE title`` section the example's files are written into a temporary directory and run
-(``verify check``, or ``verify analyze`` for ``command=analyze``); the section's code must be among the
+(``verify check``, ``verify analyze`` for ``command=analyze``, ``verify prove`` for ``command=prove``); the section's code must be among the
 diagnostics, and the rendered text must equal ``tests/golden/diagnostics/CODE.txt``. Run with
 ``UPDATE_GOLDEN=1`` to (re)write the golden files, then read them as a user would.
 """
@@ -48,7 +48,10 @@ class Section:
 
     @property
     def command(self) -> str:
-        return "analyze" if any(b.command == "analyze" for b in self.blocks) else "check"
+        for command in ("prove", "analyze"):
+            if any(b.command == command for b in self.blocks):
+                return command
+        return "check"
 
 
 _FENCE = re.compile(r"^```vfy([^\n]*)\n(.*?)^```[ \t]*$", re.MULTILINE | re.DOTALL)
@@ -93,9 +96,13 @@ def run_example(section: Section, directory: Path):
         model = result.system(None)
     except SelectionError as err:
         return [err.diagnostic], result.sources
-    holes = require_configured(model, "analyze")
+    holes = require_configured(model, section.command)
     if holes:
         return holes, result.sources
+    if section.command == "prove":
+        from verify.prove import prove
+
+        return list(prove(model).diagnostics), result.sources
     return list(timing.diagnostics_of(timing.analyze(model))), result.sources
 
 

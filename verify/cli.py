@@ -186,8 +186,12 @@ def _parser() -> argparse.ArgumentParser:
     p = add("analyze", cmd_analyze, "rates, sampling, response times and chain latencies")
     p.add_argument("--data-age", choices=("reduced", "non-reduced"), default="reduced",
                    help="data age measured from the first task's read (reduced) or from the earliest event")
-    add("synth", cmd_pending("synth"), "synthesize periods, prescalers and activation kinds")
-    add("prove", cmd_pending("prove"), "prove every latency spec of a configured system")
+    from .synth import command as synth_command
+
+    synth_command.add_arguments(add("synth", synth_command.run, "synthesize periods, prescalers and activation "
+                                    "kinds, or explain why no configuration exists"))
+    from .prove.command import add_arguments as prove_arguments, cmd_prove
+    prove_arguments(add("prove", cmd_prove, "prove every latency spec and deadline of a configured system"))
 
     p = sub.add_parser("fmt", help="print the canonical formatting of a file",
                        description="print the canonical formatting of a file (comments are kept)")

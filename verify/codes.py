@@ -66,6 +66,14 @@ _ALL = [
     Code("E311", "core utilisation above 1"),
     Code("E312", "no response-time bound within the deadline"),
     Code("E313", "synthesis hole has no candidate values"),
+    # E4xx: synthesis
+    Code("E401", "synthesis is unsatisfiable"),
+    Code("E402", "synthesis is undecided"),
+    Code("E403", "synthesis hole has too many candidate values"),
+    # E5xx: proof
+    Code("E501", "latency spec violated"),
+    Code("E502", "spec undecided within the budget", Severity.WARNING),
+    Code("E503", "deadline miss"),
 ]
 
 CODES: dict[str, Code] = {c.code: c for c in _ALL}

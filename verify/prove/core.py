@@ -1,0 +1,244 @@
+"""``prove(model)``: every spec of a configured system proved, refuted with a concrete run, or
+undecided within the budget (specs/proof.md).
+
+Order of work: the compositional analysis decides everything its bounds meet ("bound"). The
+obligations left over are measured by one exact search over the scenario space of the exactness
+theorem — enumeration through the reference simulator when the representatives fit in the budget,
+else the Z3 encoding where it applies — and otherwise by a falsifying search, which can show a
+violation but never proves.
+"""
+from __future__ import annotations
+
+import time
+from fractions import Fraction
+
+from ..diagnostics import DiagnosticSink, Label
+from ..model import SystemModel
+from ..timing import analyze
+from ..units import fmt_time
+from . import bound as bound_mod
+from .bound import Obligation
+from .exact import (Budget, ExactResult, Goal, approach, enumerate_exact, exact_class, grid_of, search,
+                    search_horizon)
+from .scenario import Measured, Target
+from .verdict import Counterexample, ProofResult, Verdict
+
+DEFAULT_BUDGET = 1000  # simulated scenarios
+DEFAULT_RLIMIT = 20_000_000  # Z3 resource units (deterministic), per query
+
+
+def prove(model: SystemModel, *, budget: int = DEFAULT_BUDGET, rlimit: int = DEFAULT_RLIMIT,
+          timeout: float | None = None, data_age: str = "reduced", use_z3: bool = True) -> ProofResult:
+    """Prove every chain spec and task deadline of ``model`` (which must have no synthesis holes).
+
+    ``budget`` bounds the number of simulated scenarios, ``rlimit`` the resources of each Z3 query;
+    ``timeout`` (seconds, wall clock) is off unless given. Deterministic for fixed arguments."""
+    if model.holes:
+        raise ValueError("prove needs a configured system: use verify.api.require_configured first")
+    analysis = analyze(model, data_age=data_age)
+    obs = bound_mod.obligations(model, analysis)
+    verdicts: dict[int, Verdict] = {}
+    open_: list[tuple[int, Obligation]] = []
+    for i, ob in enumerate(obs):
+        if ob.proved_by_bound:
+            verdicts[i] = bound_mod.by_bound(ob)
+        else:
+            open_.append((i, ob))
+    budget_obj = Budget(budget, None if timeout is None else time.monotonic() + timeout)
+    if open_:
+        verdicts.update(_decide(model, open_, budget_obj, rlimit, use_z3))
+    ordered = tuple(verdicts[i] for i in range(len(obs)))
+    return ProofResult(model.name, ordered, tuple(diagnostics(model, ordered)), analysis.data_age_variant,
+                       budget_obj.used, budget)
+
+
+# ------------------------------------------------------------------ deciding what the bound left open
+
+
+def _decide(model: SystemModel, open_: list[tuple[int, Obligation]], budget: Budget, rlimit: int,
+            use_z3: bool) -> dict[int, Verdict]:
+    targets = sorted({ob.target for _, ob in open_})
+    want_best = frozenset(ob.target for _, ob in open_ if ob.kind == "jitter")
+    reason = exact_class(model)
+    exact: ExactResult | None = None
+    if reason is None:
+        exact = enumerate_exact(model, targets, budget, want_best)
+        if exact is None and use_z3:
+            from .z3bmc import EncodingMismatch, z3_exact
+
+            try:
+                exact = z3_exact(model, targets, want_best, rlimit=rlimit, budget=budget)
+            except EncodingMismatch:  # a bug: the encoding and the simulator disagree; decide nothing by it
+                exact = None
+        if exact is None:
+            reason = "the exact search space does not fit in the budget (raise --budget)"
+        elif not exact.complete:
+            reason = exact.reason
+    out: dict[int, Verdict] = {}
+    leftover: list[tuple[int, Obligation]] = []
+    for i, ob in open_:
+        v = _from_exact(model, ob, exact, budget) if exact is not None else None
+        if v is None:
+            leftover.append((i, ob))
+        else:
+            out[i] = v
+    if leftover:
+        out.update(_by_search(model, leftover, budget, reason or "", exact))
+    return out
+
+
+def _from_exact(model: SystemModel, ob: Obligation, exact: ExactResult, budget: Budget) -> Verdict | None:
+    """The verdict an exact result gives, or None when it gives none (incomplete and no violation)."""
+    worst = exact.worst.get(ob.target)
+    best = exact.best.get(ob.target) if ob.kind == "jitter" else None
+    if worst is None or worst.value is None or (ob.kind == "jitter" and (best is None or best.value is None)):
+        return None
+    value = worst.value - best.value if ob.kind == "jitter" else worst.value
+    if value <= ob.spec:
+        if not exact.complete:
+            return None
+        return ob.verdict("proved", exact.method, exact=value, exact_best=best.value if best else None,
+                          explored=exact.explored)
+    cex = _concrete(model, ob, exact, budget, value)
+    if cex is None:
+        return None
+    if not exact.complete:  # a real violation, but the supremum is not established
+        return ob.verdict("violated", exact.method, counterexample=cex, explored=exact.explored,
+                          note="the exact search was incomplete (" + exact.reason + "); the run shown is real")
+    return ob.verdict("violated", exact.method, exact=value, exact_best=best.value if best else None,
+                      counterexample=cex, explored=exact.explored)
+
+
+def _concrete(model: SystemModel, ob: Obligation, exact: ExactResult, budget: Budget,
+              value: Fraction) -> Counterexample | None:
+    """A concrete run exceeding the spec, found by approaching the extreme (proof spec §4.5)."""
+    grid = exact.grid or grid_of(model)
+    t = ob.target
+    worst = exact.worst[t].measured
+    if ob.kind != "jitter":
+        m = approach(model, grid, worst, t, lambda x: x > ob.spec, value - ob.spec, "worst", budget)
+        return None if m is None else Counterexample.of(t, m)
+    best = exact.best[t].measured
+    gap = (value - ob.spec) / 2
+    hi = exact.worst[t].value - gap
+    lo = exact.best[t].value + gap
+    mw = approach(model, grid, worst, t, lambda x: x > hi, gap, "worst", budget)
+    mb = approach(model, grid, best, t, lambda x: x < lo, gap, "best", budget)
+    if mw is None or mb is None:
+        return None
+    return Counterexample.of(t, mw, mb)
+
+
+def _by_search(model: SystemModel, items: list[tuple[int, Obligation]], budget: Budget, reason: str,
+               exact: ExactResult | None) -> dict[int, Verdict]:
+    goals = []
+    for _, ob in items:
+        if ob.kind == "jitter":
+            goals.append(Goal(ob.target, spread=ob.spec))
+        else:
+            goals.append(Goal(ob.target, above=ob.spec))
+    span = max((ob.bound for _, ob in items if ob.bound is not None), default=None)
+    found = search(model, goals, budget, search_horizon(model, span)) if not budget.expired() else None
+    out: dict[int, Verdict] = {}
+    for i, ob in items:
+        cex = _search_cex(ob, found) if found is not None else None
+        explored = (found.explored if found else 0) + (exact.explored if exact else 0)
+        if cex is not None:
+            out[i] = ob.verdict("violated", "search", counterexample=cex, explored=explored)
+        else:
+            why = reason or "no exact method applies"
+            if budget.expired():
+                why += "; the time limit was reached"
+            out[i] = ob.verdict("undecided", "search", explored=explored, note=why)
+    return out
+
+
+def _search_cex(ob: Obligation, found) -> Counterexample | None:
+    t = ob.target
+    w: Measured | None = found.worst.get(t)
+    if ob.kind == "jitter":
+        b: Measured | None = found.best.get(t)
+        if w is None or b is None:
+            return None
+        if w.values[t].worst.value - b.values[t].best.value > ob.spec:
+            return Counterexample.of(t, w, b)
+        return None
+    if w is None or w.values[t].worst is None or not w.values[t].worst.value > ob.spec:
+        return None
+    return Counterexample.of(t, w)
+
+
+# ------------------------------------------------------------------ diagnostics
+
+
+def _spec_text(v: Verdict) -> str:
+    if v.kind == "deadline":
+        return f"deadline {fmt_time(v.spec)}"
+    return f"`{v.kind} <= {fmt_time(v.spec)}`"
+
+
+def _method_text(method: str) -> str:
+    return {"bound": "the compositional bound", "exact-enumeration": "exact enumeration",
+            "exact-z3": "the exact Z3 search", "search": "a falsifying search"}[method]
+
+
+def diagnostics(model: SystemModel, verdicts) -> list:
+    """E501 (violated spec), E503 (deadline miss), E502 (undecided), in verdict order."""
+    sink = DiagnosticSink()
+    for v in verdicts:
+        if v.status == "proved":
+            continue
+        notes = []
+        if v.bound is not None:
+            notes.append(f"the compositional bound is {fmt_time(v.bound)}")
+        elif v.subject == "task":
+            notes.append("the response-time analysis finds no bound within the deadline (E312)")
+        else:
+            notes.append("the compositional analysis gives no bound")
+        if v.status == "violated":
+            cex = v.counterexample
+            notes.append(f"established by {_method_text(v.method)}; the run replays in the reference "
+                         "simulator (verify.sim)")
+            if v.exact is not None:
+                notes.append(f"exact worst case: {fmt_time(v.exact)}"
+                             + (" (a supremum, approached by runs like this one)" if v.exact != cex.latency else ""))
+            notes.append("scenario: " + cex.scenario.summary(model))
+            notes.append(_sample_text(model, v, cex))
+            if v.note:
+                notes.append(v.note)
+            if v.subject == "chain":
+                sink.emit("E501", f"chain `{v.name}` violates {_spec_text(v)}: a run reaches {fmt_time(cex.latency)}",
+                          v.span, f"{fmt_time(cex.latency)} > {fmt_time(v.spec)}",
+                          secondary=[Label(span, text) for span, text in v.related], notes=notes,
+                          help="see the run with `--trace-svg FILE` or `--format json`; relax the spec, "
+                               "or shorten the periods or execution times along the chain")
+            else:
+                sink.emit("E503", f"`{v.name}` can miss its {_spec_text(v)}: a job responds after "
+                          f"{fmt_time(cex.latency)}", v.span, f"responds after {fmt_time(cex.latency)}",
+                          notes=notes, help="give it a higher priority, move interfering tasks to another "
+                                            "core, or relax the deadline")
+        else:
+            notes.append(f"searched {v.explored} scenario{'s' * (v.explored != 1)} without a violation; "
+                         f"not exact because {v.note}")
+            what = f"chain `{v.name}`: {_spec_text(v)}" if v.subject == "chain" else f"`{v.name}`: {_spec_text(v)}"
+            sink.emit("E502", f"cannot decide {what} within the budget", v.span,
+                      "neither proved nor refuted", notes=notes,
+                      help="raise `--budget`, tighten the model (constant execution times and delays make the "
+                           "exact search apply), or improve the bound")
+    return sink.items
+
+
+def _sample_text(model: SystemModel, v: Verdict, cex: Counterexample) -> str:
+    s = cex.sample
+    if v.subject == "task":
+        end = "still running at the end of the run" if s.finish is None else f"completes at {fmt_time(s.finish)}"
+        return f"job {s.task}#{s.index} is released at {fmt_time(s.release)} and {end}"
+    chain = next(c for c in model.chains if c.name == v.name)
+    first, last = chain.tasks[0], chain.tasks[-1]
+    text = (f"from the read of {first}#{s.origin} at {fmt_time(s.begin)} to the completion of {last}#{s.last} "
+            f"at {fmt_time(s.end)}: {fmt_time(s.value)}")
+    if v.kind == "jitter":
+        b = cex.best_sample
+        text = (f"data age {fmt_time(s.value)} in one run and {fmt_time(b.value)} in another: jitter "
+                f"{fmt_time(cex.latency)}")
+    return text

@@ -1,0 +1,225 @@
+"""Counterexample timelines: text, JSON and an SVG Gantt chart (specs/proof.md §8).
+
+Every view starts from a ``Counterexample`` and replays its scenario in the reference simulator;
+nothing is drawn that the simulator did not produce. The job chain is found by walking back from
+the last task's job through the values it read (provenance, specs/timing.md §4).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from fractions import Fraction
+from xml.sax.saxutils import escape
+
+from ..model import SystemModel
+from ..sim import JobRecord, Message, Trace
+from ..timing.report import exact
+from ..units import fmt_time
+from .scenario import replay
+from .verdict import Counterexample, Verdict
+
+
+@dataclass(frozen=True)
+class ChainStep:
+    """One job of the job chain and the message it wrote along the chain (None for the last)."""
+
+    job: JobRecord
+    message: Message | None
+
+
+def job_chain(model: SystemModel, trace: Trace, chain_name: str, sample) -> list[ChainStep]:
+    """The jobs τ₁#stamp → … → τₙ#last through which the sample's value flowed."""
+    chain = next(c for c in model.chains if c.name == chain_name)
+    job = trace.job(chain.tasks[-1], sample.last)
+    steps = [ChainStep(job, None)]
+    for pos in range(len(chain.tasks) - 1, 0, -1):
+        msg = job.read(chain.hops[pos - 1].link.target)
+        if msg is None:
+            break
+        job = trace.job(msg.writer, msg.job)
+        steps.append(ChainStep(job, msg))
+    steps.reverse()  # each step carries the message its job wrote and the next job read
+    return steps
+
+
+def _t(x: Fraction | None) -> str:
+    return "-" if x is None else fmt_time(x)
+
+
+# ------------------------------------------------------------------ text
+
+
+def to_text(model: SystemModel, verdict: Verdict) -> str:
+    cex = verdict.counterexample
+    assert cex is not None
+    trace = replay(model, cex.scenario)
+    lines = [f"counterexample: {verdict.label} {fmt_time(cex.latency)} > spec {fmt_time(verdict.spec)} "
+             f"(by {verdict.method})",
+             f"  scenario: {cex.scenario.summary(model)}; the run lasts {fmt_time(cex.scenario.horizon)}"]
+    s = cex.sample
+    if verdict.subject == "task":
+        lines.append(f"  job {s.task}#{s.index}: released {_t(s.release)}, completes {_t(s.finish)}: "
+                     f"response {fmt_time(s.value)}")
+        job = trace.job(s.task, s.index)
+        lines.append(f"  it starts at {_t(job.start)}; jobs of its core running in between:")
+        core = model.task(s.task).core
+        end = s.finish if s.finish is not None else trace.horizon
+        for t in model.tasks_on(core):
+            for j in trace.jobs[t.id]:
+                if j.start is not None and j.start < end and (j.finish is None or j.finish > s.release) \
+                        and (t.id, j.index) != (s.task, s.index):
+                    lines.append(f"    {t.id}#{j.index}  [priority {t.priority}]  released {_t(j.release)}, "
+                                 f"starts {_t(j.start)}, completes {_t(j.finish)}")
+        return "\n".join(lines)
+    chain = next(c for c in model.chains if c.name == verdict.name)
+    first = chain.tasks[0]
+    if verdict.kind == "reaction_time":
+        nxt = s.origin + 1
+        sampled = trace.job(first, nxt).start if nxt < len(trace.jobs[first]) else None
+        lines.append(f"  stimulus just after the read of {first}#{s.origin} at {fmt_time(s.begin)}; it is first "
+                     f"read by {first}#{nxt} at {_t(sampled)}")
+    else:
+        lines.append(f"  the value read by {first}#{s.stamp} at {fmt_time(s.begin)}"
+                     + (" (measured from that job's previous read)" if verdict.variant == "non-reduced" else ""))
+    lines.append("  job chain (each job reads at its start and writes at its completion):")
+    steps = job_chain(model, trace, verdict.name, s)
+    width = max(len(f"{st.job.task}#{st.job.index}") for st in steps)
+    for step in steps:
+        j = step.job
+        lines.append(f"    {f'{j.task}#{j.index}'.ljust(width)}  released {_t(j.release):>10}  reads at "
+                     f"{_t(j.start):>10}  completes {_t(j.finish):>10}")
+        if step.message is not None:
+            m = step.message
+            lines.append(f"      -> {m.source} -> {m.target}: written {_t(m.written)}, arrives {_t(m.arrival)}")
+    lines.append(f"  latency: {fmt_time(s.end)} − {fmt_time(s.begin)} = {fmt_time(s.value)}")
+    if verdict.kind == "jitter":
+        b = cex.best_sample
+        lines.append(f"  a second run ({cex.best_scenario.summary(model)}) has a data age of {fmt_time(b.value)}: "
+                     f"jitter {fmt_time(s.value)} − {fmt_time(b.value)} = {fmt_time(cex.latency)}")
+    return "\n".join(lines)
+
+
+# ------------------------------------------------------------------ JSON
+
+
+def _job_json(j: JobRecord) -> dict:
+    return {"task": j.task, "index": j.index, "release": exact(j.release), "start": exact(j.start),
+            "finish": exact(j.finish), "execution_time": exact(j.exec_time)}
+
+
+def _sample_json(s) -> dict:
+    if hasattr(s, "origin"):
+        return {"value": exact(s.value), "begin": exact(s.begin), "end": exact(s.end), "origin_job": s.origin,
+                "stamp_job": s.stamp, "last_job": s.last}
+    return {"value": exact(s.value), "task": s.task, "job": s.index, "release": exact(s.release),
+            "finish": exact(s.finish)}
+
+
+def to_json(model: SystemModel, verdict: Verdict) -> dict:
+    cex = verdict.counterexample
+    assert cex is not None
+    doc = {"target": {"kind": cex.target.kind, "name": cex.target.name}, "latency": exact(cex.latency),
+           "spec": exact(verdict.spec), "scenario": cex.scenario.to_json(), "sample": _sample_json(cex.sample)}
+    trace = replay(model, cex.scenario)
+    if verdict.subject == "chain":
+        doc["job_chain"] = [dict(_job_json(st.job), message=None if st.message is None else {
+            "source": st.message.source, "target": st.message.target, "index": st.message.index,
+            "written": exact(st.message.written), "arrival": exact(st.message.arrival)})
+            for st in job_chain(model, trace, verdict.name, cex.sample)]
+    else:
+        doc["job"] = _job_json(trace.job(cex.sample.task, cex.sample.index))
+    if cex.best_scenario is not None:
+        doc["best_scenario"] = cex.best_scenario.to_json()
+        doc["best_sample"] = _sample_json(cex.best_sample)
+    return doc
+
+
+# ------------------------------------------------------------------ SVG
+
+
+def _num(x: float) -> str:
+    return f"{x:.2f}".rstrip("0").rstrip(".")
+
+
+def to_svg(model: SystemModel, verdict: Verdict) -> str:
+    """A Gantt chart of the counterexample: one row per task (the chain's tasks and the tasks sharing
+    their cores), jobs as bars from start to completion (preemptions are not drawn), releases as
+    ticks, the chain's jobs highlighted with data-flow arrows, the violating interval shaded."""
+    cex = verdict.counterexample
+    assert cex is not None
+    trace = replay(model, cex.scenario)
+    s = cex.sample
+    if verdict.subject == "chain":
+        chain = next(c for c in model.chains if c.name == verdict.name)
+        steps = job_chain(model, trace, verdict.name, s)
+        lo, hi = s.begin, s.end
+        cores = {model.task(t).core for t in chain.tasks}
+        rows = list(dict.fromkeys(list(chain.tasks) + [t.id for c in sorted(cores) for t in sorted(
+            model.tasks_on(c), key=lambda t: -t.priority)]))
+        highlighted = {(st.job.task, st.job.index) for st in steps}
+    else:
+        steps = []
+        lo = s.release
+        hi = s.finish if s.finish is not None else trace.horizon
+        rows = [t.id for t in sorted(model.tasks_on(model.task(s.task).core), key=lambda t: -t.priority)]
+        highlighted = {(s.task, s.index)}
+    pad = max((hi - lo) / 10, Fraction(1, 10**6))
+    t0, t1 = max(Fraction(0), lo - pad), hi + pad
+    left, width, row_h, top = 230, 900, 30, 60
+    height = top + row_h * len(rows) + 50
+
+    def x(t: Fraction) -> float:
+        return left + float((min(max(t, t0), t1) - t0) / (t1 - t0)) * width
+
+    def y(task: str) -> float:
+        return top + row_h * rows.index(task)
+
+    title = (f"{verdict.label}: {fmt_time(cex.latency)} > {fmt_time(verdict.spec)} "
+             f"(counterexample by {verdict.method})")
+    out = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{left + width + 40}" height="{height}" '
+           f'viewBox="0 0 {left + width + 40} {height}" font-family="sans-serif" font-size="12">',
+           f"<title>{escape(title)}</title>",
+           '<defs><marker id="arrow" viewBox="0 0 10 10" refX="10" refY="5" markerWidth="7" markerHeight="7" '
+           'orient="auto-start-reverse"><path d="M 0 0 L 10 5 L 0 10 z" fill="#c0392b"/></marker></defs>',
+           '<rect x="0" y="0" width="100%" height="100%" fill="white"/>',
+           f'<text x="10" y="20" font-size="14" font-weight="bold">{escape(title)}</text>',
+           f'<text x="10" y="40" fill="#555">{escape(cex.scenario.summary(model))}</text>']
+    out.append(f'<rect class="violation" x="{_num(x(lo))}" y="{top - 8}" width="{_num(x(hi) - x(lo))}" '
+               f'height="{row_h * len(rows) + 8}" fill="#f5b7b1" fill-opacity="0.35" stroke="#c0392b" '
+               'stroke-dasharray="4 3"/>')
+    out.append(f'<text x="{_num((x(lo) + x(hi)) / 2)}" y="{top + row_h * len(rows) + 16}" text-anchor="middle" '
+               f'fill="#c0392b">{escape(fmt_time(hi - lo))} (spec {escape(fmt_time(verdict.spec))})</text>')
+    for task in rows:
+        yy = y(task)
+        out.append(f'<text x="10" y="{_num(yy + 19)}">{escape(task)} [{escape(model.task(task).core)}, '
+                   f'priority {model.task(task).priority}]</text>')
+        out.append(f'<line x1="{left}" y1="{_num(yy + row_h - 2)}" x2="{left + width}" y2="{_num(yy + row_h - 2)}" '
+                   'stroke="#ddd"/>')
+        for j in trace.jobs[task]:
+            if t0 <= j.release <= t1:
+                out.append(f'<line class="release" x1="{_num(x(j.release))}" y1="{_num(yy + 2)}" '
+                           f'x2="{_num(x(j.release))}" y2="{_num(yy + row_h - 4)}" stroke="#333"/>')
+            if j.start is None:
+                continue
+            end = j.finish if j.finish is not None else trace.horizon
+            if end < t0 or j.start > t1:
+                continue
+            on = (j.task, j.index) in highlighted
+            fill = "#e67e22" if on else "#aed6f1"
+            out.append(f'<rect class="job{" chain" if on else ""}" x="{_num(x(j.start))}" y="{_num(yy + 6)}" '
+                       f'width="{_num(max(x(end) - x(j.start), 1.0))}" height="{row_h - 14}" fill="{fill}" '
+                       f'stroke="#2c3e50"><title>{escape(j.task)}#{j.index}: released {escape(_t(j.release))}, '
+                       f'starts {escape(_t(j.start))}, completes {escape(_t(j.finish))}</title></rect>')
+    for a, b in zip(steps, steps[1:]):
+        m = a.message
+        if m is None or b.job.start is None:
+            continue
+        out.append(f'<line class="flow" x1="{_num(x(m.written))}" y1="{_num(y(a.job.task) + row_h / 2)}" '
+                   f'x2="{_num(x(b.job.start))}" y2="{_num(y(b.job.task) + row_h / 2)}" stroke="#c0392b" '
+                   f'stroke-width="1.5" marker-end="url(#arrow)"><title>{escape(m.source)} -> {escape(m.target)}: '
+                   f'written {escape(_t(m.written))}, arrives {escape(_t(m.arrival))}</title></line>')
+    for frac in range(0, 5):
+        t = t0 + (t1 - t0) * frac / 4
+        out.append(f'<text x="{_num(x(t))}" y="{height - 12}" text-anchor="middle" fill="#555">'
+                   f'{escape(fmt_time(t))}</text>')
+    out.append("</svg>")
+    return "\n".join(out) + "\n"

@@ -1,0 +1,288 @@
+"""Every decision of a synthesis problem as an ordered, finite list of candidate activations.
+
+A *choice* is a task whose activation synthesis decides: every hole, and — when statements are
+tracked for an unsat core — every task whose rate a relaxable statement fixes (specs/synthesis.md §2).
+
+* ``timer ? in LOW .. HIGH step S``: the grid LOW, LOW + S, … up to HIGH.
+* ``timer ? in LOW .. HIGH`` (no step): LOW, HIGH, the default grid inside the range, and the
+  fastest and slowest period the activation constraint allows if they lie inside.
+* ``timer ?``: the default grid plus the fastest and slowest period the constraint allows.
+* ``every ? in A .. B``: A … B; ``every ?``: 1 … ``PRESCALER_CAP``.
+* ``activation ?``: the timer candidates of ``timer ?`` and, for every in-port or compound in-port the
+  task may trigger on (it reads every member; the members are connected), prescalers 1 … cap.
+
+Each candidate records the statements that forbid it (``excluded``): a range, a fixed rate, an end of
+the activation constraint. A relaxed timer may take the default grid, a relaxed prescaler
+``RELAXED_PRESCALERS``. Untracked problems drop those candidates; tracked ones keep them and let
+the statement's literal forbid them. Candidates are ordered canonically (timers by period, then
+triggers by port name and prescaler), never by declaration order. Default grid: the usual robotics
+and automotive periods (WATERS 2015 and ROS drivers), ``DEFAULT_PERIODS``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from fractions import Fraction
+
+from .. import syntax as s
+from ..model import DataTriggered, Hole, Periodic, SystemModel, TaskModel
+from ..resolve import SystemScope
+from ..units import fmt_number, fmt_time
+from .statements import Statement, statement_index
+
+MS = Fraction(1, 1000)
+DEFAULT_PERIODS: tuple[Fraction, ...] = tuple(ms * MS for ms in (1, 2, 5, 10, 20, 25, 40, 50, 100, 200, 250, 500, 1000))
+PRESCALER_CAP = 100  # default upper end of `every ?` and of the prescalers of `activation ?`
+#: what a relaxed prescaler (an explicit `every K`, or a prescaler range) may take besides its own values
+RELAXED_PRESCALERS: tuple[int, ...] = (1, 2, 3, 4, 5, 6, 8, 10, 12, 16, 20, 25, 50, 100)
+MAX_CANDIDATES = 4096  # per choice; a finer grid is refused (E403)
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """One way to activate a task: a timer with ``period`` (and the binding's ``phase``), or a data
+    trigger on ``port`` (members, mode) with ``prescaler``."""
+
+    kind: str  # "timer" | "trigger"
+    period: Fraction | None = None
+    phase: Fraction | None = None
+    port: str | None = None
+    members: tuple[str, ...] = ()
+    mode: str = "single"
+    prescaler: int = 1
+
+    @property
+    def group(self) -> str:
+        """Candidates of one group differ only in speed (period or prescaler)."""
+        return "timer" if self.kind == "timer" else f"trigger {self.port}"
+
+    @property
+    def speed(self) -> Fraction:
+        """Smaller is faster: the period of a timer, the prescaler of a trigger."""
+        return self.period if self.kind == "timer" else Fraction(self.prescaler)
+
+    def sort_key(self) -> tuple:
+        return (self.kind != "timer", self.port or "", self.speed)
+
+    def activation(self):
+        if self.kind == "timer":
+            return Periodic(self.period, self.phase)
+        return DataTriggered(self.port, self.members, self.mode, self.prescaler)
+
+    @property
+    def rate(self) -> Fraction | None:
+        """The activation rate of a timer candidate (a trigger's depends on its writers)."""
+        return 1 / self.period if self.kind == "timer" else None
+
+    def text(self) -> str:
+        if self.kind == "timer":
+            return f"timer {fmt_time(self.period)}" + (f" phase {fmt_time(self.phase)}" if self.phase is not None else "")
+        return f"trigger {self.port}" + (f" every {self.prescaler}" if self.prescaler != 1 else "")
+
+
+@dataclass(frozen=True)
+class Choice:
+    """A task's decision: its candidates in canonical order, and per candidate the keys of the
+    statements that forbid it."""
+
+    task: str
+    candidates: tuple[Candidate, ...]
+    excluded: tuple[tuple[str, ...], ...]
+    hole: s.Activation | None = None  # the hole's syntax node; None for a relaxable fixed binding
+    slowest: int = field(default=0, compare=False)
+
+    def allowed(self, off: frozenset[str] = frozenset()) -> tuple[int, ...]:
+        """Indices of the candidates no statement (other than those in ``off``) forbids."""
+        return tuple(i for i, ex in enumerate(self.excluded) if all(k in off for k in ex))
+
+
+class TooManyCandidates(ValueError):
+    """A hole whose range and grid give more than ``MAX_CANDIDATES`` values."""
+
+    def __init__(self, task: TaskModel, count: int):
+        super().__init__(f"{task.id}: {count} candidates")
+        self.task, self.count = task, count
+
+
+# ================================================================== trigger ports
+
+
+def trigger_ports(model: SystemModel, task: TaskModel, scope: SystemScope | None) -> dict[str, tuple[str, tuple[str, ...]]]:
+    """The ports ``task`` may be data-triggered on, by name: (mode, members). Validation's rules: the
+    task reads every member, the members are connected (for OR, at least one)."""
+    ports: dict[str, tuple[str, tuple[str, ...]]] = {}
+    comp = scope.component_of.get(task.instance) if scope is not None else None
+    if comp is not None:
+        for p in comp.component.in_ports:
+            ports[p.name.text] = ("single", (p.name.text,))
+        for c in comp.component.compounds:
+            ports[c.name.text] = (c.mode, tuple(m.text for m in c.members))
+    else:
+        for r in task.reads:
+            ports[r.port] = ("single", (r.port,))
+
+    def usable(mode: str, members: tuple[str, ...]) -> bool:
+        if not all(task.reads_port(m) for m in members):
+            return False
+        linked = [model.link_into(f"{task.instance}.{m}") is not None for m in members]
+        return any(linked) if mode == "or" else all(linked)
+
+    return {name: ports[name] for name in sorted(ports) if usable(*ports[name])}
+
+
+# ================================================================== domains
+
+
+def _constraint_periods(task: TaskModel) -> list[Fraction]:
+    """The fastest and slowest period the activation constraint allows."""
+    return [1 / r for r in (task.max_rate, task.min_rate) if r is not None and r > 0]
+
+
+def _grid(lo: Fraction, hi: Fraction, step: Fraction, task: TaskModel) -> list[Fraction]:
+    count = (hi - lo) // step + 1
+    if count > MAX_CANDIDATES:
+        raise TooManyCandidates(task, int(count))
+    return [lo + i * step for i in range(int(count))]
+
+
+def period_values(h: s.PeriodHole, task: TaskModel) -> tuple[list[Fraction] | None, list[Fraction]]:
+    """(the hole's own range values or None for a bare ``?``, its default candidates)."""
+    extremes = _constraint_periods(task)
+    if h.low is None:
+        return None, sorted(set(DEFAULT_PERIODS) | set(extremes))
+    lo, hi = sorted((h.low.seconds(), h.high.seconds()))
+    if h.step is not None:
+        values = _grid(h.low.seconds(), h.high.seconds(), h.step.seconds(), task)
+    else:
+        inside = [p for p in list(DEFAULT_PERIODS) + extremes if lo <= p <= hi]
+        values = sorted({lo, hi, *inside})
+    return values, values
+
+
+def prescaler_values(h: s.PrescalerHole, task: TaskModel) -> tuple[list[int] | None, list[int]]:
+    if h.low is None:
+        return None, list(range(1, PRESCALER_CAP + 1))
+    lo, hi = int(h.low.value), int(h.high.value)
+    if hi - lo + 1 > MAX_CANDIDATES:
+        raise TooManyCandidates(task, hi - lo + 1)
+    return list(range(lo, hi + 1)), list(range(lo, hi + 1))
+
+
+class _Builder:
+    """Collects candidates with the statement keys that exclude each."""
+
+    def __init__(self, task: TaskModel, slots: dict[str, str]):
+        self.task, self.slots = task, slots
+        self.items: dict[Candidate, set[str]] = {}
+
+    def add(self, cand: Candidate, *excluders: str | None) -> None:
+        if cand.kind == "timer" and cand.phase is not None and cand.period <= cand.phase:
+            return  # a phase lies in [0, period)
+        keys = self.items.setdefault(cand, set())
+        keys.update(k for k in excluders if k)
+        if cand.kind == "timer":
+            keys.update(self._constraint_excluders(cand.rate))
+
+    def _constraint_excluders(self, rate: Fraction) -> list[str]:
+        t, out = self.task, []
+        if t.min_rate is not None and rate < t.min_rate:
+            out.append(self.slots.get("min_rate") or self.slots.get("rate"))
+        if t.max_rate is not None and rate > t.max_rate:
+            out.append(self.slots.get("max_rate") or self.slots.get("rate"))
+        return [k for k in out if k]
+
+    def choice(self, hole: s.Activation | None, drop_excluded: bool) -> Choice:
+        if len(self.items) > MAX_CANDIDATES:
+            raise TooManyCandidates(self.task, len(self.items))
+        cands = sorted(self.items, key=Candidate.sort_key)
+        if drop_excluded:
+            cands = [c for c in cands if not self.items[c]]
+        excluded = tuple(tuple(sorted(self.items[c])) for c in cands)
+        return make_choice(self.task.id, tuple(cands), excluded, hole)
+
+
+def make_choice(task: str, cands: tuple[Candidate, ...], excluded: tuple[tuple[str, ...], ...],
+                hole: s.Activation | None) -> Choice:
+    """A choice; ``slowest`` is the slowest allowed timer candidate (else the slowest allowed one)."""
+    allowed = [i for i, ex in enumerate(excluded) if not ex] or list(range(len(cands)))
+    slowest = max(allowed, key=lambda i: (cands[i].kind == "timer", cands[i].speed), default=0)
+    return Choice(task, cands, excluded, hole, slowest)
+
+
+def task_choice(model: SystemModel, task: TaskModel, scope: SystemScope | None, statements: tuple[Statement, ...],
+                tracked: bool) -> Choice | None:
+    """The choice of ``task``, or None when its activation is not decided by synthesis. Untracked:
+    only holes, with every excluded candidate dropped. Tracked: also relaxable fixed bindings, with
+    the default grid (or prescalers) added so that relaxing a statement widens the choice."""
+    slots = statement_index(statements).get(task.id, {})
+    b = _Builder(task, slots)
+    act = task.activation
+    if isinstance(act, Hole):
+        _hole_candidates(b, model, task, act.activation, scope, slots, tracked)
+        hole = act.activation
+    elif tracked and isinstance(act, Periodic) and "rate" in slots:
+        bound = Candidate("timer", act.period, act.phase)
+        b.add(bound)
+        for p in _timer_defaults(task):  # a relaxed binding leaves the phase unknown too
+            cand = Candidate("timer", p)
+            b.add(cand, slots["rate"] if cand != bound else None)
+        hole = None
+    elif tracked and isinstance(act, DataTriggered) and "rate" in slots:
+        for k in sorted({act.prescaler, *RELAXED_PRESCALERS}):
+            b.add(Candidate("trigger", port=act.port, members=act.members, mode=act.mode, prescaler=k),
+                  slots["rate"] if k != act.prescaler else None)
+        hole = None
+    else:
+        return None
+    return b.choice(hole, drop_excluded=not tracked)
+
+
+def _timer_defaults(task: TaskModel) -> list[Fraction]:
+    return sorted(set(DEFAULT_PERIODS) | set(_constraint_periods(task)))
+
+
+def _hole_candidates(b: _Builder, model: SystemModel, task: TaskModel, node: s.Activation,
+                     scope: SystemScope | None, slots: dict[str, str], tracked: bool) -> None:
+    rng = slots.get("range")
+    if isinstance(node, s.Timer):
+        phase = node.phase.seconds() if node.phase is not None else None
+        own, values = period_values(node.period, task)
+        for p in values:
+            b.add(Candidate("timer", p, phase))
+        if tracked and own is not None:
+            for p in _timer_defaults(task):
+                b.add(Candidate("timer", p, phase), rng if p not in own else None)
+    elif isinstance(node, s.Trigger):
+        mode, members = trigger_ports(model, task, scope).get(node.port.text, ("single", (node.port.text,)))
+        own, values = prescaler_values(node.prescaler, task)
+        extra = RELAXED_PRESCALERS if tracked and own is not None else ()
+        for k in sorted(set(values) | set(extra)):
+            b.add(Candidate("trigger", port=node.port.text, members=members, mode=mode, prescaler=k),
+                  rng if own is not None and k not in own else None)
+    else:  # activation ?
+        for p in _timer_defaults(task):
+            b.add(Candidate("timer", p))
+        for port, (mode, members) in trigger_ports(model, task, scope).items():
+            for k in range(1, PRESCALER_CAP + 1):
+                b.add(Candidate("trigger", port=port, members=members, mode=mode, prescaler=k))
+
+
+def build_choices(model: SystemModel, scope: SystemScope | None, statements: tuple[Statement, ...],
+                  tracked: bool) -> dict[str, Choice]:
+    """Every choice of ``model``, keyed by task id in sorted (canonical) order."""
+    out: dict[str, Choice] = {}
+    for task in sorted(model.tasks, key=lambda t: t.id):
+        choice = task_choice(model, task, scope, statements, tracked)
+        if choice is not None:
+            out[task.id] = choice
+    return out
+
+
+def describe_hole(choice: Choice) -> str:
+    """What the user wrote for a hole, e.g. ``timer ? in 25 ms .. 200 ms step 25 ms``."""
+    from ..fmt import _activation  # the canonical text of an activation clause
+
+    return _activation(choice.hole) if choice.hole is not None else "(fixed binding)"
+
+
+def value_text(c: Candidate) -> str:
+    return c.text() if c.kind == "timer" or c.prescaler == 1 else f"trigger {c.port} every {fmt_number(c.prescaler)}"

@@ -1,0 +1,287 @@
+"""``synthesize``: the whole pipeline behind ``synth``, and the brute-force baseline.
+
+    result = synthesize(verify.load("examples/navigation/navigation-holes.vfy"))
+    result.status            # "sat" | "unsat" | "undecided"
+    result.choices           # task id -> Candidate, for every hole
+    result.model             # the configured SystemModel; result.analysis its analysis
+
+Pipeline (specs/synthesis.md): build the problem and prune it; answer from the cheap necessary checks
+if they already decide; otherwise solve with lazy refinement and the objective; only when that is
+unsatisfiable, rebuild with tracked statements and explain (unsat core and repair hints).
+"""
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass, field
+from fractions import Fraction
+
+import z3
+
+from ..api import LoadResult
+from ..diagnostics import Diagnostic, DiagnosticSink
+from ..model import SystemModel
+from ..resolve import SystemScope
+from ..timing import AnalysisResult
+from ..units import fmt_time
+from .candidates import Candidate
+from .core import Explanation, explain_unsat, unsat_diagnostic
+from .problem import Config, Evaluation, Problem, build_problem
+from .solve import Budget, Engine, Objective, lex_better
+from .statements import Statement
+
+DEFAULT_RLIMIT = 50_000_000  # Z3 resource units for one run (deterministic); --rlimit changes it
+OBJECTIVES = ("utilisation", "slack", "latency:CHAIN", "age:CHAIN", "none")
+
+
+class ObjectiveError(ValueError):
+    """An ``--objective`` that names no known objective or chain."""
+
+
+@dataclass(frozen=True)
+class Goal:
+    """One objective as the user asked for it: ``kind`` utilisation | slack | latency | age."""
+
+    kind: str
+    chain: str | None = None
+
+    @property
+    def name(self) -> str:
+        return self.kind if self.chain is None else f"{self.kind}:{self.chain}"
+
+    @property
+    def sense(self) -> str:
+        return "max" if self.kind == "slack" else "min"
+
+
+def parse_objective(text: str | None, model: SystemModel) -> list[Goal]:
+    """``utilisation`` (default), ``slack``, ``latency:CHAIN``, ``age:CHAIN``, comma-separated for a
+    lexicographic combination; ``none`` for any feasible configuration."""
+    from ..diagnostics import suggest
+
+    goals: list[Goal] = []
+    chains = [c.name for c in model.chains]
+    for part in (text or "utilisation").split(","):
+        part = part.strip()
+        kind, _, chain = part.partition(":")
+        if part == "none":
+            continue
+        if kind in ("utilisation", "utilization", "slack") and not chain:
+            goals.append(Goal("utilisation" if kind.startswith("utili") else "slack"))
+        elif kind in ("latency", "age") and chain:
+            if chain not in chains:
+                hint = suggest(chain, chains)
+                raise ObjectiveError(f"no chain `{chain}` in system `{model.name}`"
+                                     + (f"; did you mean `{hint}`?" if hint else f" (chains: {', '.join(chains) or 'none'})"))
+            goals.append(Goal(kind, chain))
+        else:
+            raise ObjectiveError(f"unknown objective `{part}`; use one of {', '.join(OBJECTIVES)}, "
+                                 "comma-separated for a lexicographic combination")
+    if any(g.kind == "slack" for g in goals) and not any(c.reaction_time or c.data_age or c.jitter for c in model.chains):
+        raise ObjectiveError("objective `slack` needs at least one spec")
+    return goals
+
+
+def objectives_for(goals: list[Goal], enc) -> list[Objective]:
+    out = []
+    for g in goals:
+        if g.kind == "utilisation":
+            out.append(Objective(g.name, "min", enc.utilisation,
+                                 lambda c, ev: int(_utilisation(ev.result) * enc.M)))
+        elif g.kind == "slack":
+            slack = z3.Int("objective|slack", enc.ctx)
+            for _, term, bound in enc.specs:
+                enc.add(slack <= bound - enc.t.lift(term))
+            out.append(Objective(g.name, "max", slack, lambda c, ev: enc.ticks(min_margin(ev.result))))
+        else:
+            kind = "reaction_time" if g.kind == "latency" else "data_age"
+            out.append(Objective(g.name, "min", enc.latency[(g.chain, kind)],
+                                 lambda c, ev, ch=g.chain, k=kind: enc.ticks(_latency(ev.result, ch, k))))
+    return out
+
+
+def _utilisation(result: AnalysisResult) -> Fraction:
+    return sum((c.utilisation for c in result.cores), Fraction(0))
+
+
+def min_margin(result: AnalysisResult) -> Fraction | None:
+    margins = [s.margin for c in result.chains for s in c.specs]
+    return min(margins) if margins and None not in margins else None
+
+
+def _latency(result: AnalysisResult, chain: str, kind: str) -> Fraction:
+    bounds = result.chain(chain)
+    return bounds.reaction_time.worst if kind == "reaction_time" else bounds.data_age_reduced.worst
+
+
+def goal_value(goal: Goal, result: AnalysisResult) -> Fraction | None:
+    """The natural value of an objective for an analysed configuration (a fraction, or seconds)."""
+    if goal.kind == "utilisation":
+        return _utilisation(result)
+    if goal.kind == "slack":
+        return min_margin(result)
+    return _latency(result, goal.chain, "reaction_time" if goal.kind == "latency" else "data_age")
+
+
+# ================================================================== result
+
+
+@dataclass
+class SynthResult:
+    status: str  # "sat" | "unsat" | "undecided"
+    system: str
+    goals: tuple[Goal, ...] = ()
+    values: tuple[Fraction | None, ...] = ()
+    optimal: bool = False
+    choices: dict[str, Candidate] = field(default_factory=dict)
+    model: SystemModel | None = None
+    analysis: AnalysisResult | None = None
+    explanation: Explanation | None = None
+    reason: str | None = None
+    established: tuple[str, ...] = ()
+    diagnostics: tuple[Diagnostic, ...] = ()
+    stats: dict = field(default_factory=dict)
+    problem: Problem | None = None
+
+    @property
+    def core(self) -> tuple[Statement, ...]:
+        return self.explanation.core if self.explanation is not None else ()
+
+    @property
+    def ok(self) -> bool:
+        return self.status == "sat"
+
+
+def _inputs(source, system: str | None, scope: SystemScope | None) -> tuple[SystemModel, SystemScope | None]:
+    if isinstance(source, LoadResult):
+        model = source.system(system)
+        resolution = source.resolution
+        return model, resolution.systems.get(model.name) if resolution is not None else None
+    return source, scope
+
+
+def synthesize(source, system: str | None = None, *, objective: str | list[Goal] | None = "utilisation",
+               rlimit: int | None = DEFAULT_RLIMIT, timeout: float | None = None, explain: bool = True,
+               scope: SystemScope | None = None) -> SynthResult:
+    """Fill the holes of a system: a ``LoadResult`` (with ``system`` naming one of its systems) or a
+    ``SystemModel`` (with an optional ``scope`` for source spans). Raises ``ObjectiveError`` for an
+    unknown objective and ``candidates.TooManyCandidates`` for a hole with too fine a grid."""
+    model, scope = _inputs(source, system, scope)
+    goals = objective if isinstance(objective, list) else parse_objective(objective, model)
+    budget = Budget(rlimit, timeout)
+    problem = build_problem(model, scope)
+    stats = {"candidates": sum(len(c.candidates) for c in problem.choices.values()), "pruned": problem.pruned}
+    reason = problem.infeasible
+    if reason is None:
+        enc = problem.encoding(z3.Context())
+        engine = Engine(problem, enc, budget)
+        out = engine.run(objectives_for(goals, enc))
+        stats.update(_engine_stats(engine, problem, budget))
+        if out.status in ("sat", "optimal"):
+            return _answer(model, problem, goals, out.config, out.evaluation, not goals or out.status == "optimal",
+                           stats)
+        if out.status == "unknown":
+            return _undecided(model, problem, goals, out, budget, stats)
+        reason = "no configuration meets every constraint"
+    return _unsat(model, scope, problem, goals, reason, budget, stats, explain)
+
+
+def _engine_stats(engine: Engine, problem: Problem, budget: Budget) -> dict:
+    return {"solver_calls": engine.stats.checks, "analyses": problem.analyses, "lemmas": engine.stats.lemmas,
+            "rejected": engine.stats.rejected, "rlimit_used": budget.used}
+
+
+def _answer(model, problem: Problem, goals, config: Config, ev: Evaluation, optimal: bool, stats) -> SynthResult:
+    values = tuple(goal_value(g, ev.result) for g in goals)
+    return SynthResult("sat", model.name, tuple(goals), values, optimal, problem.candidates(config), ev.model,
+                       ev.result, stats=stats, problem=problem)
+
+
+def _undecided(model, problem: Problem, goals, out, budget: Budget, stats) -> SynthResult:
+    established = [f"{problem.pruned} candidate values were excluded by exact pruning"]
+    if out.config is not None:
+        values = tuple(goal_value(g, out.evaluation.result) for g in goals)
+        shown = ", ".join(f"{g.name} {_show(g, v)}" for g, v in zip(goals, values))
+        established.append(f"a configuration meeting every spec was found ({shown}); it is printed, but no "
+                           "better one has been ruled out")
+    else:
+        established.append("no configuration meeting every spec has been found yet, and none has been ruled out")
+    established.append(f"{stats.get('rejected', 0)} configuration(s) were rejected by the analysis")
+    sink = DiagnosticSink()
+    sink.emit("E402", f"synthesis of `{model.name}` is undecided: {out.reason or budget.reason}", model.span,
+              "undecided", notes=tuple(f"established: {e}" for e in established),
+              help="raise the budget with `--rlimit N` (deterministic) or allow more time with `--timeout S`")
+    result = SynthResult("undecided", model.name, tuple(goals), reason=out.reason or budget.reason,
+                         established=tuple(established), diagnostics=tuple(sink.items), stats=stats, problem=problem)
+    if out.config is not None:
+        result.values = tuple(goal_value(g, out.evaluation.result) for g in goals)
+        result.choices, result.model, result.analysis = problem.candidates(out.config), out.evaluation.model, \
+            out.evaluation.result
+    return result
+
+
+def _show(goal: Goal, value) -> str:
+    if value is None:
+        return "unbounded"
+    return f"{float(value) * 100:.2f} %" if goal.kind == "utilisation" else fmt_time(value)
+
+
+def _unsat(model, scope, problem, goals, reason, budget: Budget, stats, explain: bool) -> SynthResult:
+    expl = explain_unsat(model, scope, budget) if explain else None
+    if expl is not None and expl.status == "sat":  # the tracked search found what the untracked one missed
+        ev = expl.problem.evaluate(expl.sat_config)
+        result = SynthResult("sat", model.name, tuple(goals), tuple(goal_value(g, ev.result) for g in goals), False,
+                             expl.problem.candidates(expl.sat_config), ev.model, ev.result, stats=stats,
+                             problem=problem)
+        result.choices = {k: v for k, v in result.choices.items() if k in problem.choices}
+        return result
+    if expl is not None:
+        stats["core_analyses"] = expl.problem.analyses
+        stats["rlimit_used"] = budget.used
+    diag = unsat_diagnostic(model, expl if expl is not None and expl.status == "unsat" else None, reason)
+    return SynthResult("unsat", model.name, tuple(goals), explanation=expl, reason=reason, diagnostics=(diag,),
+                       stats=stats, problem=problem)
+
+
+# ================================================================== baseline
+
+
+@dataclass
+class BruteResult:
+    status: str  # "sat" | "unsat"
+    choices: dict[str, Candidate] | None
+    values: tuple[Fraction | None, ...]
+    evaluated: int
+
+
+def brute_force(source, system: str | None = None, *, objective: str | list[Goal] | None = "utilisation",
+                scope: SystemScope | None = None, prune: bool = False, limit: int | None = None) -> BruteResult:
+    """Enumerate every combination of candidates (unpruned by default), analyse each, keep the best
+    accepted one by the objective (the first in enumeration order among equals). The naive baseline."""
+    model, scope = _inputs(source, system, scope)
+    goals = objective if isinstance(objective, list) else parse_objective(objective, model)
+    problem = build_problem(model, scope, prune=prune)
+    names = list(problem.choices)
+    ranges = [range(len(problem.choices[n].candidates)) for n in names]
+    best: tuple | None = None
+    count = 0
+    for combo in itertools.product(*ranges):
+        if limit is not None and count >= limit:
+            break
+        count += 1
+        ev = problem.evaluate(Config(tuple(zip(names, combo))))
+        if not ev.accepted:
+            continue
+        values = tuple(goal_value(g, ev.result) for g in goals)
+        key = tuple(v if g.sense == "min" else -v for g, v in zip(goals, values))
+        if best is None or key < best[0]:
+            best = (key, combo, values)
+            if not goals:
+                break
+    if best is None:
+        return BruteResult("unsat", None, (), count)
+    choices = {n: problem.choices[n].candidates[i] for n, i in zip(names, best[1])}
+    return BruteResult("sat", choices, best[2], count)
+
+
+__all__ = ["BruteResult", "DEFAULT_RLIMIT", "Goal", "ObjectiveError", "SynthResult", "brute_force",
+           "lex_better", "parse_objective", "synthesize"]

@@ -1,0 +1,638 @@
+"""The Z3 encoding: linear integer arithmetic and pseudo-Boolean constraints over integer ticks.
+
+Every choice is a one-hot vector of Bools over its candidates (exactly one true, a PB equality).
+Times are integers in *ticks*: the greatest common divisor of every time of the problem (execution
+times, delays, candidate periods, phases, deadlines, bounds), so the same problem with every time
+scaled gives the same integers. Rates are integers in units of ``1/(M·tick)``, ``M`` the least
+common multiple of the denominators every rate can have, so ``k·f_reader = f_writer`` for a
+prescaler ``k`` stays integral. A product of two decisions (a prescaler times a period that is itself
+decided) never appears: each candidate contributes its own linear equality under its Bool
+(``sel → P = k·P_writer``), the classic linearisation of Davare et al., *Period Optimization for Hard
+Real-time Distributed Automotive Systems*, DAC 2007.
+
+Per task: the maximum-distance event model ``P⁺, J⁺, F`` of specs/timing.md §5.2 (exact, as the
+analysis computes it), the response time ``R`` (an integer with lower bounds only: from ``wcet`` and
+from lemmas learnt lazily, specs/synthesis.md §4), the rate interval ``fl, fh``. Chains are sums of
+the hop terms of §7 with the same rule choice (the smaller of trigger and register rule). Constraints:
+exactly one candidate, no trigger cycle, activation constraints of triggered tasks, sampling
+tolerances, utilisation per core, ``R ≤ deadline``, the specs. Tracked statements guard their
+constraints with an assumption literal (``guard``).
+"""
+from __future__ import annotations
+
+import math
+from fractions import Fraction
+from typing import Mapping
+
+import z3
+
+from ..model import DataTriggered, LinkModel, Periodic, SporadicSource, SystemModel, TaskModel
+from .candidates import Choice
+from .statements import Statement, statement_index
+from .structure import Structure, activation_options, member_links
+
+Term = "int | z3.ArithRef"
+
+
+# ================================================================== scale
+
+
+def _gcd(a: Fraction, b: Fraction) -> Fraction:
+    return Fraction(math.gcd(a.numerator * b.denominator, b.numerator * a.denominator), a.denominator * b.denominator)
+
+
+def problem_times(model: SystemModel, choices: Mapping[str, Choice]) -> list[Fraction]:
+    times: list[Fraction | None] = []
+    for t in model.tasks:
+        times += [t.wcet, t.bcet, t.deadline, t.wcrt_bound]
+        act = t.activation
+        if isinstance(act, Periodic):
+            times += [act.period, act.phase]
+        elif isinstance(act, SporadicSource):
+            times += [act.min_interarrival, act.max_interarrival]
+    for lk in model.links:
+        times += [lk.delay_min, lk.delay_max]
+    for ch in model.chains:
+        times += [ch.reaction_time, ch.data_age, ch.jitter]
+    for choice in choices.values():
+        for c in choice.candidates:
+            times += [c.period, c.phase]
+    return [x for x in times if x]
+
+
+def tick_of(model: SystemModel, choices: Mapping[str, Choice]) -> Fraction:
+    """The largest time of which every time of the problem is a whole multiple."""
+    tick = Fraction(0)
+    for x in problem_times(model, choices):
+        tick = x if tick == 0 else _gcd(tick, x)
+    return tick or Fraction(1, 1000)
+
+
+def rate_scale(model: SystemModel, choices: Mapping[str, Choice], structure: Structure, tick: Fraction) -> int:
+    """M: a common multiple of the denominators of every possible rate (per tick)."""
+    den: dict[str, int] = {}
+
+    def of(task: TaskModel) -> int:
+        value = 1
+        for _, act in activation_options(task, choices.get(task.id)):
+            if isinstance(act, Periodic):
+                d = int(act.period / tick)
+            elif isinstance(act, SporadicSource):
+                d = math.lcm(int(act.min_interarrival / tick), int(act.max_interarrival / tick))
+            elif isinstance(act, DataTriggered):
+                d = act.prescaler
+                for _, link in member_links(model, task, act):
+                    if link is not None:
+                        d = math.lcm(d, den.get(link.writer, 1) * act.prescaler)
+            else:
+                d = 1
+            value = math.lcm(value, d)
+        return value
+
+    rounds = {tid: (len(structure.cyclic) + 1 if tid in structure.cyclic else 1) for tid in structure.order}
+    for _ in range(max(rounds.values(), default=1)):
+        for tid in structure.order:
+            if rounds[tid] > 0:
+                den[tid] = math.lcm(den.get(tid, 1), of(model.task(tid)))
+                rounds[tid] -= 1
+    scale = 1
+    for d in den.values():
+        scale = math.lcm(scale, d)
+    return scale
+
+
+# ================================================================== term helpers
+
+
+class Terms:
+    """Linear terms in one context; Python ints are folded and only lifted into Z3 when mixed."""
+
+    def __init__(self, ctx: z3.Context):
+        self.ctx = ctx
+
+    def lift(self, x):
+        return z3.IntVal(x, self.ctx) if isinstance(x, int) else x
+
+    def add(self, *xs):
+        const = sum(x for x in xs if isinstance(x, int))
+        rest = [x for x in xs if not isinstance(x, int)]
+        if not rest:
+            return const
+        total = rest[0]
+        for x in rest[1:]:
+            total = total + x
+        return total + const if const else total
+
+    def mul(self, k: int, x):
+        return k * x if isinstance(x, int) else (x if k == 1 else k * x)
+
+    def max(self, a, b):
+        if isinstance(a, int) and isinstance(b, int):
+            return max(a, b)
+        return z3.If(self.lift(a) >= self.lift(b), self.lift(a), self.lift(b))
+
+    def min(self, a, b):
+        if isinstance(a, int) and isinstance(b, int):
+            return min(a, b)
+        return z3.If(self.lift(a) <= self.lift(b), self.lift(a), self.lift(b))
+
+    def ite(self, cond, a, b):
+        if isinstance(cond, bool):
+            return a if cond else b
+        return z3.If(cond, self.lift(a), self.lift(b))
+
+    def le(self, a, b):
+        if isinstance(a, int) and isinstance(b, int):
+            return a <= b
+        return self.lift(a) <= self.lift(b)
+
+    def eq(self, a, b):
+        if isinstance(a, int) and isinstance(b, int):
+            return a == b
+        return self.lift(a) == self.lift(b)
+
+
+# ================================================================== the encoding
+
+
+class Encoding:
+    """All variables and constraints of one problem. ``hard`` lists every constraint so far;
+    ``take_new()`` hands out what was added since the last call (lemmas, ladders, blocks)."""
+
+    def __init__(self, model: SystemModel, choices: Mapping[str, Choice], statements: tuple[Statement, ...],
+                 structure: Structure, tracked: bool, seed: Mapping[str, Fraction | None], ctx: z3.Context):
+        self.model, self.choices, self.statements = model, choices, statements
+        self.structure, self.tracked, self.seed = structure, tracked, seed
+        self.tick = tick_of(model, choices)
+        self.M = rate_scale(model, choices, structure, self.tick)
+        self.ctx = ctx
+        self.t = Terms(ctx)
+        self.slots = statement_index(statements)
+        self.hard: list = []
+        self._given = 0
+        self.lits: dict[str, z3.BoolRef] = {}
+        self.sel: dict[str, list[z3.BoolRef]] = {}
+        self.R: dict[str, object] = {}
+        self.events: dict[str, tuple] = {}
+        self.rates: dict[str, tuple] = {}
+        self.C: dict[str, object] = {}
+        self.latency: dict[tuple[str, str], object] = {}
+        self.specs: list[tuple[Statement, object, int]] = []  # (statement, latency term, bound ticks)
+        self.ladders: dict[str, list] = {}
+        self._floors: dict[str, Fraction] | None = None
+        self._build()
+
+    # -------------------------------------------------------------- basics
+
+    def ticks(self, x: Fraction) -> int:
+        value = x / self.tick
+        assert value.denominator == 1, f"{x} is not a multiple of the tick {self.tick}"
+        return int(value)
+
+    def add(self, c) -> None:
+        if c is True:
+            return
+        self.hard.append(z3.BoolVal(False, self.ctx) if c is False else c)
+
+    def floor(self, tid: str) -> int:
+        """The static lower bound of R (ticks) every configuration respects."""
+        if self._floors is None:
+            self._floors = first_job_bounds(self.model, self.choices, relaxed=self.tracked)
+        return math.ceil(self._floors[tid] / self.tick)
+
+    def take_new(self) -> list:
+        new = self.hard[self._given:]
+        self._given = len(self.hard)
+        return new
+
+    def lit(self, key: str | None):
+        """The assumption literal of a tracked statement; None (always on) when untracked."""
+        if key is None or not self.tracked:
+            return None
+        if key not in self.lits:
+            self.lits[key] = z3.Bool(f"stmt|{key}", self.ctx)
+        return self.lits[key]
+
+    def guard(self, key: str | None, c, *conds) -> None:
+        """Assert ``c`` under the statement ``key`` (tracked) and the candidate literals ``conds``."""
+        if c is True:
+            return
+        pre = [x for x in (self.lit(key), *conds) if x is not None and x is not True]
+        if not pre:
+            self.add(c)
+        else:
+            self.add(z3.Implies(pre[0] if len(pre) == 1 else z3.And(*pre), z3.BoolVal(False, self.ctx) if c is False else c))
+
+    def slot(self, task: str, name: str) -> str | None:
+        return self.slots.get(task, {}).get(name)
+
+    # -------------------------------------------------------------- build
+
+    def _build(self) -> None:
+        for tid, choice in self.choices.items():
+            self.sel[tid] = [z3.Bool(f"sel|{tid}|{i}", self.ctx) for i in range(len(choice.candidates))]
+            self.add(z3.PbEq([(b, 1) for b in self.sel[tid]], 1) if self.sel[tid] else False)
+            for i, keys in enumerate(choice.excluded):
+                for key in keys:
+                    self.guard(key, z3.Not(self.sel[tid][i]))
+        ordered = sorted(self.model.tasks, key=lambda t: t.id)
+        for task in ordered:
+            self.C[task.id] = self._cost(task)
+            self.R[task.id] = self._response_var(task)
+        self._declare_flow_vars()
+        for tid in self.structure.order:
+            self._task_flow(self.model.task(tid))
+        self._no_trigger_cycles()
+        for task in ordered:
+            self._schedulable(task)
+            self._activation_constraint(task)
+        self._tolerances()
+        self._utilisation()
+        for chain in sorted(self.model.chains, key=lambda c: c.name):
+            self._chain(chain)
+
+    def _cost(self, task: TaskModel):
+        wcet, bcet = self.ticks(task.wcet) if task.wcet else 0, self.ticks(task.bcet) if task.bcet else 0
+        key = self.slot(task.id, "wcet")
+        if not self.tracked or key is None or wcet == bcet:
+            return wcet
+        return z3.If(self.lit(key), self.t.lift(wcet), self.t.lift(bcet))
+
+    def _response_var(self, task: TaskModel):
+        if task.wcrt_bound is not None:
+            return self.ticks(task.wcrt_bound)
+        if not self.structure.cones.get(task.id) and not self.tracked:
+            value = self.seed.get(task.id)
+            if value is None:
+                self.add(False)  # unschedulable whatever synthesis chooses
+                return 0
+            return self.ticks(value)
+        r = z3.Int(f"R|{task.id}", self.ctx)
+        self.add(r >= self.t.lift(self.C[task.id]))
+        self.add(r >= self.floor(task.id))
+        return r
+
+    def _variable(self, task: TaskModel) -> bool:
+        """Whether the event model or rate of ``task`` depends on a decision or a learnt R."""
+        if task.id in self.choices or task.id in self.structure.cyclic:
+            return True
+        act = task.activation
+        if not isinstance(act, DataTriggered):
+            return False
+        for _, link in member_links(self.model, task, act):
+            if link is not None and (self._varflags[link.writer] or not isinstance(self.R[link.writer], int)):
+                return True
+        return False
+
+    def _declare_flow_vars(self) -> None:
+        self._varflags: dict[str, bool] = {}
+        for tid in self.structure.order:
+            self._varflags[tid] = self._variable(self.model.task(tid))
+        for tid in sorted(self._varflags):
+            if self._varflags[tid]:
+                self.events[tid] = tuple(z3.Int(f"{n}|{tid}", self.ctx) for n in ("P", "J", "F"))
+                self.rates[tid] = tuple(z3.Int(f"{n}|{tid}", self.ctx) for n in ("fl", "fh"))
+
+    # -------------------------------------------------------------- event models and rates (§5)
+
+    def _task_flow(self, task: TaskModel) -> None:
+        options = activation_options(task, self.choices.get(task.id))
+        for index, act in options:
+            events, rates = self._source(task, act)
+            if not self._varflags[task.id]:
+                self.events[task.id], self.rates[task.id] = events, rates
+                return
+            cond = self.sel[task.id][index] if index is not None else None
+            P, J, F = self.events[task.id]
+            fl, fh = self.rates[task.id]
+            k = act.prescaler if isinstance(act, DataTriggered) else 1
+            cs = [self.t.eq(P, events[0]), self.t.eq(J, events[1]), self.t.eq(F, events[2]),
+                  self.t.eq(self.t.mul(k, fl), rates[0]), self.t.eq(self.t.mul(k, fh), rates[1])]
+            for c in cs:
+                self.guard(None, c, *([cond] if cond is not None else []))
+
+    def _source(self, task: TaskModel, act) -> tuple[tuple, tuple]:
+        """(P⁺, J⁺, F) in ticks and (k·fl, k·fh) in rate units for one activation (§5.2)."""
+        if isinstance(act, Periodic):
+            period = self.ticks(act.period)
+            first = self.ticks(act.phase) if act.phase is not None else period
+            return (period, 0, first), (self.M // period, self.M // period)
+        if isinstance(act, SporadicSource):
+            lo, hi = self.ticks(act.min_interarrival), self.ticks(act.max_interarrival)
+            return (hi, 0, hi), (self.M // hi, self.M // lo)
+        arrivals = [(self.arrival(link), self.rates[link.writer])
+                    for _, link in member_links(self.model, task, act) if link is not None]
+        stream = self._stream([a for a, _ in arrivals], act.mode)
+        k, t = act.prescaler, self.t
+        P, J, F = stream
+        if k > 1:
+            if act.mode == "or" and len(arrivals) > 1:
+                first = None
+                for (aP, aJ, aF), _ in arrivals:
+                    cand = t.add(aF, t.mul(k - 1, aP), aJ)
+                    first = cand if first is None else t.min(first, cand)
+                F = first
+            else:
+                F = t.add(F, t.mul(k - 1, P), J)
+        rates = [r for _, r in arrivals]
+        if act.mode == "and":
+            fl = fh = None
+            for rl, rh in rates:
+                fl = rl if fl is None else t.min(fl, rl)
+                fh = rh if fh is None else t.min(fh, rh)
+        elif act.mode == "or":
+            fl, fh = t.add(*(r[0] for r in rates)), t.add(*(r[1] for r in rates))
+        else:
+            fl, fh = rates[0]
+        if not self._varflags.get(task.id) and isinstance(fl, int):
+            return (t.mul(k, P), J, F), (fl // k, fh // k)
+        return (t.mul(k, P), J, F), (fl, fh)
+
+    def arrival(self, link: LinkModel) -> tuple:
+        """The arrival stream on ``link.target`` (§5.2): the writer's period, its jitter plus the output
+        jitter ``R − B + d⁺ − d⁻``, first arrival ``F + R + d⁺``."""
+        w = link.writer
+        P, J, F = self.events[w]
+        R, B = self.R[w], self.ticks(self.model.task(w).bcet) if self.model.task(w).bcet else 0
+        dmax = self.ticks(link.delay_max) if link.delay_max else 0
+        dmin = self.ticks(link.delay_min) if link.delay_min else 0
+        t = self.t
+        return P, t.add(J, R, -B, dmax - dmin), t.add(F, R, dmax)
+
+    def _stream(self, arrivals: list[tuple], mode: str) -> tuple:
+        t = self.t
+        if mode == "and":
+            P = F = None
+            for aP, aJ, aF in arrivals:
+                gap = t.add(aP, aJ)
+                P = gap if P is None else t.max(P, gap)
+                F = aF if F is None else t.max(F, aF)
+            return P, 0, F
+        if mode == "or" and len(arrivals) > 1:
+            best = None
+            for aP, aJ, aF in arrivals:
+                wait = t.max(t.add(aP, aJ), aF)
+                if best is None:
+                    best = (aP, aJ, aF, wait)
+                    continue
+                bP, bJ, bF, bW = best
+                better = _lt_pair(t, (wait, aP), (bW, bP))
+                best = tuple(t.ite(better, x, y) for x, y in zip((aP, aJ, aF, wait), best))
+            bP, bJ, bF, _ = best
+            first = None
+            for _, _, aF in arrivals:
+                first = aF if first is None else t.min(first, aF)
+            return bP, t.add(bJ, t.max(0, t.add(bF, t.mul(-1, bP)))), first
+        return arrivals[0]
+
+    def _no_trigger_cycles(self) -> None:
+        """A configuration whose triggers form a cycle is never synthesized (specs/synthesis.md §2)."""
+        cyclic = self.structure.cyclic
+        if not cyclic:
+            return
+        rank = {tid: z3.Int(f"ord|{tid}", self.ctx) for tid in sorted(cyclic)}
+        for w, r, index in self.structure.trigger_edges:
+            if w in rank and r in rank:
+                self.guard(None, rank[w] < rank[r], *([self.sel[r][index]] if index is not None else []))
+
+    # -------------------------------------------------------------- constraints
+
+    def a_max(self, tid: str):
+        P, J, _ = self.events[tid]
+        return self.t.add(P, J)
+
+    def wait(self, tid: str):
+        """W⁺ = max(A⁺, F)."""
+        return self.t.max(self.a_max(tid), self.events[tid][2])
+
+    def _schedulable(self, task: TaskModel) -> None:
+        """R ≤ deadline (E312): the given deadline, else A⁺."""
+        if task.wcrt_bound is not None:
+            return
+        limit = self.ticks(task.deadline) if task.deadline is not None else self.a_max(task.id)
+        self.add(self.t.le(self.R[task.id], limit))
+
+    def _activation_constraint(self, task: TaskModel) -> None:
+        """A triggered activation's rate within the task's constraint (E305/E306); timer candidates
+        outside it are excluded candidates already."""
+        if task.min_rate is None and task.max_rate is None:
+            return
+        options = [(i, a) for i, a in activation_options(task, self.choices.get(task.id)) if isinstance(a, DataTriggered)]
+        if not options:
+            return
+        fl, fh = self.rates[task.id]
+        rate_key = self.slot(task.id, "rate") if not task.changeable else None
+        for index, _ in options:
+            cond = [self.sel[task.id][index]] if index is not None else []
+            if task.min_rate is not None:
+                low = math.ceil(task.min_rate * self.tick * self.M)
+                self.guard(rate_key or self.slot(task.id, "min_rate"), self.t.le(low, fl), *cond)
+            if task.max_rate is not None:
+                high = math.floor(task.max_rate * self.tick * self.M)
+                self.guard(rate_key or self.slot(task.id, "max_rate"), self.t.le(fh, high), *cond)
+
+    def _tolerances(self) -> None:
+        """Sampling tolerances (E310, §5.3) for every connection and reader."""
+        for link in self.model.links:
+            port = link.target.split(".", 1)[1]
+            for reader_id in link.readers:
+                reader = self.model.task(reader_id)
+                read = next((r for r in reader.reads if r.port == port), None)
+                if read is None:
+                    continue
+                for direction, tol in (("over", read.oversampling), ("under", read.undersampling)):
+                    if tol is not None and tol.kind != "ok":
+                        self._tolerance(link, reader, port, direction, tol)
+
+    def _tolerance(self, link: LinkModel, reader: TaskModel, port: str, direction: str, tol) -> None:
+        limit = Fraction(1) if tol.kind == "forbidden" else max(Fraction(1), Fraction(tol.factor.value))
+        key = self.slot(reader.id, f"tolerance:{port}:{direction}")
+        general = []
+        for index, act in activation_options(reader, self.choices.get(reader.id)):
+            cond = [self.sel[reader.id][index]] if index is not None else []
+            if isinstance(act, DataTriggered) and act.mode == "single" and act.port == port:
+                if direction == "under" and act.prescaler > limit:
+                    self.guard(key, False, *cond)
+            else:
+                general.append(cond)
+        if not general:
+            return
+        w_lo, w_hi = self.rates[link.writer]
+        r_lo, r_hi = self.rates[reader.id]
+        num, den = limit.numerator, limit.denominator
+        t = self.t
+        c = (t.le(t.mul(den, r_hi), t.mul(num, w_lo)) if direction == "over"
+             else t.le(t.mul(den, w_hi), t.mul(num, r_lo)))
+        options = len(activation_options(reader, self.choices.get(reader.id)))
+        if len(general) == options:  # every activation reads this port as a register
+            self.guard(key, c)
+        else:
+            for cond in general:
+                self.guard(key, c, *cond)
+
+    def _utilisation(self) -> None:
+        """Σ C·fh ≤ M per core (E311); a task whose core assignment is relaxed runs alone."""
+        by_core: dict[str, list[TaskModel]] = {}
+        for t in sorted(self.model.tasks, key=lambda t: t.id):
+            by_core.setdefault(t.core, []).append(t)
+        self.util_terms: dict[str, object] = {}
+        for core in sorted(by_core):
+            parts = []
+            for task in by_core[core]:
+                demand = self._demand(task)
+                key = self.slot(task.id, "core")
+                if self.tracked and key is not None:
+                    self.add(z3.Implies(z3.Not(self.lit(key)), self.t.lift(demand) <= self.M))
+                    parts.append(self.t.ite(self.lit(key), demand, 0))
+                else:
+                    parts.append(demand)
+            total = self.t.add(*parts)
+            self.util_terms[core] = total
+            self.add(self.t.le(total, self.M))
+        self.utilisation = self.t.add(*(self._demand(t) for t in sorted(self.model.tasks, key=lambda t: t.id)))
+
+    def _demand(self, task: TaskModel):
+        C, fh = self.C[task.id], self.rates[task.id][1]
+        if isinstance(C, int):
+            return self.t.mul(C, fh) if isinstance(fh, int) or C != 0 else 0
+        wcet, bcet = self.ticks(task.wcet), self.ticks(task.bcet) if task.bcet else 0
+        return z3.If(self.lit(self.slot(task.id, "wcet")), self.t.lift(self.t.mul(wcet, fh)),
+                     self.t.lift(self.t.mul(bcet, fh)))
+
+    # -------------------------------------------------------------- chains (§7)
+
+    def _chain(self, chain) -> None:
+        t = self.t
+        first, last = chain.tasks[0], chain.tasks[-1]
+        reaction = [t.add(self.wait(first), self.R[first])]
+        age = []
+        for n, hop in enumerate(chain.hops):
+            r, a = self._hop(chain.name, n, hop)
+            reaction.append(r)
+            age.append(a)
+        age.append(self.R[last])
+        best = sum(self.ticks(self.model.task(x).bcet) if self.model.task(x).bcet else 0 for x in chain.tasks)
+        best += sum(self.ticks(h.link.delay_min) if h.link.delay_min else 0 for h in chain.hops)
+        totals = {"reaction_time": self._named(f"lat|{chain.name}|reaction", t.add(*reaction)),
+                  "data_age": self._named(f"lat|{chain.name}|age", t.add(*age))}
+        totals["jitter"] = t.add(totals["data_age"], -best)
+        self.latency[(chain.name, "reaction_time")] = totals["reaction_time"]
+        self.latency[(chain.name, "data_age")] = totals["data_age"]
+        self.latency[(chain.name, "jitter")] = totals["jitter"]
+        for st in self.statements:
+            if st.kind == "spec" and st.chain == chain.name:
+                bound = self.ticks(getattr(chain, st.spec_kind))
+                self.specs.append((st, totals[st.spec_kind], bound))
+                self.guard(st.key, t.le(totals[st.spec_kind], bound))
+
+    def _named(self, name: str, term):
+        if isinstance(term, int):
+            return term
+        var = z3.Int(name, self.ctx)
+        self.add(var == term)
+        return var
+
+    def _hop(self, chain: str, n: int, hop):
+        """(reaction term, data-age term) of one hop, by the reader's activation (§7.3)."""
+        reader = self.model.task(hop.reader)
+        options = activation_options(reader, self.choices.get(reader.id))
+        terms = [(index, self._hop_terms(hop, act)) for index, act in options]
+        if len(terms) == 1:
+            return terms[0][1]
+        hr, ha = z3.Int(f"hop|{chain}|{n}|r", self.ctx), z3.Int(f"hop|{chain}|{n}|a", self.ctx)
+        for index, (r, a) in terms:
+            self.guard(None, self.t.eq(hr, r), self.sel[reader.id][index])
+            self.guard(None, self.t.eq(ha, a), self.sel[reader.id][index])
+        return hr, ha
+
+    def _hop_terms(self, hop, act):
+        t = self.t
+        p, i = hop.writer, hop.reader
+        d = self.ticks(hop.link.delay_max) if hop.link.delay_max else 0
+        register_r = t.add(d, self.wait(i), self.R[i])
+        register_a = t.add(d, self.a_max(p), self.R[p])
+        member = hop.link.target.split(".", 1)[1]
+        if not (isinstance(act, DataTriggered) and member in act.members):
+            return register_r, register_a
+        k = act.prescaler
+        if act.mode == "and":
+            trig = t.add(d, self._and_wait(hop, act), self._and_join(hop, act, k), self.R[i])
+        else:
+            trig = t.add(d, self._delta_plus(p, k), self.R[i])
+        reaction = t.min(trig, register_r)
+        return reaction, (t.add(d, self.R[p]) if act.mode == "single" else register_a)
+
+    def _delta_plus(self, writer: str, k: int):
+        """δ⁺ₚ(k) = 0 for k = 1, else (k−1)·P⁺ₚ + J⁺ₚ + Rₚ − Bₚ."""
+        if k == 1:
+            return 0
+        P, J, _ = self.events[writer]
+        B = self.ticks(self.model.task(writer).bcet) if self.model.task(writer).bcet else 0
+        return self.t.add(self.t.mul(k - 1, P), J, self.R[writer], -B)
+
+    def _and_arrivals(self, hop, act):
+        reader = self.model.task(hop.reader)
+        return [(m, self.arrival(link)) for m, link in member_links(self.model, reader, act) if link is not None]
+
+    def _and_wait(self, hop, act):
+        t = self.t
+        member = hop.link.target.split(".", 1)[1]
+        wait = 0
+        for m, (aP, aJ, aF) in self._and_arrivals(hop, act):
+            if m != member:
+                wait = t.max(wait, t.max(t.add(aP, aJ), aF))
+        return wait
+
+    def _and_join(self, hop, act, k: int):
+        if k == 1:
+            return 0
+        t = self.t
+        gap = None
+        for _, (aP, aJ, _) in self._and_arrivals(hop, act):
+            gap = t.add(aP, aJ) if gap is None else t.max(gap, t.add(aP, aJ))
+        return t.mul(k - 1, gap)
+
+
+def first_job_bounds(model: SystemModel, choices: Mapping[str, Choice], *, relaxed: bool = False) -> dict[str, Fraction]:
+    """A response-time lower bound per task, valid in every configuration: the first job of the
+    level-i busy window (specs/timing.md §6.2), ``w = C + Σ_{hp} η·C`` with ``η = ⌈w / T_max⌉`` for
+    an interferer that is a timer in every configuration (``T_max`` its longest candidate period) and
+    1 otherwise (every interferer is activated at least once in a window, and a causal cap is at
+    least 1). ``relaxed`` (tracked problems): an execution time may fall to ``bcet`` and a task may
+    leave its core, so only the task's own ``bcet`` is certain."""
+    if relaxed:
+        return {t.id: t.bcet for t in model.tasks}
+    out: dict[str, Fraction] = {}
+    by_core: dict[str, list[TaskModel]] = {}
+    for t in model.tasks:
+        by_core.setdefault(t.core, []).append(t)
+    for tasks in by_core.values():
+        cost = [t.bcet if relaxed else t.wcet for t in tasks]
+        periods = []
+        for t in tasks:
+            acts = [a for _, a in activation_options(t, choices.get(t.id))]
+            periods.append(max(a.period for a in acts) if all(isinstance(a, Periodic) for a in acts) else None)
+        scale = 1
+        for x in cost + [p for p in periods if p is not None]:
+            scale = math.lcm(scale, x.denominator)
+        c = [int(x * scale) for x in cost]
+        per = [int(p * scale) if p is not None else None for p in periods]
+        limit = max([p for p in per if p is not None], default=scale) * 1000
+        for n, t in enumerate(tasks):
+            hp = [m for m, o in enumerate(tasks) if m != n and o.priority >= t.priority]
+            w = c[n] + sum(c[m] for m in hp)
+            for _ in range(1000):
+                new = c[n] + sum(c[m] * (-(-w // per[m]) if per[m] else 1) for m in hp)
+                if new == w or new > limit:
+                    break
+                w = new
+            out[t.id] = Fraction(max(w, c[n]), scale)
+    return out
+
+
+def _lt_pair(t: Terms, a: tuple, b: tuple):
+    """(a0, a1) < (b0, b1) lexicographically."""
+    if all(isinstance(x, int) for x in (*a, *b)):
+        return a < b
+    a0, a1, b0, b1 = (t.lift(x) for x in (*a, *b))
+    return z3.Or(a0 < b0, z3.And(a0 == b0, a1 < b1))

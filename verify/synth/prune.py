@@ -1,0 +1,332 @@
+"""Exact pruning of candidates before the solver runs, and the cheap necessary checks.
+
+Every rule removes only candidates that no accepted configuration can use (specs/synthesis.md §3),
+from bounds over *all* remaining configurations:
+
+* rate bounds per task, propagated through triggers (a writer's range divided by the prescaler,
+  AND: minimum of the members, OR: sum) — a triggered candidate whose rate can never lie within the
+  task's activation constraint goes (E305/E306 would reject it);
+* sampling tolerances (E310): a candidate that over- or undersamples beyond the tolerance whatever
+  the other side does goes;
+* utilisation (E311): a candidate that puts its core above 1 even with every other task at its
+  slowest goes; if a core is above 1 at the slowest candidates, the problem is infeasible;
+* latency: a candidate whose chain lower bound (periods, WCETs and delays that every rule of
+  specs/timing.md §7 must add) already exceeds a spec goes.
+
+The rules are applied until nothing changes. Only untracked problems are pruned: an unsat-core
+problem must keep every candidate a relaxed statement could allow.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from fractions import Fraction
+from typing import Mapping
+
+from ..model import ChainModel, DataTriggered, Periodic, SporadicSource, SystemModel, TaskModel
+from .candidates import Choice, make_choice
+from .structure import activation_options, member_links
+
+ZERO = Fraction(0)
+
+
+@dataclass(frozen=True)
+class Bounds:
+    """Over all remaining configurations: the range of the lower and upper activation rate (Hz) and
+    a lower bound on the longest distance between activations (``p_min``, seconds). None: unknown."""
+
+    fl: tuple[Fraction, Fraction] | None
+    fh: tuple[Fraction, Fraction] | None
+    p_min: Fraction
+
+
+UNKNOWN = Bounds(None, None, ZERO)
+
+
+class _Trigger:
+    kind = "trigger"
+
+
+_FIXED_TRIGGER = _Trigger()
+
+
+def _hull(items: list[Bounds]) -> Bounds:
+    if not items:
+        return UNKNOWN
+    fl = None if any(b.fl is None for b in items) else (min(b.fl[0] for b in items), max(b.fl[1] for b in items))
+    fh = None if any(b.fh is None for b in items) else (min(b.fh[0] for b in items), max(b.fh[1] for b in items))
+    return Bounds(fl, fh, min(b.p_min for b in items))
+
+
+def activation_bounds(model: SystemModel, task: TaskModel, act, known: Mapping[str, Bounds]) -> Bounds:
+    """The bounds of one activation of ``task`` given its writers' bounds (specs/timing.md §5.1)."""
+    if isinstance(act, Periodic):
+        rate = 1 / act.period
+        return Bounds((rate, rate), (rate, rate), act.period)
+    if isinstance(act, SporadicSource):
+        lo, hi = 1 / act.max_interarrival, 1 / act.min_interarrival
+        return Bounds((lo, lo), (hi, hi), act.max_interarrival)
+    if not isinstance(act, DataTriggered):
+        return UNKNOWN
+    members = [known.get(link.writer, UNKNOWN) for _, link in member_links(model, task, act) if link is not None]
+    if not members:
+        return UNKNOWN
+    k = act.prescaler
+    if act.mode == "and":
+        fl = _combine([m.fl for m in members], min)
+        fh = _combine([m.fh for m in members], min)
+        p_min = max(m.p_min for m in members)
+    elif act.mode == "or":
+        fl = _combine([m.fl for m in members], sum)
+        fh = _combine([m.fh for m in members], sum)
+        p_min = min(m.p_min for m in members)
+    else:
+        fl, fh, p_min = members[0].fl, members[0].fh, members[0].p_min
+    div = (lambda r: None if r is None else (r[0] / k, r[1] / k))
+    return Bounds(div(fl), div(fh), k * p_min)
+
+
+def _combine(ranges, how) -> tuple[Fraction, Fraction] | None:
+    if any(r is None for r in ranges):
+        return None
+    if how is sum:
+        return (sum((r[0] for r in ranges), ZERO), sum((r[1] for r in ranges), ZERO))
+    return (min(r[0] for r in ranges), min(r[1] for r in ranges))
+
+
+class Pruner:
+    """Applies the rules of this module to the choices of an untracked problem until a fixed point."""
+
+    def __init__(self, model: SystemModel, choices: dict[str, Choice], order: tuple[str, ...],
+                 cyclic: frozenset[str]):
+        self.model, self.choices, self.order, self.cyclic = model, dict(choices), order, cyclic
+        self.removed = 0
+        self.infeasible: str | None = None
+
+    # -------------------------------------------------------------- bounds
+
+    def bounds(self) -> tuple[dict[str, Bounds], dict[tuple[str, int], Bounds]]:
+        """Task bounds, and per (choice, candidate index) the bounds of that candidate."""
+        tasks: dict[str, Bounds] = {}
+        per_candidate: dict[tuple[str, int], Bounds] = {}
+        for tid in self.order:
+            task = self.model.task(tid)
+            if tid in self.cyclic:
+                tasks[tid] = UNKNOWN
+                continue
+            options = activation_options(task, self.choices.get(tid))
+            found = []
+            for index, act in options:
+                b = activation_bounds(self.model, task, act, tasks)
+                if index is not None:
+                    per_candidate[(tid, index)] = b
+                found.append(b)
+            tasks[tid] = _hull(found)
+        return tasks, per_candidate
+
+    # -------------------------------------------------------------- rules
+
+    def run(self) -> dict[str, Choice]:
+        while self.infeasible is None:
+            tasks, per = self.bounds()
+            dead = self._dead(tasks, per)
+            if not dead:
+                break
+            self._remove(dead)
+        return self.choices
+
+    def _remove(self, dead: set[tuple[str, int]]) -> None:
+        for tid in sorted({t for t, _ in dead}):
+            choice = self.choices[tid]
+            keep = [i for i in range(len(choice.candidates)) if (tid, i) not in dead]
+            self.removed += len(choice.candidates) - len(keep)
+            if not keep:
+                self.infeasible = f"no candidate of `{tid}` can meet the constraints"
+            self.choices[tid] = make_choice(tid, tuple(choice.candidates[i] for i in keep),
+                                            tuple(choice.excluded[i] for i in keep), choice.hole)
+
+    def _dead(self, tasks: dict[str, Bounds], per: dict[tuple[str, int], Bounds]) -> set[tuple[str, int]]:
+        dead: set[tuple[str, int]] = set()
+        for (tid, i), b in per.items():
+            if not self._rate_ok(self.model.task(tid), self.choices[tid].candidates[i], b):
+                dead.add((tid, i))
+        for t in self.model.tasks:
+            if t.id not in self.choices and isinstance(t.activation, DataTriggered) and not self._rate_ok(
+                    t, _FIXED_TRIGGER, tasks.get(t.id, UNKNOWN)):
+                self.infeasible = f"`{t.id}` is activated outside its activation constraint in every configuration"
+        dead |= self._schedulability()
+        dead |= self._sampling(tasks, per)
+        dead |= self._utilisation(tasks, per)
+        dead |= self._latency(tasks, per)
+        return dead
+
+    def _schedulability(self) -> set[tuple[str, int]]:
+        """A timer candidate whose period (its default deadline) is below the first-job bound of its
+        busy window goes (E312); a task whose given deadline is below it makes the problem infeasible."""
+        from .encode import first_job_bounds
+
+        dead: set[tuple[str, int]] = set()
+        floors = first_job_bounds(self.model, self.choices)
+        for task in self.model.tasks:
+            if task.wcrt_bound is not None:
+                continue
+            floor = floors[task.id]
+            if task.deadline is not None:
+                if floor > task.deadline:
+                    self.infeasible = f"`{task.id}` cannot meet its deadline in any configuration"
+                continue
+            choice = self.choices.get(task.id)
+            for i, c in enumerate(choice.candidates if choice else ()):
+                if c.kind == "timer" and floor > c.period:
+                    dead.add((task.id, i))
+        return dead
+
+    @staticmethod
+    def _rate_ok(task: TaskModel, cand, b: Bounds) -> bool:
+        if cand.kind != "trigger":
+            return True  # timer candidates outside the constraint were excluded already
+        if task.min_rate is not None and b.fl is not None and b.fl[1] < task.min_rate:
+            return False
+        return not (task.max_rate is not None and b.fh is not None and b.fh[0] > task.max_rate)
+
+    def _sampling(self, tasks, per) -> set[tuple[str, int]]:
+        dead: set[tuple[str, int]] = set()
+        for link in self.model.links:
+            for reader_id in link.readers:
+                reader = self.model.task(reader_id)
+                port = link.target.split(".", 1)[1]
+                read = next((r for r in reader.reads if r.port == port), None)
+                if read is None:
+                    continue
+                for direction, tol in (("over", read.oversampling), ("under", read.undersampling)):
+                    if tol is None or tol.kind == "ok":
+                        continue
+                    limit = Fraction(1) if tol.kind == "forbidden" else max(Fraction(1), tol.factor.value)
+                    dead |= self._tolerance(link.writer, reader, port, direction, limit, tasks, per)
+        return dead
+
+    def _tolerance(self, writer: str, reader: TaskModel, port: str, direction: str, limit: Fraction,
+                   tasks, per) -> set[tuple[str, int]]:
+        dead: set[tuple[str, int]] = set()
+        choice = self.choices.get(reader.id)
+        options = activation_options(reader, choice)
+        w = tasks.get(writer, UNKNOWN)
+        for index, act in options:
+            rb = per.get((reader.id, index), tasks.get(reader.id, UNKNOWN)) if index is not None else tasks[reader.id]
+            if isinstance(act, DataTriggered) and act.mode == "single" and act.port == port:
+                bad = direction == "under" and act.prescaler > limit
+            else:
+                bad = _violates(direction, w, rb, limit)
+            if bad and index is not None:
+                dead.add((reader.id, index))
+            elif bad:
+                self.infeasible = f"`{reader.id}` violates its {direction}sampling tolerance on `{port}` in every configuration"
+        wchoice = self.choices.get(writer)
+        if wchoice is not None and not _triggered_by(reader, choice, port):
+            r = tasks.get(reader.id, UNKNOWN)
+            for index in range(len(wchoice.candidates)):
+                if _violates(direction, per.get((writer, index), UNKNOWN), r, limit):
+                    dead.add((writer, index))
+        return dead
+
+    def _utilisation(self, tasks, per) -> set[tuple[str, int]]:
+        dead: set[tuple[str, int]] = set()
+        by_core: dict[str, list[TaskModel]] = {}
+        for t in self.model.tasks:
+            by_core.setdefault(t.core, []).append(t)
+        for core in sorted(by_core):
+            floor = ZERO
+            for t in by_core[core]:
+                b = tasks.get(t.id, UNKNOWN)
+                floor += t.wcet * (b.fh[0] if b.fh is not None else ZERO)
+            if floor > 1:
+                self.infeasible = f"core `{core}` is above 100 % utilisation even at the slowest candidates"
+                return dead
+            for t in by_core[core]:
+                choice = self.choices.get(t.id)
+                if choice is None:
+                    continue
+                own = tasks[t.id].fh[0] if tasks[t.id].fh is not None else ZERO
+                for i in range(len(choice.candidates)):
+                    b = per.get((t.id, i), UNKNOWN)
+                    if b.fh is not None and floor - t.wcet * own + t.wcet * b.fh[0] > 1:
+                        dead.add((t.id, i))
+        return dead
+
+    def _latency(self, tasks, per) -> set[tuple[str, int]]:
+        dead: set[tuple[str, int]] = set()
+        for chain in self.model.chains:
+            for bound, kind in ((chain.reaction_time, "reaction"), (chain.data_age, "age")):
+                if bound is None:
+                    continue
+                if chain_lower_bound(self, chain, kind, tasks, per, None) > bound:
+                    self.infeasible = f"chain `{chain.name}` cannot meet its {kind} bound at any candidate"
+                    return dead
+                for tid in dict.fromkeys(chain.tasks):
+                    choice = self.choices.get(tid)
+                    for i in range(len(choice.candidates) if choice else 0):
+                        if chain_lower_bound(self, chain, kind, tasks, per, (tid, i)) > bound:
+                            dead.add((tid, i))
+        return dead
+
+
+def _violates(direction: str, w: Bounds, r: Bounds, limit: Fraction) -> bool:
+    """Certainly over-/undersampled beyond ``limit`` (§5.3): fastest possible reader vs slowest
+    possible writer never meets the tolerance's own worst direction."""
+    if w.fl is None or w.fh is None or r.fl is None or r.fh is None:
+        return False
+    if direction == "over":  # need r.high <= limit * w.low for some configuration
+        return r.fh[0] > limit * w.fl[1]
+    return w.fh[0] > limit * r.fl[1]
+
+
+def _triggered_by(reader: TaskModel, choice: Choice | None, port: str) -> bool:
+    """Whether some activation of ``reader`` is a single-port trigger on ``port`` (then the writer's
+    rate does not matter to that activation's tolerance)."""
+    for _, act in activation_options(reader, choice):
+        if isinstance(act, DataTriggered) and act.mode == "single" and act.port == port:
+            return True
+    return False
+
+
+def _r_min(task: TaskModel) -> Fraction:
+    return task.wcrt_bound if task.wcrt_bound is not None else task.wcet
+
+
+def chain_lower_bound(p: Pruner, chain: ChainModel, kind: str, tasks, per, fixed) -> Fraction:
+    """A lower bound on the reaction time or data age of ``chain``; ``fixed`` = (task, candidate)
+    pins one choice. Every term of §7 is at least the WCET (or user bound) of the task it ends in,
+    plus the delay, plus a sampling wait: a register read waits up to ``A⁺ ≥ P⁺`` (reaction: of the
+    reader; data age: of the writer), a prescaler-k trigger ``(k−1)·P⁺`` of the writer."""
+
+    def options(tid: str):
+        choice = p.choices.get(tid)
+        task = p.model.task(tid)
+        if fixed is not None and fixed[0] == tid:
+            return [(choice.candidates[fixed[1]].activation(), per.get(fixed, UNKNOWN).p_min)]
+        if choice is None:
+            return [(task.activation, tasks.get(tid, UNKNOWN).p_min)]
+        return [(c.activation(), per.get((tid, i), UNKNOWN).p_min) for i, c in enumerate(choice.candidates)]
+
+    def p_min(tid: str) -> Fraction:
+        return min(pm for _, pm in options(tid))
+
+    first = chain.tasks[0]
+    total = (p_min(first) + _r_min(p.model.task(first))) if kind == "reaction" else ZERO
+    for hop in chain.hops:
+        member = hop.link.target.split(".", 1)[1]
+        d = hop.link.delay_max
+        waits = []
+        for act, pm in options(hop.reader):
+            triggered = isinstance(act, DataTriggered) and member in act.members
+            if kind == "reaction":
+                if triggered and act.mode != "and" and act.prescaler > 1:
+                    waits.append(min(pm, (act.prescaler - 1) * p_min(hop.writer)))
+                else:
+                    waits.append(ZERO if triggered else pm)
+            else:
+                waits.append(ZERO if triggered and act.mode == "single" else p_min(hop.writer))
+        end = hop.reader if kind == "reaction" else hop.writer
+        total += d + _r_min(p.model.task(end)) + min(waits)
+    if kind == "age":
+        total += _r_min(p.model.task(chain.tasks[-1]))
+    return total

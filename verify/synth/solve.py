@@ -1,0 +1,355 @@
+"""The lazy refinement loop: solve, analyse the answer, learn, repeat (specs/synthesis.md §4).
+
+Response times are not encoded exactly: each task's ``R`` is an integer bounded below by lemmas.
+After every answer of the solver the configuration is analysed by ``verify.timing.analyze`` (the
+independent analysis, specs/timing.md §5–§7). For every task whose analysed WCRT exceeds the value
+the solver assumed, a lemma ``(every decision in its cone at least as fast as now) → R ≥ r`` is
+added: the response-time analysis is monotone (a shorter period or prescaler of an interferer, or of
+a source of jitter, never shortens a response time), so the lemma holds for every such configuration.
+A configuration the analysis rejects is also blocked exactly. Only configurations the analysis
+accepts are ever returned. The space is finite and every round cuts the current answer off, so the
+loop ends; the solver budget (Z3 ``rlimit``) and an optional wall clock bound it.
+
+Objectives are optimised lexicographically by strengthening with the same incremental solver
+(``_best``). An accepted configuration becomes the incumbent, and the next question is "is there one
+strictly better than it?"; the optimum is proven when that is unsatisfiable. Encoded objective values are optimistic (response times are lower
+bounds), so a proven optimum of the encoding that the analysis confirms is the true optimum.
+Period optimization in this style follows Davare et al., DAC 2007.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from fractions import Fraction
+from typing import Callable
+
+import z3
+
+from .encode import Encoding
+from .problem import Config, Evaluation, Problem
+
+RANDOM_SEED = 0
+
+
+# ================================================================== budget
+
+
+class Budget:
+    """A deterministic solver budget (Z3 resource units, shared by every check of one run) and an
+    optional wall-clock limit in seconds."""
+
+    def __init__(self, rlimit: int | None, timeout: float | None = None):
+        self.rlimit, self.timeout = rlimit, timeout
+        self.used = 0
+        self.deadline = None if timeout is None else time.monotonic() + timeout
+        self.reason: str | None = None
+
+    @property
+    def remaining(self) -> int | None:
+        return None if not self.rlimit else self.rlimit - self.used
+
+    def exhausted(self) -> bool:
+        if self.remaining is not None and self.remaining <= 0:
+            self.reason = self.reason or f"the solver budget (rlimit {self.rlimit}) ran out"
+        elif self.deadline is not None and time.monotonic() >= self.deadline:
+            self.reason = self.reason or f"the time limit of {self.timeout:g} s ran out"
+        return self.reason is not None
+
+    def arm(self, obj) -> None:
+        if self.remaining is not None:
+            obj.set("rlimit", max(1, self.remaining))
+        if self.deadline is not None:
+            obj.set("timeout", max(1, int((self.deadline - time.monotonic()) * 1000)))
+
+    def charge(self, spent: int) -> None:
+        self.used += spent
+
+
+def implies(parts: list, fact):
+    """``(∧ parts) → fact`` built directly (z3py's ``And`` coerces every argument, which is slow for
+    the long antecedents of lemmas)."""
+    if not parts:
+        return fact
+    ctx = fact.ctx
+    terms = [z3.Not(p) for p in parts] + [fact]  # kept alive while Z3 builds the disjunction
+    args = (z3.Ast * len(terms))()
+    for n, term in enumerate(terms):
+        args[n] = term.as_ast()
+    return z3.BoolRef(z3.Z3_mk_or(ctx.ref(), len(terms), args), ctx)
+
+
+def _rlimit_count(obj) -> int:
+    stats = obj.statistics()
+    for key in stats.keys():
+        if key == "rlimit count":
+            return int(stats.get_key_value(key))
+    return 0
+
+
+# ================================================================== objectives
+
+
+@dataclass(frozen=True)
+class Objective:
+    """``term`` in encoding units; ``real`` gives the same quantity from an analysed configuration."""
+
+    name: str
+    sense: str  # "min" | "max"
+    term: object
+    real: Callable[[Config, Evaluation], int | None]
+
+    def better(self, a: int, b: int) -> bool:
+        return a < b if self.sense == "min" else a > b
+
+
+def lex_better(objectives: list[Objective], a: tuple, b: tuple) -> bool:
+    for obj, x, y in zip(objectives, a, b):
+        if obj.better(x, y):
+            return True
+        if x != y:
+            return False
+    return False
+
+
+def strictly_better(enc: Encoding, objectives: list[Objective], values: tuple):
+    """The encoded objectives lexicographically better than ``values``."""
+    t = enc.t
+    cases = []
+    for n, obj in enumerate(objectives):
+        term = t.lift(obj.term)
+        strict = term < values[n] if obj.sense == "min" else term > values[n]
+        cases.append(z3.And(*[t.lift(o.term) == values[m] for m, o in enumerate(objectives[:n])], strict))
+    return z3.Or(*cases)
+
+
+# ================================================================== the loop
+
+
+@dataclass
+class Outcome:
+    status: str  # "sat" | "optimal" | "unsat" | "unknown"
+    config: Config | None = None
+    evaluation: Evaluation | None = None
+    values: tuple | None = None
+    core: tuple[str, ...] = ()  # statement keys (tracked, unsat)
+    reason: str | None = None
+
+
+@dataclass
+class Stats:
+    checks: int = 0
+    lemmas: int = 0
+    blocked: int = 0
+    rejected: int = 0
+
+
+class Engine:
+    def __init__(self, problem: Problem, enc: Encoding, budget: Budget):
+        self.problem, self.enc, self.budget = problem, enc, budget
+        self.stats = Stats()
+        self.solver = z3.Solver(ctx=enc.ctx)
+        self.solver.set("random_seed", RANDOM_SEED)
+        self.solver.add(*enc.hard) if enc.hard else None
+        enc.take_new()
+        self._bounds = 0
+        if problem.choices or problem.tracked:
+            self.learn(*problem.seed(), None)
+
+    # -------------------------------------------------------------- z3 plumbing
+
+    def _sync(self) -> None:
+        new = self.enc.take_new()
+        if new:
+            self.solver.add(*new)
+
+    def _check(self, assumptions: list):
+        self._sync()
+        if self.budget.exhausted():
+            return "unknown", None
+        self.budget.arm(self.solver)
+        before = _rlimit_count(self.solver)
+        result = self.solver.check(*assumptions)
+        self.budget.charge(_rlimit_count(self.solver) - before)
+        self.stats.checks += 1
+        if result == z3.sat:
+            return "sat", self.solver.model()
+        if result == z3.unsat:
+            return "unsat", self.solver.unsat_core()
+        self.budget.exhausted()
+        self.budget.reason = self.budget.reason or f"the solver gave up ({self.solver.reason_unknown()})"
+        return "unknown", None
+
+    def _fresh(self, prefix: str):
+        self._bounds += 1
+        return z3.Bool(f"{prefix}|{self._bounds}", self.enc.ctx)
+
+    def _value(self, model, term) -> int:
+        return term if isinstance(term, int) else model.eval(term, model_completion=True).as_long()
+
+    def _best(self, objectives: list[Objective], assumptions: list):
+        """The encoded lexicographic optimum under ``assumptions``, by strengthening: ask for a value
+        better than the last answer by a step that doubles while answers come, then bisect between the
+        best answer and the closest value found impossible. The last, unsatisfiable question proves it."""
+        status, answer = self._check(assumptions)
+        if status != "sat" or not objectives:
+            return status, answer
+        fixed: list = []
+        for obj in objectives:
+            best, bound, step = self._value(answer, obj.term), None, 1
+            sign = 1 if obj.sense == "min" else -1
+            while bound is None or abs(best - bound) > 1:
+                target = best - sign * step if bound is None else (best + bound) // 2
+                lit = self._fresh("goal")
+                term = self.enc.t.lift(obj.term)
+                self.enc.add(z3.Implies(lit, term <= target if sign > 0 else term >= target))
+                status, found = self._check(assumptions + fixed + [lit])
+                if status == "unknown":
+                    return "sat", answer  # the best so far; the caller finds the budget exhausted
+                if status == "sat":
+                    answer, best, step = found, self._value(found, obj.term), step * 2
+                else:
+                    bound = target
+            lit = self._fresh("fix")
+            self.enc.add(z3.Implies(lit, self.enc.t.lift(obj.term) == best))
+            fixed.append(lit)
+        return "sat", answer
+
+    # -------------------------------------------------------------- configurations
+
+    def config_of(self, model) -> Config:
+        choice = []
+        for tid, sels in self.enc.sel.items():
+            index = next((i for i, b in enumerate(sels) if z3.is_true(model.eval(b, model_completion=True))), 0)
+            choice.append((tid, index))
+        off = frozenset(key for key, lit in self.enc.lits.items()
+                        if not z3.is_true(model.eval(lit, model_completion=True)))
+        return Config(tuple(choice), off)
+
+    def _config_literals(self, config: Config) -> list:
+        lits = [self.enc.sel[tid][i] for tid, i in config.choice]
+        for key, lit in sorted(self.enc.lits.items()):
+            lits.append(z3.Not(lit) if key in config.off else lit)
+        return lits
+
+    def block(self, config: Config) -> None:
+        lits = self._config_literals(config)
+        self.enc.add(z3.Not(z3.And(*lits)) if lits else False)
+        self.stats.blocked += 1
+
+    # -------------------------------------------------------------- lemmas
+
+    def ladder(self, tid: str, index: int):
+        """"The choice of ``tid`` is in the group of candidate ``index`` and at least as fast" (the
+        candidates of a group are sorted fastest first), or the exact candidate for an AND feeder."""
+        sels = self.enc.sel[tid]
+        if tid in self.problem.structure.exact_only:
+            return sels[index]
+        cands = self.problem.choices[tid].candidates
+        group = cands[index].group
+        start = index
+        while start > 0 and cands[start - 1].group == group:
+            start -= 1
+        if start == 0 and index == len(cands) - 1:
+            return None  # every candidate qualifies
+        if index == start:
+            return sels[index]
+        lads = self.enc.ladders.setdefault(tid, [None] * len(cands))
+        if lads[index] is None:
+            previous = self.ladder(tid, index - 1)
+            lads[index] = z3.Bool(f"lad|{tid}|{index}", self.enc.ctx)
+            self.enc.add(lads[index] == z3.Or(previous, sels[index]))
+        return lads[index]
+
+    def antecedent(self, tid: str, config: Config) -> list:
+        bits = self.problem.structure.cones.get(tid, 0)
+        choice = dict(config.choice)
+        parts = []
+        while bits:
+            low = bits & -bits
+            kind, key = self.problem.atoms[low.bit_length() - 1]
+            bits ^= low
+            if kind == "choice":
+                lit = self.ladder(key, choice[key])
+                if lit is not None:
+                    parts.append(lit)
+            elif kind == "wcet":
+                if key not in config.off:
+                    parts.append(self.enc.lit(key))
+            else:
+                lit = self.enc.lit(key)
+                parts.append(z3.Not(lit) if key in config.off else lit)
+        return parts
+
+    def learn(self, config: Config, ev: Evaluation, model) -> int:
+        """Lemmas ``antecedent → R ≥ r`` for every task whose analysed WCRT exceeds the solver's."""
+        added = 0
+        for tid in sorted(self.enc.R):
+            var = self.enc.R[tid]
+            if isinstance(var, int):
+                continue
+            bound = self._lower_bound(ev.result.task(tid).response)
+            if bound is None:
+                continue
+            if model is not None and model.eval(var, model_completion=True).as_long() >= bound:
+                continue
+            if bound <= self.enc.floor(tid):
+                continue
+            parts = self.antecedent(tid, config)
+            fact = var >= bound
+            self.enc.add(implies(parts, fact))
+            added += 1
+        self.stats.lemmas += added
+        return added
+
+    def _lower_bound(self, response) -> int | None:
+        """The analysed WCRT in ticks; for a task without a bound within its deadline (its busy window
+        exceeded it, or the interfering load reached 1) one tick more than the deadline."""
+        if response.wcrt is not None:
+            return self.enc.ticks(response.wcrt)
+        why = response.failure or ""
+        if response.deadline is not None and ("exceeds the deadline" in why or "utilisation" in why):
+            return self.enc.ticks(response.deadline) + 1
+        return None
+
+    # -------------------------------------------------------------- search
+
+    def run(self, objectives: list[Objective] = (), assumptions: list = ()) -> Outcome:
+        """The best accepted configuration under ``assumptions`` (any one without objectives)."""
+        objectives = list(objectives)
+        if not objectives and not assumptions and not self.problem.tracked:
+            config, ev = self.problem.seed()  # the slowest configuration is often good enough
+            if ev.accepted:
+                return Outcome("sat", config, ev)
+        best: Outcome | None = None
+        guard = None
+        scope = self._fresh("run")  # run-local exclusions hang on it
+        seen: set[Config] = set()
+        while True:
+            assume = list(assumptions) + [scope] + ([guard] if guard is not None else [])
+            status, answer = self._best(objectives, assume)
+            if status == "unknown":
+                return Outcome("unknown", *(best.config, best.evaluation, best.values) if best else (None,) * 3,
+                               reason=self.budget.reason)
+            if status == "unsat":
+                if best is not None:
+                    return Outcome("optimal", best.config, best.evaluation, best.values)
+                core = tuple(sorted(str(x.decl().name())[len("stmt|"):] for x in answer
+                                    if str(x.decl().name()).startswith("stmt|")))
+                return Outcome("unsat", core=core)
+            config = self.config_of(answer)
+            ev = self.problem.evaluate(config)
+            self.learn(config, ev, answer)
+            if not ev.accepted:
+                self.stats.rejected += 1
+                self.block(config)
+                continue
+            if not objectives:
+                return Outcome("sat", config, ev)
+            values = tuple(o.real(config, ev) for o in objectives)
+            if best is None or lex_better(objectives, values, best.values):
+                best = Outcome("sat", config, ev, values)
+                guard = self._fresh("better")
+                self.enc.add(z3.Implies(guard, strictly_better(self.enc, objectives, values)))
+            if config in seen:  # the encoding still overrates it: exclude it from this run
+                self.enc.add(z3.Implies(scope, z3.Not(z3.And(*self._config_literals(config)))))
+            seen.add(config)
