@@ -1,7 +1,8 @@
 """Every diagnostic code has a section in specs/diagnostics.md whose minimal failing example reports it.
 
 For each ``## CODE title`` section the example's files are written into a temporary directory and run
-(``verify check``, ``verify analyze`` for ``command=analyze``, ``verify prove`` for ``command=prove``); the section's code must be among the
+(``verify check``, ``verify analyze`` for ``command=analyze``, ``verify prove`` for ``command=prove``,
+``synth`` for ``command=synth``, with ``rlimit=N`` as its budget); the section's code must be among the
 diagnostics, and the rendered text must equal ``tests/golden/diagnostics/CODE.txt``. Run with
 ``UPDATE_GOLDEN=1`` to (re)write the golden files, then read them as a user would.
 """
@@ -37,6 +38,7 @@ class Block:
     text: str
     encoding: str
     command: str
+    rlimit: str | None = None
 
 
 @dataclass(frozen=True)
@@ -48,7 +50,7 @@ class Section:
 
     @property
     def command(self) -> str:
-        for command in ("prove", "analyze"):
+        for command in ("synth", "prove", "analyze"):
             if any(b.command == command for b in self.blocks):
                 return command
         return "check"
@@ -62,7 +64,7 @@ def _blocks(body: str) -> tuple[Block, ...]:
     for match in _FENCE.finditer(body):
         attrs = dict(item.split("=", 1) for item in match.group(1).split())
         blocks.append(Block(attrs.get("file", "main.vfy"), match.group(2), attrs.get("encoding", "utf-8"),
-                            attrs.get("command", "check")))
+                            attrs.get("command", "check"), attrs.get("rlimit")))
     return tuple(blocks)
 
 
@@ -96,6 +98,8 @@ def run_example(section: Section, directory: Path):
         model = result.system(None)
     except SelectionError as err:
         return [err.diagnostic], result.sources
+    if section.command == "synth":
+        return synth_diagnostics(section, result, model), result.sources
     holes = require_configured(model, section.command)
     if holes:
         return holes, result.sources
@@ -104,6 +108,19 @@ def run_example(section: Section, directory: Path):
 
         return list(prove(model).diagnostics), result.sources
     return list(timing.diagnostics_of(timing.analyze(model))), result.sources
+
+
+def synth_diagnostics(section: Section, result, model) -> list:
+    """What `synth` reports for the example (its budget from the block's ``rlimit=N``)."""
+    from verify.synth import TooManyCandidates, synthesize
+    from verify.synth.command import too_many
+    from verify.synth.driver import DEFAULT_RLIMIT
+
+    rlimit = next((int(b.rlimit) for b in section.blocks if b.rlimit), DEFAULT_RLIMIT)
+    try:
+        return list(synthesize(result, model.name, rlimit=rlimit).diagnostics)
+    except TooManyCandidates as err:
+        return [too_many(err)]
 
 
 # ------------------------------------------------------------------ the registry and the spec agree

@@ -91,7 +91,8 @@ def _both_paths(text: str):
     sink = DiagnosticSink()
     slow = _parse_with_lark(text, "t.vfy", sink)
     try:
-        fast = _fast_parser().parse(text, _Builder("t.vfy", DiagnosticSink(), text).callbacks())
+        builder = _Builder("t.vfy", DiagnosticSink())
+        fast = _fast_parser().parse(text, builder.callbacks(), builder.tokens())
     except (Unparsable, _NumberError):
         fast = None
     return fast, slow, sink.items

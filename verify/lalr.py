@@ -1,7 +1,7 @@
 """The parser's fast path: Lark's own LALR(1) table, driven by a one-regex lexer, building values
 while parsing.
 
-Lark's contextual lexer, its parser loop and the tree-then-transform pipeline cost about 15 µs per
+Lark's contextual lexer, its parser loop and the tree-then-transform pipeline cost about 14 µs per
 token (10,000 tasks, 400,000 tokens: 5.5 s without garbage collection). This module reads the parse
 table and the rules of the Lark parser built from ``grammar/verify.lark`` — the grammar stays the one
 definition of the language — and runs the same automaton with less machinery:
@@ -16,8 +16,9 @@ definition of the language — and runs the same automaton with less machinery:
   ``?rule`` with one child replaced by it) and Lark's position rule (a node spans from the start of its
   first child to the end of its last one, anonymous tokens included). A position is one integer,
   ``position(line, column)`` (1-based, as Lark counts them), so that the stacks hold no tuples.
-- **Building**: each reduction calls ``callbacks[rule alias or name](start, end, children)`` at once;
-  there is no intermediate tree.
+- **Building**: a token the tree keeps becomes ``tokens[terminal](text, start, end)`` (or its text),
+  and each reduction calls ``callbacks[rule alias or name](start, end, children)`` at once; there is no
+  intermediate tree.
 
 **Exact or nothing.** The fast path never reports an error: whenever its lexer or the table rejects the
 input, it raises :class:`Unparsable` and the caller runs Lark itself (contextual lexer, error recovery,
@@ -52,35 +53,12 @@ _WORD, _NUMBER, _PUNCT, _STRING = 1, 2, 3, 4
 
 
 def position(line: int, column: int) -> int:
-    """A line and column in one integer: ``line_of``/``column_of`` take it apart."""
+    """A line and a column in one integer: ``pos >> 32`` is the line, ``pos & 0xFFFFFFFF`` the column."""
     return line << 32 | column
-
-
-def line_of(pos: int) -> int:
-    return pos >> 32
-
-
-def column_of(pos: int) -> int:
-    return pos & 0xFFFFFFFF
 
 
 class Unparsable(Exception):
     """The fast path does not decide this input: run Lark."""
-
-
-class Tok:
-    """A token the tree keeps (NAME, NUMBER, UNIT, STRING, RBRACE): its text and positions."""
-
-    __slots__ = ("type", "text", "start", "end")
-
-    def __init__(self, type: str, text: str, start: int, end: int):
-        self.type = type
-        self.text = text
-        self.start = start
-        self.end = end
-
-    def __repr__(self) -> str:  # pragma: no cover - debugging aid
-        return f"Tok({self.type}, {self.text!r}, {self.start}, {self.end})"
 
 
 # rule modes: how a reduction makes its value
@@ -126,7 +104,7 @@ def _picker(include: tuple[tuple[int, bool], ...], size: int, as_list: bool):
 class FastParser:
     """Lark's LALR table for one grammar with the lexer above; ``parse`` is reentrant."""
 
-    def __init__(self, rows, start, end, rules, names, keywords, punct, kept, lexeme):
+    def __init__(self, rows, start, end, rules, names, keywords, punct, lexeme):
         self.rows = rows  # per state: {terminal or rule name: state (shift, goto) or ~rule (reduce)}
         self.start = start
         self.end = end
@@ -134,7 +112,6 @@ class FastParser:
         self.names = names  # per rule: its callback's name (its alias or its name)
         self.keywords = keywords  # word -> terminal
         self.punct = punct  # literal -> terminal
-        self.kept = kept  # terminals whose tokens a rule keeps
         self.lexeme = lexeme
 
     @classmethod
@@ -186,7 +163,6 @@ class FastParser:
             nullable |= more
         rule_index: dict[Any, int] = {}
         rules, names = [], []
-        kept: set[str] = set()
         for rule in lark.rules:
             options = rule.options
             if options.keep_all_tokens or any(options.empty_indices or ()):
@@ -195,8 +171,6 @@ class FastParser:
             for i, sym in enumerate(rule.expansion):
                 if not (sym.is_term and sym.filter_out):
                     include.append((i, not sym.is_term and sym.name.startswith("_")))
-                    if sym.is_term:
-                        kept.add(str(sym.name))
             include = tuple(include)
             size = len(rule.expansion)
             may_be_empty = any(not sym.is_term and str(sym.name) in nullable for sym in rule.expansion)
@@ -223,16 +197,19 @@ class FastParser:
                 row[str(symbol)] = arg if action.name == "Shift" else ~rule_index[arg]
             rows.append(row)
         return cls(rows, table.start_states["start"], table.end_states["start"], rules, names, keywords, punct,
-                   frozenset(kept), lexeme)
+                   lexeme)
 
     def callback_names(self) -> set[str]:
         """The rules whose values ``parse`` builds with a callback."""
         return {name for name in self.names if name is not None}
 
-    def parse(self, text: str, callbacks: Mapping[str, Callable[[int | None, int | None, Any], Any]]):
+    def parse(self, text: str, callbacks: Mapping[str, Callable[[int | None, int | None, Any], Any]],
+              tokens: Mapping[str, Callable[[str, int, int], Any]]):
         """The value of the start rule, or :class:`Unparsable`. ``callbacks[name](start, end, children)``
-        builds the value of a rule from its positions and its children (a list or a tuple)."""
-        rows, rules, keywords, punct, kept = self.rows, self.rules, self.keywords, self.punct, self.kept
+        builds the value of a rule from its positions and its children (a list or a tuple);
+        ``tokens[terminal](text, start, end)`` the value of a token (default: its text)."""
+        rows, rules, keywords, punct = self.rows, self.rules, self.keywords, self.punct
+        token_value = tokens.get
         build = [None if name is None else callbacks[name] for name in self.names]
         match = self.lexeme.match
         end_state = self.end
@@ -244,7 +221,7 @@ class FastParser:
         row = rows[self.start]
         pos = 0
         # a position is offset + base with base = position(line, 1) - line start, updated at each new line
-        line, base = 1, position(1, 1)
+        line, base = 1, 1 << 32 | 1
         size_text = len(text)
         next_newline = text.find("\n")
         if next_newline < 0:
@@ -262,7 +239,7 @@ class FastParser:
                 offset = pos - len(lex)
                 if offset > next_newline:  # the ignored text before the lexeme ended a line or more
                     line += text.count("\n", previous, offset)
-                    base = position(line, 1) - (text.rfind("\n", previous, offset) + 1)
+                    base = (line << 32 | 1) - (text.rfind("\n", previous, offset) + 1)  # position(line, 1) - ...
                     next_newline = text.find("\n", offset)
                     if next_newline < 0:
                         next_newline = size_text
@@ -282,7 +259,8 @@ class FastParser:
                     term = punct[lex]
                 else:
                     term = "STRING"
-                value = Tok(term, lex, start, end) if term in kept else None
+                convert = token_value(term)
+                value = lex if convert is None else convert(lex, start, end)
             while True:  # reduce as long as the table says so, then shift
                 try:
                     code = row[term]
@@ -325,13 +303,13 @@ class FastParser:
                 else:
                     node = children[0]
                 goto = rows[stack[-1]][origin]
+                if goto == end_state:  # the start rule is reduced, on the end only
+                    return node
                 push_state(goto)
                 push_value(node)
                 push_start(first)
                 push_end(last)
                 row = rows[goto]
-                if goto == end_state and term == "$END":
-                    return node
             if start is None:  # pragma: no cover - Lark's table never shifts the end
                 raise Unparsable
             push_state(code)

@@ -17,7 +17,7 @@ from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedTok
 
 from . import syntax as s
 from .diagnostics import DiagnosticSink
-from .lalr import FastParser, Tok, Unparsable, position
+from .lalr import FastParser, Unparsable, position
 from .source import Span
 
 MAX_SYNTAX_ERRORS = 20
@@ -189,7 +189,8 @@ def parse_text(text: str, path: str, sink: DiagnosticSink) -> s.Module | None:
     fast = _fast_parser()
     if fast is not None:
         try:
-            return fast.parse(text, _Builder(path, DiagnosticSink(), text).callbacks())
+            builder = _Builder(path, DiagnosticSink())
+            return fast.parse(text, builder.callbacks(), builder.tokens())
         except (Unparsable, _NumberError):
             pass
     return _parse_with_lark(text, path, sink)
@@ -223,7 +224,7 @@ def _parse_with_lark(text: str, path: str, sink: DiagnosticSink) -> s.Module | N
     if errors or tree is None:
         return None
     try:
-        return _Builder(path, sink, text).transform(tree)
+        return _Builder(path, sink).transform(tree)
     except _NumberError:
         return None
 
@@ -249,19 +250,20 @@ def _direct_constructors():
     parse. The instances are the same (same class, same ``__dict__``). If either class stops being a
     plain frozen dataclass with these fields, its own constructor is used."""
     new, set_dict = object.__new__, object.__setattr__
-    span, name = Span, s.Name
-    if _plain_frozen(Span, ("file", "line", "column", "end_line", "end_column")):
-        def span(file, line, column, end_line, end_column):
-            obj = new(Span)
-            set_dict(obj, "__dict__", {"file": file, "line": line, "column": column, "end_line": end_line,
-                                       "end_column": end_column})
-            return obj
-    if _plain_frozen(s.Name, ("text", "span")):
-        def name(text, span):
-            obj = new(s.Name)
-            set_dict(obj, "__dict__", {"text": text, "span": span})
-            return obj
-    return span, name
+
+    def direct_span(file, line, column, end_line, end_column):
+        obj = new(Span)
+        set_dict(obj, "__dict__", {"file": file, "line": line, "column": column, "end_line": end_line,
+                                   "end_column": end_column})
+        return obj
+
+    def direct_name(text, span):
+        obj = new(s.Name)
+        set_dict(obj, "__dict__", {"text": text, "span": span})
+        return obj
+
+    return (direct_span if _plain_frozen(Span, ("file", "line", "column", "end_line", "end_column")) else Span,
+            direct_name if _plain_frozen(s.Name, ("text", "span")) else s.Name)
 
 
 _new_span, _new_name = _direct_constructors()
@@ -278,7 +280,7 @@ def parse_number(tok: Token, path: str, sink: DiagnosticSink) -> Fraction:
 
 def _exact(text: str, where, sink: DiagnosticSink) -> Fraction:
     """The value of NUMBER ``text``; ``where()`` gives its span for a report."""
-    if text.isdigit() and len(text) <= MAX_NUMBER_LENGTH:  # the common case, without the regex of Fraction(str)
+    if text.isascii() and text.isdigit() and len(text) <= MAX_NUMBER_LENGTH:  # common; no regex (Fraction(str))
         return Fraction(int(text))
     if len(text) > MAX_NUMBER_LENGTH:
         sink.emit("E005", f"number has {len(text)} characters; at most {MAX_NUMBER_LENGTH} are allowed",
@@ -294,15 +296,31 @@ def _exact(text: str, where, sink: DiagnosticSink) -> Fraction:
     return Fraction(text)
 
 
+def _text(text: str, start: int, end: int) -> str:
+    return text
+
+
+class _Number:
+    """A NUMBER token: its value is read (and its span made) only where a rule needs them."""
+
+    __slots__ = ("text", "start", "end")
+
+    def __init__(self, text: str, start: int, end: int):
+        self.text = text
+        self.start = start
+        self.end = end
+
+
 class _Builder:
     """Builds ``verify.syntax`` nodes; collects repeated clauses for validation to report.
 
     One method per rule (its alias or name), called with the rule's start and end positions
     (``lalr.position``; None for an empty rule) and its children as Lark's tree would hold them: nodes built by these
-    methods and the tokens the rule keeps (:class:`Tok`). ``verify.lalr`` calls them while parsing;
+    methods and the tokens the rule keeps (``tokens``: a NAME is a ``syntax.Name``, a NUMBER a
+    :class:`_Number`, an RBRACE its ``Span``, a UNIT or STRING its text). ``verify.lalr`` calls them while parsing;
     ``transform`` applies them to a Lark tree (the error-recovering path)."""
 
-    def __init__(self, path: str, sink: DiagnosticSink, text: str):
+    def __init__(self, path: str, sink: DiagnosticSink):
         self.path = path
         self.sink = sink
         self._numbers: dict[str, Fraction] = {}
@@ -312,9 +330,9 @@ class _Builder:
 
     def transform(self, tree: Tree):
         """The value of a Lark tree (built with positions), bottom-up as Lark's Transformer does."""
-        children = [self.transform(c) if isinstance(c, Tree) else
-                    Tok(c.type, c.value, position(c.line, c.column), position(c.end_line, c.end_column))
-                    for c in tree.children]
+        tokens = self.tokens()
+        children = [self.transform(c) if isinstance(c, Tree) else tokens.get(c.type, _text)(
+                    c.value, position(c.line, c.column), position(c.end_line, c.end_column)) for c in tree.children]
         meta = tree.meta
         if meta.empty:
             return getattr(self, tree.data)(None, None, children)
@@ -328,21 +346,24 @@ class _Builder:
             return Span(self.path, 1, 1, 1, 1)
         return _new_span(self.path, start >> 32, start & 0xFFFFFFFF, end >> 32, end & 0xFFFFFFFF)
 
-    def _tspan(self, tok: Tok) -> Span:
-        return self._span(tok.start, tok.end)
+    def tokens(self) -> dict:
+        """The value of each kind of token the tree keeps (``lalr.FastParser.parse``)."""
+        return {"NAME": self._name, "NUMBER": _Number, "RBRACE": self._span_of}
 
-    def _name(self, tok: Tok) -> s.Name:
-        start, end = tok.start, tok.end
-        return _new_name(tok.text, _new_span(self.path, start >> 32, start & 0xFFFFFFFF, end >> 32, end & 0xFFFFFFFF))
+    def _span_of(self, text: str, start: int, end: int) -> Span:
+        return self._span(start, end)
 
-    def _value(self, tok: Tok) -> Fraction:
+    def _name(self, text: str, start: int, end: int) -> s.Name:
+        return _new_name(text, _new_span(self.path, start >> 32, start & 0xFFFFFFFF, end >> 32, end & 0xFFFFFFFF))
+
+    def _value(self, tok: _Number) -> Fraction:
         value = self._numbers.get(tok.text)
         if value is None:
-            value = self._numbers[tok.text] = _exact(tok.text, lambda: self._tspan(tok), self.sink)
+            value = self._numbers[tok.text] = _exact(tok.text, lambda: self._span(tok.start, tok.end), self.sink)
         return value
 
-    def _number(self, tok: Tok) -> s.Number:
-        return s.Number(self._value(tok), self._tspan(tok))
+    def _number(self, tok: _Number) -> s.Number:
+        return s.Number(self._value(tok), self._span(tok.start, tok.end))
 
     # ---------------------------------------------------------------- file
     def start(self, start, end, items):
@@ -352,37 +373,37 @@ class _Builder:
         return s.Module(self.path, imports, comps, systems, self._span(start, end))
 
     def import_decl(self, start, end, children):
-        return s.Import(children[0].text[1:-1], self._span(start, end))
+        return s.Import(children[0][1:-1], self._span(start, end))
 
     # ---------------------------------------------------------------- quantities
     def quantity(self, start, end, children):
         num, unit = children
-        return s.Quantity(self._value(num), unit.text, self._span(start, end))
+        return s.Quantity(self._value(num), unit, self._span(start, end))
 
     # ---------------------------------------------------------------- components
     def component(self, start, end, children):
         name, *members, rbrace = children
         return s.Component(
-            self._name(name),
+            name,
             tuple(m for m in members if isinstance(m, s.InPort)),
             tuple(m for m in members if isinstance(m, s.OutPort)),
             tuple(m for m in members if isinstance(m, s.CompoundPort)),
             tuple(m for m in members if isinstance(m, s.Task)),
             self._span(start, end),
-            self._tspan(rbrace),
+            rbrace,
         )
 
     def in_port(self, start, end, children):
-        return s.InPort(self._name(children[0]), self._name(children[1]), self._span(start, end))
+        return s.InPort(children[0], children[1], self._span(start, end))
 
     def out_port(self, start, end, children):
-        return s.OutPort(self._name(children[0]), self._name(children[1]), self._span(start, end))
+        return s.OutPort(children[0], children[1], self._span(start, end))
 
     def _compound(self, start, end, children, mode):
         name, *rest = children
         constraint = rest.pop()[1] if rest and isinstance(rest[-1], tuple) else None
-        members = tuple(self._name(t) for t in rest if isinstance(t, Tok) and t.type == "NAME")
-        return s.CompoundPort(self._name(name), mode, members, constraint, self._span(start, end))
+        members = tuple(t for t in rest if isinstance(t, s.Name))
+        return s.CompoundPort(name, mode, members, constraint, self._span(start, end))
 
     def compound_and(self, start, end, children):
         return self._compound(start, end, children, "and")
@@ -411,8 +432,8 @@ class _Builder:
             else:
                 fields[tag] = value
         return s.Task(
-            self._name(name), kind, tuple(fields.pop("reads")), tuple(fields.pop("produces")),
-            span=self._span(start, end), repeated=tuple(repeated), end=self._tspan(rbrace), **fields,
+            name, kind, tuple(fields.pop("reads")), tuple(fields.pop("produces")),
+            span=self._span(start, end), repeated=tuple(repeated), end=rbrace, **fields,
         )
 
     def reads(self, start, end, children):
@@ -420,7 +441,7 @@ class _Builder:
         opts: dict = {}
         for key, value in options:
             opts[key] = value
-        read = s.Read(self._name(port), span=self._span(start, end), **opts)
+        read = s.Read(port, span=self._span(start, end), **opts)
         return ("reads", [read], (start, end))
 
     def optional(self, start, end, children):
@@ -445,7 +466,7 @@ class _Builder:
         return s.Tolerance("max", self._number(children[0]), self._span(start, end))
 
     def produces(self, start, end, children):
-        return ("produces", [self._name(t) for t in children], (start, end))
+        return ("produces", list(children), (start, end))
 
     def bcet(self, start, end, children):
         return ("bcet", children[0], (start, end))
@@ -480,18 +501,18 @@ class _Builder:
     def system(self, start, end, children):
         name, *members, rbrace = children
         return s.System(
-            self._name(name),
+            name,
             tuple(m for m in members if isinstance(m, s.Core)),
             tuple(m for m in members if isinstance(m, s.Instance)),
             tuple(m for m in members if isinstance(m, s.Connection)),
             tuple(m for m in members if isinstance(m, s.Chain)),
             self._span(start, end),
-            self._tspan(rbrace),
+            rbrace,
         )
 
     def core(self, start, end, children):
-        policy = self._name(children[1]) if len(children) > 1 else None
-        return s.Core(self._name(children[0]), policy, self._span(start, end))
+        policy = children[1] if len(children) > 1 else None
+        return s.Core(children[0], policy, self._span(start, end))
 
     def instance(self, start, end, children):
         name, comp, *rest = children
@@ -499,15 +520,15 @@ class _Builder:
         bindings: tuple = ()
         body_end = None
         for r in rest:
-            if isinstance(r, Tok):
-                core = self._name(r)
+            if isinstance(r, s.Name):
+                core = r
             else:
                 bindings, body_end = r
-        return s.Instance(self._name(name), self._name(comp), core, bindings, self._span(start, end), body_end)
+        return s.Instance(name, comp, core, bindings, self._span(start, end), body_end)
 
     def instance_body(self, start, end, children):
         *bindings, rbrace = children
-        return tuple(bindings), self._tspan(rbrace)
+        return tuple(bindings), rbrace
 
     def binding(self, start, end, children):
         name, *clauses = children
@@ -521,13 +542,13 @@ class _Builder:
             else:
                 fields[tag] = value
         fields["activations"] = tuple(fields["activations"])
-        return s.TaskBinding(self._name(name), span=self._span(start, end), repeated=tuple(repeated), **fields)
+        return s.TaskBinding(name, span=self._span(start, end), repeated=tuple(repeated), **fields)
 
     def priority(self, start, end, children):
         return ("priority", self._number(children[0]), (start, end))
 
     def task_core(self, start, end, children):
-        return ("core", self._name(children[0]), (start, end))
+        return ("core", children[0], (start, end))
 
     def wcrt(self, start, end, children):
         return ("wcrt", children[0], (start, end))
@@ -544,7 +565,7 @@ class _Builder:
         return s.PeriodHole(low, high, step, self._span(start, end))
 
     def trigger(self, start, end, children):
-        port = self._name(children[0])
+        port = children[0]
         prescaler = children[1] if len(children) > 1 else s.Number(Fraction(1))
         return ("activations", s.Trigger(port, prescaler, self._span(start, end)), (start, end))
 
@@ -579,11 +600,11 @@ class _Builder:
         specs, body_end = (), None
         if rest and isinstance(rest[-1], tuple):
             specs, body_end = rest[-1]
-        return s.Chain(self._name(name), refs, specs, self._span(start, end), body_end)
+        return s.Chain(name, refs, specs, self._span(start, end), body_end)
 
     def chain_body(self, start, end, children):
         *specs, rbrace = children
-        return tuple(specs), self._tspan(rbrace)
+        return tuple(specs), rbrace
 
     def spec_reaction_time(self, start, end, children):
         return s.Spec("reaction_time", children[0], self._span(start, end))
@@ -595,4 +616,4 @@ class _Builder:
         return s.Spec("jitter", children[0], self._span(start, end))
 
     def port_ref(self, start, end, children):
-        return s.PortRef(self._name(children[0]), self._name(children[1]), self._span(start, end))
+        return s.PortRef(children[0], children[1], self._span(start, end))

@@ -12,7 +12,7 @@ import networkx as nx
 
 from . import syntax as s
 from .diagnostics import DiagnosticSink, Label
-from .model import SystemModel, chain_path
+from .model import SystemModel, chain_path, quantity_base, quantity_hertz, quantity_seconds
 from .resolve import ComponentScope, Resolution, SystemScope
 from .units import fmt_number, fmt_quantity, fmt_rate, fmt_time
 
@@ -51,7 +51,7 @@ def _dimension(q: s.Quantity | None, want: str, role: str, sink: DiagnosticSink)
 
 
 def _positive(q: s.Quantity | None, role: str, sink: DiagnosticSink, allow_zero: bool = False) -> bool:
-    if q is None or q.value > 0 or (allow_zero and q.value == 0):
+    if q is None or q.value.numerator > 0 or (allow_zero and not q.value):
         return True
     sink.emit("E307", f"{role} must be {'non-negative' if allow_zero else 'positive'}, found {fmt_quantity(q)}",
               q.span, "not positive", help=f"give a {role} above zero")
@@ -62,8 +62,8 @@ def _ordered(low, high, role: str, sink: DiagnosticSink, span) -> bool:
     """E303: ``low .. high`` must not be inverted (compared in the dimension written)."""
     if low is None or high is None:
         return True
-    lv = low.base if isinstance(low, s.Quantity) else low.value
-    hv = high.base if isinstance(high, s.Quantity) else high.value
+    lv = quantity_base(low) if isinstance(low, s.Quantity) else low.value
+    hv = quantity_base(high) if isinstance(high, s.Quantity) else high.value
     if lv <= hv:
         return True
     show = fmt_quantity if isinstance(low, s.Quantity) else (lambda n: fmt_number(n.value))
@@ -79,7 +79,7 @@ def _check_execution_times(task: s.Task, sink: DiagnosticSink) -> None:
                   help="add a line such as `wcet 2 ms` to the task")
     ok = _dimension(task.bcet, "time", "bcet", sink) & _dimension(task.wcet, "time", "wcet", sink)
     ok &= _positive(task.bcet, "bcet", sink, allow_zero=True) & _positive(task.wcet, "wcet", sink)
-    if ok and task.bcet is not None and task.wcet is not None and task.bcet.base > task.wcet.base:
+    if ok and task.bcet is not None and task.wcet is not None and quantity_base(task.bcet) > quantity_base(task.wcet):
         sink.emit("E301", f"task `{name}`: bcet {fmt_quantity(task.bcet)} exceeds wcet {fmt_quantity(task.wcet)}",
                   task.bcet.span, "best case above worst case",
                   secondary=(Label(task.wcet.span, "worst case"),),
@@ -231,7 +231,7 @@ def _check_timer(t: s.Timer, sink: DiagnosticSink) -> bool:
         return ok
     ok = _positive(t.period, "period", sink) & _dimension(t.phase, "time", "phase", sink)
     ok &= _positive(t.phase, "phase", sink, allow_zero=True)
-    if ok and t.phase is not None and t.phase.base >= t.period.seconds():
+    if ok and t.phase is not None and quantity_base(t.phase) >= quantity_seconds(t.period):
         sink.emit("E308", f"phase {fmt_quantity(t.phase)} is not below the period "
                   f"{fmt_quantity(t.period)}", t.phase.span, "phase too large",
                   help="a phase lies in [0, period); subtract whole periods")
@@ -254,10 +254,10 @@ def _check_prescaler(p, sink: DiagnosticSink) -> bool:
 def _binding_rates(act: s.Activation) -> tuple[Fraction, Fraction] | None:
     """The rate interval (Hz) a timer or sporadic binding gives, or None if not fixed here."""
     if isinstance(act, s.Timer) and isinstance(act.period, s.Quantity):
-        rate = act.period.hertz()
+        rate = quantity_hertz(act.period)
         return rate, rate
     if isinstance(act, s.Sporadic):
-        rates = sorted((act.low.hertz(), act.high.hertz()))
+        rates = sorted((quantity_hertz(act.low), quantity_hertz(act.high)))
         return rates[0], rates[1]
     return None
 
@@ -278,9 +278,11 @@ def _check_against_constraint(act: s.Activation, task: s.Task, who: str, sink: D
     if rates is None:
         return
     low, high = rates
-    lo = c.min.hertz() if c.min else None
-    hi = c.max.hertz() if c.max else None
+    lo = quantity_hertz(c.min) if c.min else None
+    hi = quantity_hertz(c.max) if c.max else None
     outside = (lo is not None and low < lo) or (hi is not None and high > hi)
+    if not outside and (c.changeable or lo != hi or (low, high) == (lo, hi)):
+        return
     given = fmt_rate(low) if low == high else f"{fmt_rate(low)} .. {fmt_rate(high)}"
     if not c.changeable and (outside or (lo == hi and (low, high) != (lo, hi))):
         sink.emit("E306", f"task {who} runs at a fixed {_constraint_text(c)}, but is bound to {given}", act.span,
@@ -296,15 +298,15 @@ def _check_hole_candidates(h: s.PeriodHole, c: s.ActivationConstraint, who: str,
     """E313: a period hole's range (and grid, ``low + k * step``) must hold a period within the constraint."""
     if h.low is None or h.high is None or not _well_formed(c):
         return
-    shortest, longest = sorted((h.low.seconds(), h.high.seconds()))
+    shortest, longest = sorted((quantity_seconds(h.low), quantity_seconds(h.high)))
     if c.max is not None:
-        shortest = max(shortest, 1 / c.max.hertz())
+        shortest = max(shortest, 1 / quantity_hertz(c.max))
     if c.min is not None:
-        longest = min(longest, 1 / c.min.hertz())
+        longest = min(longest, 1 / quantity_hertz(c.min))
     candidates = shortest <= longest
     what, notes = f"{fmt_quantity(h.low)} .. {fmt_quantity(h.high)}", []
     if candidates and h.step is not None:  # a grid of periods (validation made the range and step times)
-        start, step = h.low.seconds(), h.step.seconds()
+        start, step = quantity_seconds(h.low), quantity_seconds(h.step)
         first = -((start - shortest) // step)  # ceil((shortest - start) / step)
         candidates = start + first * step <= longest
         what += f" step {fmt_quantity(h.step)}"
@@ -322,17 +324,17 @@ def _well_formed(c: s.ActivationConstraint) -> bool:
     bounds = [q for q in (c.min, c.max) if q is not None]
     if any(q.dimension != "frequency" or q.value <= 0 for q in bounds):
         return False
-    return c.min is None or c.max is None or c.min.base <= c.max.base
+    return c.min is None or c.max is None or quantity_base(c.min) <= quantity_base(c.max)
 
 
 def _allowed_periods(c: s.ActivationConstraint) -> str:
     if c.min is not None and c.max is not None:
         if c.min == c.max:
-            return fmt_time(1 / c.max.hertz())
-        return f"{fmt_time(1 / c.max.hertz())} .. {fmt_time(1 / c.min.hertz())}"
+            return fmt_time(1 / quantity_hertz(c.max))
+        return f"{fmt_time(1 / quantity_hertz(c.max))} .. {fmt_time(1 / quantity_hertz(c.min))}"
     if c.max is not None:
-        return f"at least {fmt_time(1 / c.max.hertz())}"
-    return f"at most {fmt_time(1 / c.min.hertz())}"
+        return f"at least {fmt_time(1 / quantity_hertz(c.max))}"
+    return f"at most {fmt_time(1 / quantity_hertz(c.min))}"
 
 
 def _is_hole(act: s.Activation) -> bool:

@@ -3,7 +3,7 @@
 Only when the untracked problem is unsatisfiable is it rebuilt with every user statement behind an
 assumption literal (specs/synthesis.md §5). The solver's unsat core (over those literals) is then
 minimised by deletion in a fixed order — hole ranges, execution times, core assignments, sampling
-tolerances, activation constraints, fixed rates, spec bounds, each in source order — so that what
+tolerances, activation constraints, fixed rates, spec bounds, each by name — so that what
 remains is what a user most likely wants to see. A statement stays only if the core without it is
 satisfiable; that is shown by a configuration the analysis accepts (the *witness*), so the core is
 minimal: removing any one member makes the rest satisfiable.
@@ -47,8 +47,8 @@ def explain_unsat(model: SystemModel, scope: SystemScope | None, budget: Budget,
     ctx = z3.Context()
     enc = problem.encoding(ctx)
     engine = Engine(problem, enc, budget)
-    by_key = {st.key: st for st in problem.statements}
-    lits = {st.key: enc.lit(st.key) for st in problem.statements}
+    by_key = {st.key: st for st in sorted(problem.statements, key=lambda st: st.key)}
+    lits = {key: enc.lit(key) for key in by_key}
     out = engine.run([], [lits[k] for k in by_key])
     if out.status == "sat":
         return Explanation("sat", problem=problem, engine=engine, sat_config=out.config)
@@ -63,7 +63,9 @@ def explain_unsat(model: SystemModel, scope: SystemScope | None, budget: Budget,
 
 
 def deletion_order(statements) -> list[Statement]:
-    return sorted(statements, key=lambda st: (st.rank, st.order_key()))
+    """By kind (ranks of ``statements.RANKS``), then by key: names, not positions, so that
+    reordering declarations does not change the core."""
+    return sorted(statements, key=lambda st: (st.rank, st.key))
 
 
 def _minimise(engine: Engine, lits: dict, by_key: dict[str, Statement], core: set[str]):

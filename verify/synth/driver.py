@@ -180,7 +180,8 @@ def synthesize(source, system: str | None = None, *, objective: str | list[Goal]
             return _answer(model, problem, goals, out.config, out.evaluation, not goals or out.status == "optimal",
                            stats)
         if out.status == "unknown":
-            return _undecided(model, problem, goals, out, budget, stats)
+            where = scope.system.name.span if scope is not None else model.span
+            return _undecided(model, problem, goals, out, budget, stats, where)
         reason = "no configuration meets every constraint"
     return _unsat(model, scope, problem, goals, reason, budget, stats, explain)
 
@@ -196,8 +197,10 @@ def _answer(model, problem: Problem, goals, config: Config, ev: Evaluation, opti
                        ev.result, stats=stats, problem=problem)
 
 
-def _undecided(model, problem: Problem, goals, out, budget: Budget, stats) -> SynthResult:
-    established = [f"{problem.pruned} candidate values were excluded by exact pruning"]
+def _undecided(model, problem: Problem, goals, out, budget: Budget, stats, where) -> SynthResult:
+    kept = sum(len(c.candidates) for c in problem.choices.values())
+    established = [f"pruning kept {kept} of {kept + problem.pruned} candidate values "
+                   f"({len(problem.choices)} hole{'s' * (len(problem.choices) != 1)})"]
     if out.config is not None:
         values = tuple(goal_value(g, out.evaluation.result) for g in goals)
         shown = ", ".join(f"{g.name} {_show(g, v)}" for g, v in zip(goals, values))
@@ -205,9 +208,12 @@ def _undecided(model, problem: Problem, goals, out, budget: Budget, stats) -> Sy
                            "better one has been ruled out")
     else:
         established.append("no configuration meeting every spec has been found yet, and none has been ruled out")
-    established.append(f"{stats.get('rejected', 0)} configuration(s) were rejected by the analysis")
+    rejected = stats.get("rejected", 0)
+    established.append("no configuration was rejected by the analysis" if not rejected else
+                       f"{rejected} configuration{'s' * (rejected != 1)} that the solver proposed "
+                       f"{'were' if rejected != 1 else 'was'} rejected by the analysis and excluded")
     sink = DiagnosticSink()
-    sink.emit("E402", f"synthesis of `{model.name}` is undecided: {out.reason or budget.reason}", model.span,
+    sink.emit("E402", f"synthesis of `{model.name}` is undecided: {out.reason or budget.reason}", where,
               "undecided", notes=tuple(f"established: {e}" for e in established),
               help="raise the budget with `--rlimit N` (deterministic) or allow more time with `--timeout S`")
     result = SynthResult("undecided", model.name, tuple(goals), reason=out.reason or budget.reason,

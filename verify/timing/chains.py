@@ -25,7 +25,7 @@ from typing import Mapping
 
 from ..model import ChainModel, DataTriggered, HopModel, SystemModel
 from ..units import fmt_time
-from .rates import ActivationInfo, EventModel, arrival_model, combine_and
+from .rates import ActivationInfo, EventModel, arrival_model, combine_and, exact_sum
 from .rta import TaskResponse
 
 ZERO = Fraction(0)
@@ -165,7 +165,7 @@ class Timing:
 
 def _total(parts) -> Fraction | None:
     values = [v for _, v in parts]
-    return None if any(v is None for v in values) else sum(values, ZERO)
+    return None if any(v is None for v in values) else exact_sum(values)
 
 
 def _term(rule: str, parts, note: str = "") -> Term:
@@ -289,7 +289,7 @@ def hop_step(t: Timing, hop: HopModel) -> Step:
 
 def _sum_terms(terms: list[Term]) -> Fraction | None:
     values = [x.value for x in terms]
-    return None if any(v is None for v in values) else sum(values, ZERO)
+    return None if any(v is None for v in values) else exact_sum(values)
 
 
 def reaction_time(steps: tuple[Step, ...]) -> Fraction | None:
@@ -341,7 +341,7 @@ def chain_bounds(t: Timing, chain: ChainModel, variant: str = "reduced") -> Chai
                        else "the chain's hops do not match its tasks")
     first, last = chain.tasks[0], chain.tasks[-1]
     steps = (first_step(t, first),) + tuple(hop_step(t, h) for h in chain.hops) + (last_step(t, last),)
-    best = sum((s.best for s in steps), ZERO)
+    best = exact_sum(s.best for s in steps)
     wait, a_max = t.events[first].sampling_wait, t.events[first].a_max
     reaction = reaction_time(steps)
     age = data_age(steps)

@@ -34,7 +34,7 @@ from fractions import Fraction
 from math import lcm
 from typing import Mapping
 
-from ..model import DataTriggered, Hole, SystemModel, TaskModel
+from ..model import DataTriggered, Hole, SystemModel
 from .rates import EventModel
 from .rta import (MAX_JOBS, MAX_STEPS, ZERO, TaskResponse, carry_in, deadline_of, ratio)
 
@@ -98,7 +98,7 @@ class _Period:
     ``⌈(w + J)/P⌉ = m + a + [s + r > 0] + [s + r > P]``, so the demand of all of them is
     ``m·ΣC + Σa·C + (ΣC if s > 0 else Σ_{r>0} C) + Σ_{r > P−s} C``: a few operations, plus a
     suffix sum over the sorted residues when some residue is large enough (jitter close to a period,
-    which is rare). Timers (no jitter) are r = a = 0."""
+    which is rare); ``Round._lfp`` computes it. Timers (no jitter) are r = a = 0."""
 
     __slots__ = ("period", "cost", "offset", "positive", "residues", "costs")
 
@@ -120,36 +120,31 @@ class _Period:
             self.residues.insert(k, r)
             self.costs.insert(k, cost)
 
-    def demand(self, w: int) -> int:
-        m, s = divmod(w, self.period)
-        total = m * self.cost + self.offset
-        if not s:
-            return total + self.positive
-        total += self.cost
-        residues = self.residues
-        if residues and residues[-1] > self.period - s:
-            total += sum(self.costs[bisect_right(residues, self.period - s):])
-        return total
-
 
 class _Core:
     """The streams of one core added so far in the sweep (hp of the next priority level)."""
 
-    def __init__(self) -> None:
+    def __init__(self, position: Mapping[int, int]) -> None:
         self.periods: dict[int, _Period] = {}
+        self.groups: list[_Period] = []  # the values of ``periods``
         self.load = 0  # Σ cost/period over the streams with a bounded rate, in units of 1/U
         self.unrated: list[int] = []  # streams whose rate is not bounded
         self.unbounded: list[int] = []  # streams whose demand is not bounded
+        self.first_unbounded: int | None = None  # the first of them in system order
+        self.position = position
 
     def add(self, s: _Stream) -> None:
         if s.silent:
             pass
         elif s.period is None or s.jitter is None:
             self.unbounded.append(s.task)
+            if self.first_unbounded is None or self.position[s.task] < self.position[self.first_unbounded]:
+                self.first_unbounded = s.task
         else:
             group = self.periods.get(s.period)
             if group is None:
                 group = self.periods[s.period] = _Period(s.period)
+                self.groups.append(group)
             group.add(s.jitter, s.cost)
         if s.load is None:
             self.unrated.append(s.task)
@@ -187,7 +182,11 @@ class Round:
                         else self._stream(n) for n in range(len(tasks))]
         self.capped = self._causal_paths()
         self._hold_run: list[tuple | None] = [None] * len(tasks)  # (ticks or None, failure, steps left)
+        self._hold_limit: list[int | None] = [None] * len(tasks)  # the deadline in ticks
         self.result: list[tuple] = [()] * len(tasks)  # (computed, q, critical, failure, blocking, remote)
+        # last round, if its ticks are these (then a stream of the same object is the same stream)
+        self.previous = previous if previous is not None and previous.scale == self.scale and \
+            previous.unit == self.unit else None
         later = {core: self._sweep(levels) for core, levels in static.levels.items()}
         for core, pending in later.items():
             if pending:  # the siblings' hold times are known now
@@ -253,23 +252,35 @@ class Round:
         """Sweep one core, highest priority first: hold times, and the WCRTs of the tasks without
         cooperative siblings (returned: the others); with ``pending``, only those WCRTs. A task alone
         on its level is analysed before it is added; the tasks of a shared level after the whole level
-        has been added, each less itself."""
-        core = _Core()
+        has been added, each less itself.
+
+        As long as every stream added so far is last round's (the same object), the core holds what it
+        held then, and a task whose own inputs are last round's too has last round's results: they are
+        taken over (``_unchanged``). Late CPA rounds change few streams, most of them low on their core."""
+        core = _Core(self.static.position)
         later: set[int] = set()
+        previous = self.previous if pending is None else None
         for members in levels:
             if len(members) == 1:
-                self._analyse(members[0], core, False, pending, later)
+                self._analyse(members[0], core, False, pending, later, previous)
             for n in members:
                 core.add(self.streams[n])
+                if previous is not None and self.streams[n] is not previous.streams[n]:
+                    previous = None
             if len(members) > 1:
                 for n in members:
-                    self._analyse(n, core, True, pending, later)
+                    self._analyse(n, core, True, pending, later, previous)
         return later
 
-    def _analyse(self, n: int, core: _Core, with_self: bool, pending: set[int] | None, later: set[int]) -> None:
+    def _analyse(self, n: int, core: _Core, with_self: bool, pending: set[int] | None, later: set[int],
+                 previous: Round | None) -> None:
         if pending is not None:
             if n in pending:
                 self.result[n] = self._response(n, core, with_self)
+            return
+        if previous is not None and self._unchanged(n, previous):
+            self._hold_run[n], self._hold_limit[n] = previous._hold_run[n], previous._hold_limit[n]
+            self.result[n] = previous.result[n]
             return
         self._hold(n, core, with_self)
         if self.static.siblings[n]:
@@ -277,12 +288,20 @@ class Round:
         else:
             self.result[n] = self._response(n, core, with_self)
 
+    def _unchanged(self, n: int, previous: Round) -> bool:
+        """Task n's own inputs are last round's: its stream and event model (the same objects, so the
+        same deadline), its WCRT estimate, its causal caps; and no cooperative sibling."""
+        return (self.streams[n] is previous.streams[n] and not self.static.siblings[n]
+                and self.estimates[n] == previous.estimates[n] and self.capped.get(n) == previous.capped.get(n))
+
     def _interference(self, n: int, core: _Core, with_self: bool, capped=(), remote=()):
-        """The demand function of n's interfering streams (for w > 0, in ticks), the first of them
-        whose demand is not bounded, and the utilisation of the uncapped ones (None: not bounded).
-        ``core`` holds hp(n) (and n itself if ``with_self``); ``capped``: (stream, cap) for the
-        streams of hp(n) with a causal cap; ``remote``: the remote siblings' token streams."""
-        groups = list(core.periods.values())
+        """n's interfering streams for ``_lfp``: the core's period groups, the demand (for w > 0, in
+        ticks) to add to theirs (None: nothing), the first stream whose demand is not bounded, and the
+        utilisation of the uncapped ones (None: not bounded). ``core`` holds hp(n) (and n itself if
+        ``with_self``); ``capped``: (stream, cap) for the streams of hp(n) with a causal cap;
+        ``remote``: the remote siblings' token streams."""
+        if not with_self and not capped and not remote:  # the common case: hp(n) is what the core holds
+            return core.groups, None, core.first_unbounded, None if core.unrated else core.load
         exclude = [s for s, _ in capped]  # in the core's sums, but not (or not so) among n's streams
         if with_self:
             exclude.append(self.streams[n])
@@ -290,18 +309,8 @@ class Round:
         caps = [(s, cap) for s, cap in capped if not s.silent]
         tokens = [s for s in remote if not s.silent]
 
-        def demand(w: int) -> int:
+        def extra(w: int) -> int:
             total = 0
-            for g in groups:  # _Period.demand, inlined (the innermost loop of the analysis)
-                period = g.period
-                m, r = divmod(w, period)
-                if r:
-                    total += (m + 1) * g.cost + g.offset
-                    residues = g.residues
-                    if residues and residues[-1] > period - r:
-                        total += sum(g.costs[bisect_right(residues, period - r):])
-                else:
-                    total += m * g.cost + g.offset + g.positive
             for s in corrections:
                 total -= s.count(w) * s.cost
             for s, cap in caps:
@@ -325,12 +334,12 @@ class Round:
                 unrated.append(s.task)
             else:
                 load += s.load
-        return demand, first_bad, None if unrated else load
+        return core.groups, extra, first_bad, None if unrated else load
 
-    def _lfp(self, base: int, start: int, demand, first_bad: int | None, load: int | None,
+    def _lfp(self, base: int, start: int, groups: list[_Period], extra, first_bad: int | None, load: int | None,
              limit: int | None, left: int) -> tuple[int | None, str | None, int]:
-        """``rta.least_fixed_point`` in ticks (``load`` in units of 1/U); ``left`` is the step budget,
-        returned as used."""
+        """``rta.least_fixed_point`` in ticks (``load`` in units of 1/U) for the streams that
+        ``_interference`` describes; ``left`` is the step budget, returned as used."""
         if limit is None and load is None:
             return None, "the interference is not bounded", left
         if load is not None and load >= self.unit and base > 0:
@@ -345,7 +354,19 @@ class Round:
             if w > 0:
                 if first_bad is not None:
                     return None, f"the activations of `{self.tasks[first_bad].id}` are not bounded", left
-                new = base + demand(w)
+                new = base
+                for g in groups:  # _Period.demand, inlined: the innermost loop of the analysis
+                    period = g.period
+                    m, r = divmod(w, period)
+                    if r:
+                        new += (m + 1) * g.cost + g.offset
+                        residues = g.residues
+                        if residues and residues[-1] > period - r:
+                            new += sum(g.costs[bisect_right(residues, period - r):])
+                    else:
+                        new += m * g.cost + g.offset + g.positive
+                if extra is not None:
+                    new += extra(w)
             else:  # an empty window: no stream demands anything
                 new = base
             if new == w:
@@ -354,10 +375,9 @@ class Round:
 
     def _hold(self, n: int, core: _Core, with_self: bool) -> None:
         """``rta.hold_time``: the busy window of one job of n, no blocking, no caps (§6.3)."""
-        demand, first_bad, load = self._interference(n, core, with_self)
         cost = self.streams[n].cost
-        self._hold_run[n] = self._lfp(cost, cost, demand, first_bad, load, self.ticks(self.deadlines[n][0]),
-                                      MAX_STEPS)
+        limit = self._hold_limit[n] = self.ticks(self.deadlines[n][0])
+        self._hold_run[n] = self._lfp(cost, cost, *self._interference(n, core, with_self), limit, MAX_STEPS)
 
     def hold(self, n: int) -> Fraction | None:
         """Eᵢ, the hold time of task n."""
@@ -406,48 +426,42 @@ class Round:
 
     def _wcrt(self, n: int, core: _Core, with_self: bool, blocking: Fraction, capped, remote) -> tuple:
         """``rta.wcrt`` in ticks: (R, Q, critical q, failure)."""
-        task, own = self.tasks[n], self.events[n]
+        own = self.events[n]
         if not own.silent and (own.period_min is None or own.jitter_min is None):
             return None, None, None, ("its activations are not bounded" if own.period_min is None else
                                       "its activation jitter is not bounded (a writer upstream has no WCRT bound)")
+        stream = self.streams[n]
         deadline = self.deadlines[n][0]
         if deadline is None:
             total = self._all_loads(n, core, with_self, remote)
             if total is not None and not own.silent:
-                total += (self.streams[n].cost + self.ticks(blocking)) * (self.unit // self.ticks(own.period_min))
+                total += (stream.cost + self.ticks(blocking)) * (self.unit // stream.period)
             if total is not None and total >= self.unit:
                 return None, None, None, "the utilisation of its level is 1 or more and it has no deadline"
         blocking_ticks = self.ticks(blocking) if blocking else 0
-        cost = self.streams[n].cost + blocking_ticks
-        period, jitter = self.ticks(own.period_min), self.ticks(own.jitter_min)
-
-        def delta_min(q: int) -> int | None:  # EventModel.delta_min in ticks
-            if q <= 1:
-                return 0
-            if own.silent:
-                return None
-            return max(0, (q - 1) * period - jitter)
-
+        cost = stream.cost + blocking_ticks
+        # δ⁻(q) = max(0, (q−1)·P − J) in ticks (a silent task never has a second job: q = 1 only)
+        period = stream.period
+        jitter = self.ticks(own.jitter_min) if self.static.siblings[n] else stream.jitter
         reuse = not capped and not remote and not blocking_ticks
-        limit_base = self.ticks(deadline)
-        best: tuple[int, int] | None = None
+        limit_base = self._hold_limit[n]
+        best, best_q = None, None
         w, left = 0, MAX_STEPS
         for q in range(1, MAX_JOBS + 1):
-            offset = delta_min(q)
+            offset = 0 if q == 1 else max(0, (q - 1) * period - jitter)
             limit = None if limit_base is None else limit_base + offset
             if q == 1 and reuse:  # the same iteration as the hold time's
                 w, why, left = self._hold_run[n]
             else:
                 caps = [(s, _cap(prescalers, carry, q)) for s, prescalers, carry in capped]
-                demand, first_bad, load = self._interference(n, core, with_self, caps, remote)
-                w, why, left = self._lfp(q * cost, w + cost, demand, first_bad, load, limit, left)
+                w, why, left = self._lfp(q * cost, w + cost, *self._interference(n, core, with_self, caps, remote),
+                                         limit, left)
             if w is None:
                 return None, q, None, why
-            if best is None or w - offset > best[0]:
-                best = (w - offset, q)
-            following = delta_min(q + 1)
-            if following is None or w <= following:
-                return self.seconds(best[0]), q, best[1], None
+            if best is None or w - offset > best:
+                best, best_q = w - offset, q
+            if own.silent or w <= max(0, q * period - jitter):  # the busy window closes before job q + 1
+                return self.seconds(best), q, best_q, None
         return None, MAX_JOBS, None, f"the busy window does not close within {MAX_JOBS} jobs"
 
     def _all_loads(self, n: int, core: _Core, with_self: bool, remote) -> int | None:

@@ -24,7 +24,7 @@ from typing import Mapping
 from ..diagnostics import DiagnosticSink, Label
 from ..model import DataTriggered, Hole, SystemModel, TaskModel
 from ..units import fmt_number, fmt_time
-from .rates import ActivationInfo, EventModel
+from .rates import ActivationInfo, EventModel, ratio_sum
 
 ZERO = Fraction(0)
 MAX_JOBS = 1000  # jobs per busy window before giving up
@@ -88,10 +88,17 @@ def core_loads(system: SystemModel, infos: Mapping[str, ActivationInfo]) -> tupl
     for core in _cores(system):
         tasks = system.tasks_on(core)
         rates = [infos[t.id].rate for t in tasks]
-        total = None if any(r is None for r in rates) else sum(
-            (t.wcet * r.high for t, r in zip(tasks, rates)), ZERO)
+        if any(r is None for r in rates):
+            total = None
+        else:  # Σ wcet·high as exact integer ratios, normalised once
+            total = ratio_sum(_times(t.wcet.as_integer_ratio(), r.high.as_integer_ratio())
+                              for t, r in zip(tasks, rates))
         loads.append(CoreLoad(core, total, tuple(t.id for t in tasks)))
     return tuple(loads)
+
+
+def _times(a: tuple[int, int], b: tuple[int, int]) -> tuple[int, int]:
+    return a[0] * b[0], a[1] * b[1]
 
 
 def _cores(system: SystemModel) -> list[str]:

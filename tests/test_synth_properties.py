@@ -1,0 +1,225 @@
+"""Properties of `synth` on small random systems (specs/synthesis.md).
+
+Hypothesis draws small systems with holes as *DSL text* (pipelines of 2–4 tasks on 1–2 cores, timer
+holes with a grid, prescaler holes, fixed rates, activation constraints, sampling tolerances, delays,
+a chain with reaction-time and data-age specs). For each:
+
+* synth agrees with brute-force enumeration of every candidate combination (analysed one by one):
+  the same verdict, and the same optimal value of the objective;
+* every satisfiable answer is accepted by the analysis and no simulated latency exceeds its bound;
+* an unsat core is minimal: without any one member (every statement outside the core relaxed) the
+  analysis accepts a configuration;
+* scaling every time by 10 scales the answer by 10; reordering declarations changes nothing.
+"""
+from __future__ import annotations
+
+import random
+from dataclasses import dataclass, field
+from fractions import Fraction as F
+
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import verify
+from verify.synth import brute_force, synthesize
+from verify.synth.statements import configured_model
+
+from .test_synth import accepted, simulated_within_bounds
+
+PERIODS = [10, 20, 25, 40, 50]
+SETTINGS = dict(deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+
+
+@dataclass
+class Task:
+    index: int
+    source: int | None  # the task whose output it reads (None: the first)
+    activation: str  # "timer P" | "grid A S N" | "trigger K" | "every K"
+    wcet: int  # in tenths of ms
+    bcet: int
+    core: int
+    priority: int
+    constraint: tuple[F, F] | None = None  # Hz
+    fixed: bool = False
+    tolerance: str | None = None
+
+
+@dataclass
+class System:
+    tasks: list[Task]
+    cores: int
+    delays: dict[int, tuple[int, int]] = field(default_factory=dict)  # reader -> (dmin, dmax) in ms
+    reaction: int | None = None  # ms
+    age: int | None = None
+
+
+@st.composite
+def systems(draw) -> System:
+    n = draw(st.integers(2, 4))
+    cores = draw(st.integers(1, 2))
+    holes = 0
+    tasks = []
+    for i in range(n):
+        source = None if i == 0 else draw(st.integers(0, i - 1))
+        kinds = ["timer", "grid"] + ([] if i == 0 else ["trigger", "every"])
+        kind = draw(st.sampled_from(kinds)) if holes < 3 else draw(st.sampled_from([k for k in kinds if k in ("timer", "trigger")]))
+        if kind == "timer":
+            act = f"timer {draw(st.sampled_from(PERIODS))}"
+        elif kind == "grid":
+            act = f"grid {draw(st.sampled_from([5, 10, 20]))} {draw(st.sampled_from([5, 10, 15]))} {draw(st.integers(2, 4))}"
+            holes += 1
+        elif kind == "trigger":
+            act = f"trigger {draw(st.sampled_from([1, 1, 2]))}"
+        else:
+            act = f"every {draw(st.integers(2, 4))}"
+            holes += 1
+        wcet = draw(st.integers(2, 60))
+        task = Task(i, source, act, wcet, draw(st.integers(0, wcet)), draw(st.integers(0, cores - 1)),
+                    draw(st.integers(1, 6)))
+        if kind == "grid" and draw(st.integers(0, 2)) == 0:  # around one grid period (else E313)
+            lo, step, count = map(int, act.split()[1:])
+            rate = F(1000, lo + step * draw(st.integers(0, count - 1)))
+            task.constraint = (rate * F(draw(st.sampled_from([1, 2, 4])), 4), rate * draw(st.sampled_from([1, 2])))
+        elif kind in ("trigger", "every") and draw(st.integers(0, 2)) == 0:
+            low = draw(st.sampled_from([1, 5, 10, 20]))
+            task.constraint = (F(low), F(low * draw(st.sampled_from([2, 4, 10]))))
+        if kind == "timer" and task.constraint is None and draw(st.integers(0, 3)) == 0:
+            task.fixed = True
+        if source is not None and draw(st.integers(0, 3)) == 0:
+            task.tolerance = draw(st.sampled_from(["oversampling forbidden", "undersampling <= 2"]))
+        tasks.append(task)
+    delays = {i: (d, d + draw(st.sampled_from([0, 1, 2])))
+              for i in range(1, n) if draw(st.booleans()) for d in [draw(st.sampled_from([0, 1]))]}
+    reaction = draw(st.none() | st.integers(20, 250))
+    age = draw(st.none() | st.integers(20, 250)) if reaction is not None else draw(st.integers(20, 250))
+    return System(tasks, cores, delays, reaction, age)
+
+
+def _time(ms: F, scale: int, unit: str = "ms") -> str:
+    value = F(ms) * scale
+    return f"{value.numerator}/{value.denominator} {unit}" if value.denominator != 1 else f"{value.numerator} {unit}"
+
+
+def _hz(hz: F, scale: int) -> str:
+    value = F(hz) / scale
+    return f"{value.numerator}/{value.denominator} Hz" if value.denominator != 1 else f"{value.numerator} Hz"
+
+
+def render(sys_: System, scale: int = 1, order: random.Random | None = None) -> str:
+    """The DSL text; ``scale`` multiplies every time (and divides every rate); ``order`` shuffles
+    components, instances, connections and chains."""
+    comps, insts, conns = [], [], []
+    for t in sys_.tasks:
+        lines = [f"component C{t.index} {{"] + (["  in a : M"] if t.source is not None else []) + ["  out o : M", "",
+                                                                                                    "  task T {"]
+        if t.source is not None:
+            lines.append("    reads a" + (f" {t.tolerance}" if t.tolerance else ""))
+        lines += ["    produces o", f"    bcet {_time(F(t.bcet, 10), scale)}", f"    wcet {_time(F(t.wcet, 10), scale)}"]
+        kind, *args = t.activation.split()
+        if t.fixed:
+            lines.append(f"    activation {_hz(F(1000, int(args[0])), scale)} fixed")
+        elif t.constraint:
+            lines.append(f"    activation {_hz(t.constraint[0], scale)} .. {_hz(t.constraint[1], scale)}")
+        lines += ["  }", "}"]
+        comps.append("\n".join(lines))
+        if kind == "timer":
+            act = f"timer {_time(int(args[0]), scale)}"
+        elif kind == "grid":
+            lo, step, count = map(int, args)
+            act = f"timer ? in {_time(lo, scale)} .. {_time(lo + step * (count - 1), scale)} step {_time(step, scale)}"
+        elif kind == "trigger":
+            act = "trigger a" + (f" every {args[0]}" if args[0] != "1" else "")
+        else:
+            act = f"trigger a every ? in 1 .. {args[0]}"
+        insts.append(f"  instance i{t.index} : C{t.index} on c{t.core} {{\n    task T priority {t.priority} {act}\n  }}")
+        if t.source is not None:
+            delay = sys_.delays.get(t.index)
+            d = "" if not delay or delay[1] == 0 else f" delay {_time(delay[0], scale)} .. {_time(delay[1], scale)}"
+            conns.append(f"  connect i{t.source}.o -> i{t.index}.a{d}")
+    path, node = [], len(sys_.tasks) - 1
+    while node is not None:
+        path.append(node)
+        node = sys_.tasks[node].source
+    specs = [f"    reaction_time <= {_time(sys_.reaction, scale)}"] if sys_.reaction else []
+    specs += [f"    data_age <= {_time(sys_.age, scale)}"] if sys_.age else []
+    chain = "  chain ch: " + " -> ".join(f"i{i}.o" for i in reversed(path)) + " {\n" + "\n".join(specs) + "\n  }"
+    if order is not None:
+        for part in (comps, insts, conns):
+            order.shuffle(part)
+    cores = [f"  core c{c}" for c in range(sys_.cores)]
+    if order is not None:
+        order.shuffle(cores)
+    return "\n\n".join(comps) + "\n\nsystem S {\n" + "\n".join(cores + insts + conns + [chain]) + "\n}\n"
+
+
+def load(text: str):
+    result = verify.load_text(text, "random.vfy")
+    assert result.ok, [(d.code, d.message) for d in result.diagnostics] + [text]
+    return result
+
+
+OBJECTIVES = ["utilisation", "slack", "latency:ch", "age:ch,utilisation"]
+
+
+@settings(max_examples=40, **SETTINGS)
+@given(systems(), st.sampled_from(OBJECTIVES))
+def test_synth_agrees_with_brute_force(system, objective):
+    text = render(system)
+    loaded = load(text)
+    result = synthesize(loaded, objective=objective)
+    naive = brute_force(loaded, objective=objective)
+    assert result.status == naive.status, text
+    if result.status == "sat":
+        assert result.optimal
+        assert result.values == naive.values, text
+        assert accepted(result.model)
+        simulated_within_bounds(result.model, runs=1, horizon=F(1))
+
+
+@settings(max_examples=25, **SETTINGS)
+@given(systems())
+def test_unsat_cores_are_minimal(system):
+    system.reaction = min(system.reaction or 1000, 25)  # make conflicts likely
+    loaded = load(render(system))
+    result = synthesize(loaded, objective="none")
+    if result.status != "unsat":
+        return
+    expl = result.explanation
+    assert expl is not None and expl.status == "unsat" and expl.minimal
+    keys = {st.key for st in result.core}
+    assert keys, "an unsat verdict names at least one statement"
+    problem = expl.problem
+    for member in keys:
+        witness = expl.witnesses[member]
+        assert not (witness.off & (keys - {member}))
+        model = configured_model(problem.model, problem.candidates(witness), problem.statements, witness.off)
+        assert accepted(model), (member, render(system))
+
+
+def _periods(result) -> dict:
+    return {t: (c.kind, c.period, c.port, c.prescaler) for t, c in result.choices.items()}
+
+
+@settings(max_examples=25, **SETTINGS)
+@given(systems(), st.sampled_from(["utilisation", "slack"]))
+def test_scaling_every_time_by_10_scales_the_answer(system, objective):
+    one = synthesize(load(render(system)), objective=objective)
+    ten = synthesize(load(render(system, scale=10)), objective=objective)
+    assert one.status == ten.status
+    if one.status != "sat":
+        return
+    scaled = {t: (k, p * 10 if p is not None else None, port, pre) for t, (k, p, port, pre) in _periods(one).items()}
+    assert _periods(ten) == scaled
+    factor = 1 if objective == "utilisation" else 10
+    assert ten.values == tuple(v * factor for v in one.values)
+
+
+@settings(max_examples=25, **SETTINGS)
+@given(systems(), st.integers(0, 2**16))
+def test_reordering_declarations_changes_nothing(system, seed):
+    plain = synthesize(load(render(system)))
+    shuffled = synthesize(load(render(system, order=random.Random(seed))))
+    assert plain.status == shuffled.status
+    assert _periods(plain) == _periods(shuffled)
+    assert plain.values == shuffled.values
+    assert [st.key for st in plain.core] == [st.key for st in shuffled.core] or plain.status != "unsat"
