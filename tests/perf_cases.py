@@ -40,8 +40,13 @@ def dump(value):
     raise TypeError(f"cannot dump {type(value).__name__}")
 
 
-def digest(value) -> str:
-    return hashlib.sha256(json.dumps(dump(value), separators=(",", ":")).encode()).hexdigest()
+def digest(value, root: str | None = None) -> str:
+    """SHA-256 of the dump; with ``root``, that path prefix is written ``<root>`` so a digest does not
+    depend on where the repository is checked out."""
+    text = json.dumps(dump(value), separators=(",", ":"))
+    if root is not None:
+        text = text.replace(json.dumps(root)[1:-1], "<root>")
+    return hashlib.sha256(text.encode()).hexdigest()
 
 
 # ------------------------------------------------------------------ systems with cooperative siblings

@@ -52,7 +52,8 @@ def _model(name: str, text: str):
 
 def _analysis_digests(name: str, text: str) -> dict[str, str]:
     model = _model(name, text)
-    return {variant: digest(analyze(model, data_age=variant)) for variant in ("reduced", "non-reduced")}
+    return {variant: digest(analyze(model, data_age=variant), root=str(ROOT))
+            for variant in ("reduced", "non-reduced")}
 
 
 @pytest.mark.parametrize("name", sorted(LOAD_CASES))
