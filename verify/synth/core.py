@@ -24,8 +24,8 @@ from ..model import SystemModel
 from ..resolve import SystemScope
 from ..source import NO_SPAN, Span
 from ..units import fmt_rate, fmt_time
-from .problem import Config, Problem, build_problem
-from .solve import Budget, Engine, Objective
+from .problem import Config, Problem, build_problem, relaxed_problem
+from .solve import Budget, Engine, Objective, quick_answer
 from .statements import Statement
 
 
@@ -38,28 +38,56 @@ class Explanation:
     hints: tuple[str, ...] = ()
     smallest: dict[str, Fraction] = field(default_factory=dict)  # spec key -> smallest feasible bound
     problem: Problem | None = None
-    engine: Engine | None = None
     sat_config: Config | None = None
 
 
-def explain_unsat(model: SystemModel, scope: SystemScope | None, budget: Budget, *, hints: bool = True) -> Explanation:
+def explain_unsat(model: SystemModel, scope: SystemScope | None, budget: Budget, *, hints: bool = True,
+                  culprit: tuple[tuple[str, ...], tuple[str, ...]] | None = None) -> Explanation:
+    """The minimal core and hints of an unsatisfiable problem. ``culprit`` (chains, tasks): what
+    pruning blamed; when the statements about those alone cannot hold together, minimisation starts
+    from them instead of from the core of a solver run over every statement."""
     problem = build_problem(model, scope, tracked=True)
-    ctx = z3.Context()
-    enc = problem.encoding(ctx)
-    engine = Engine(problem, enc, budget)
     by_key = {st.key: st for st in sorted(problem.statements, key=lambda st: st.key)}
-    lits = {key: enc.lit(key) for key in by_key}
-    out = engine.run([], [lits[k] for k in by_key])
-    if out.status == "sat":
-        return Explanation("sat", problem=problem, engine=engine, sat_config=out.config)
-    if out.status != "unsat":
-        return Explanation("unknown", problem=problem, engine=engine)
-    core, witnesses, minimal = _minimise(engine, lits, by_key, set(out.core))
+    start = seeded_core(problem, culprit, budget) if culprit is not None else None
+    if start is None:
+        enc = problem.encoding(z3.Context())
+        engine = Engine(problem, enc, budget)
+        out = engine.run([], [enc.lit(k) for k in by_key])
+        if out.status == "sat":
+            return Explanation("sat", problem=problem, sat_config=out.config)
+        if out.status != "unsat":
+            return Explanation("unknown", problem=problem)
+        start = set(out.core)
+    core, witnesses, minimal = _minimise(problem, by_key, start, budget)
     ordered = tuple(sorted((by_key[k] for k in core), key=Statement.order_key))
-    expl = Explanation("unsat", ordered, minimal, witnesses, problem=problem, engine=engine)
+    expl = Explanation("unsat", ordered, minimal, witnesses, problem=problem)
     if hints:
-        _hints(expl, engine, lits)
+        _hints(expl, problem, budget)
     return expl
+
+
+def seeded_core(problem: Problem, culprit: tuple[tuple[str, ...], tuple[str, ...]], budget: Budget) -> set[str] | None:
+    """The statements about the blamed chains and tasks — the chains' specs, and every other
+    statement on a task of theirs or on a task that may trigger one — when they alone cannot hold
+    together (decided like a deletion trial); None otherwise."""
+    chains, tasks = culprit
+    involved = set(tasks)
+    for chain in problem.model.chains:
+        if chain.name in chains:
+            involved.update(chain.tasks)
+    writers: dict[str, set[str]] = {}
+    for writer, reader, _ in problem.structure.trigger_edges:
+        writers.setdefault(reader, set()).add(writer)
+    stack = list(involved)
+    while stack:
+        for writer in writers.get(stack.pop(), ()):
+            if writer not in involved:
+                involved.add(writer)
+                stack.append(writer)
+    keys = {st.key for st in problem.statements
+            if (st.chain in chains if st.kind == "spec" else bool(involved & set(st.tasks)))}
+    status, _ = decide_trial(problem, keys, budget)
+    return keys if status == "unsat" else None
 
 
 def deletion_order(statements) -> list[Statement]:
@@ -68,57 +96,97 @@ def deletion_order(statements) -> list[Statement]:
     return sorted(statements, key=lambda st: (st.rank, st.key))
 
 
-def _minimise(engine: Engine, lits: dict, by_key: dict[str, Statement], core: set[str]):
+def _minimise(problem: Problem, by_key: dict[str, Statement], core: set[str], budget: Budget):
     witnesses: dict[str, Config] = {}
     minimal = True
     for st in deletion_order(by_key[k] for k in core):
         if st.key not in core:
             continue
-        trial = sorted(core - {st.key})
-        out = engine.run([], [lits[k] for k in trial])
-        if out.status == "unsat":
-            core = set(out.core) & set(trial) if out.core else set(trial)
-        elif out.status == "sat":
-            witnesses[st.key] = out.config
+        trial = core - {st.key}
+        status, witness = decide_trial(problem, trial, budget)
+        if status == "unsat":
+            core = set(trial)
+        elif status == "sat":
+            witnesses[st.key] = witness
         else:
             minimal = False
             break
     return core, {k: w for k, w in witnesses.items() if k in core}, minimal
 
 
+def decide_trial(problem: Problem, in_force: set[str], budget: Budget) -> tuple[str, Config | None]:
+    """Whether the statements ``in_force`` can hold together with every other statement relaxed —
+    relaxing only removes a constraint or widens a choice, so that is the most permissive case. Decided
+    on the trial's own untracked problem (``relaxed_problem``), where exact pruning often settles it
+    before the solver runs. ``("sat", witness)`` gives a configuration of ``problem`` that the analysis
+    accepts; ``("unsat", None)``; ``("unknown", None)`` when the budget ran out."""
+    off = frozenset(st.key for st in problem.statements if st.key not in in_force)
+    sub = relaxed_problem(problem, off)
+    if sub.infeasible is not None:
+        return "unsat", None
+    found = quick_answer(sub)
+    if found is None:
+        out = Engine(sub, sub.encoding(z3.Context()), budget).run([])
+        if out.status != "sat":
+            problem.analyses += sub.analyses
+            return out.status, None
+        found = (out.config, out.evaluation)
+    problem.analyses += sub.analyses
+    picked = sub.candidates(found[0])
+    choice = tuple((tid, problem.choices[tid].candidates.index(picked[tid])) for tid in problem.choices)
+    return "sat", Config(choice, off)
+
+
 # ================================================================== repair hints
 
+HINT_RLIMIT = 2_000_000  # Z3 resource units per hint: a hint never costs more than a few seconds
 
-def _hints(expl: Explanation, engine: Engine, lits: dict) -> None:
-    enc, out = engine.enc, []
+
+def _hints(expl: Explanation, problem: Problem, budget: Budget) -> None:
+    out = []
     for st in expl.core:
-        others = [lit for key, lit in sorted(lits.items()) if key != st.key]
-        if engine.budget.exhausted():
+        if budget.exhausted():
             break
         if st.kind == "spec":
-            out.insert(sum(1 for h in out if h.startswith("relax `")), _spec_hint(expl, st, engine, lits))
+            out.insert(sum(1 for h in out if h.startswith("relax `")), _spec_hint(expl, st, problem, budget))
         elif st.kind in ("min_rate", "max_rate"):
-            out.append(_rate_hint(st, engine, others))
+            out.append(_rate_hint(st, problem, budget))
         elif st.kind == "range":
-            out.append(_range_hint(st, engine, others))
+            out.append(_range_hint(st, problem, budget))
     expl.hints = tuple(h for h in out if h)
 
 
-def _spec_hint(expl: Explanation, st: Statement, engine: Engine, lits: dict) -> str:
+def _relaxed_run(problem: Problem, off: set[str], budget: Budget, objective) -> tuple[object, Problem] | None:
+    """The best configuration by ``objective(encoding)`` of ``problem`` with ``off`` relaxed and every
+    other statement in force (its own pruned problem, at most ``HINT_RLIMIT``); None if pruning shows
+    there is none."""
+    sub = relaxed_problem(problem, frozenset(off))
+    if sub.infeasible is not None:
+        return None
+    enc = sub.encoding(z3.Context())
+    own = Budget(min(HINT_RLIMIT, budget.remaining) if budget.remaining is not None else HINT_RLIMIT)
+    own.deadline = budget.deadline
+    res = Engine(sub, enc, own).run([objective(enc)])
+    budget.charge(own.used)
+    problem.analyses += sub.analyses
+    return None if res.status == "unsat" else (res, sub)
+
+
+def _spec_hint(expl: Explanation, st: Statement, problem: Problem, budget: Budget) -> str:
     """The smallest bound any configuration meets, with every other statement in force, or failing
     that with the other spec bounds relaxed as well (other conflicts remain then)."""
-    enc = engine.enc
-    objective = Objective(f"hint {st.key}", "min", enc.latency[(st.chain, st.spec_kind)], _spec_real(st, enc))
-    others = [lit for key, lit in sorted(lits.items()) if key != st.key]
-    res = engine.run([objective], others)
-    caveat = ""
-    if res.status == "unsat":
-        others = [lit for key, lit in sorted(lits.items()) if key != st.key and not key.startswith("spec:")]
-        res = engine.run([objective], others)
+    def objective(enc):
+        return Objective(f"hint {st.key}", "min", enc.latency[(st.chain, st.spec_kind)], _spec_real(st, enc))
+
+    found, caveat = _relaxed_run(problem, {st.key}, budget, objective), ""
+    if found is None:
+        specs = {key.key for key in problem.statements if key.kind == "spec"}
+        found = _relaxed_run(problem, specs, budget, objective)
         caveat = " (once the other conflicting specs are relaxed too)"
-    if res.status == "unsat" or not res.values or res.values[0] is None:
+    if found is None or not found[0].values or found[0].values[0] is None:
         return f"relaxing `{st.text}` of `{st.chain}` alone is not enough"
-    value = res.values[0] * enc.tick
+    res, sub = found
+    value = _spec_real(st, None)(res.config, res.evaluation)
     if res.status != "optimal":
         return f"relax `{st.text}` of `{st.chain}` to {fmt_time(value)}{caveat} (not proven the smallest)"
     if not caveat:
@@ -127,62 +195,75 @@ def _spec_hint(expl: Explanation, st: Statement, engine: Engine, lits: dict) -> 
 
 
 def _spec_real(st: Statement, enc):
+    """The analysed latency a spec bounds: in ticks of ``enc``, in seconds when ``enc`` is None."""
     def real(config, ev):
         chain = ev.result.chain(st.chain)
         value = {"reaction_time": chain.reaction_time.worst, "data_age": chain.data_age_reduced.worst,
                  "jitter": chain.data_age_reduced.jitter}[st.spec_kind]
-        return None if value is None else enc.ticks(value)
+        return value if value is None or enc is None else enc.ticks(value)
     return real
 
 
-def _rate_hint(st: Statement, engine: Engine, others: list) -> str:
+def _rate_hint(st: Statement, problem: Problem, budget: Budget) -> str:
     """The rate the constraint end would need to admit (every other statement in force)."""
-    enc = engine.enc
     high = st.kind == "max_rate"
-    z = z3.Int(f"hint|{st.key}", enc.ctx)
-    for tid in st.tasks:
-        fl, fh = enc.rates[tid]
-        enc.add(z >= enc.t.lift(fh) if high else z <= enc.t.lift(fl))
 
-    def real(config, ev):
+    def real_rate(ev) -> Fraction | None:
         rates = [ev.result.task(t).rate for t in st.tasks]
         if any(r is None for r in rates):
             return None
         values = [r.high if high else r.low for r in rates]
-        return int((max(values) if high else min(values)) * enc.tick * enc.M)
+        return max(values) if high else min(values)
 
-    res = engine.run([Objective(f"hint {st.key}", "min" if high else "max", z, real)], others)
+    def objective(enc):
+        z = z3.Int(f"hint|{st.key}", enc.ctx)
+        for tid in st.tasks:
+            fl, fh = enc.rates.get(tid, (None, None))
+            if fl is not None:
+                enc.add(z >= enc.t.lift(fh) if high else z <= enc.t.lift(fl))
+
+        def real(config, ev):
+            rate = real_rate(ev)
+            return None if rate is None else int(rate * enc.tick * enc.M)
+        return Objective(f"hint {st.key}", "min" if high else "max", z, real)
+
+    found = _relaxed_run(problem, {st.key}, budget, objective)
     who = ", ".join(f"`{t}`" for t in st.tasks)
-    if res.status == "unsat":
+    if found is None:
         return f"widening `{st.text}` of {who} alone is not enough"
-    if not res.values or res.values[0] is None:
+    rate = real_rate(found[0].evaluation)
+    if rate is None:
         return ""
-    rate = Fraction(res.values[0]) / (enc.tick * enc.M)
     return f"{who} would need to run at {'up to' if high else 'down to'} {fmt_rate(rate)} ({st.label} now)"
 
 
-def _range_hint(st: Statement, engine: Engine, others: list) -> str:
+def _range_hint(st: Statement, problem: Problem, budget: Budget) -> str:
     """The candidate outside a hole's range that the problem would need (every other statement in force)."""
-    enc, tid = engine.enc, st.tasks[0]
-    choice = engine.problem.choices[tid]
-    outside = [i for i, ex in enumerate(choice.excluded) if st.key in ex]
-    inside = [i for i in range(len(choice.candidates)) if i not in outside]
+    tid = st.tasks[0]
+    choice = problem.choices[tid]
+    outside = {choice.candidates[i] for i, ex in enumerate(choice.excluded) if st.key in ex}
+    inside = [c for c in choice.candidates if c not in outside]
     if not inside:
         return ""
-    lo, hi = min(choice.candidates[i].speed for i in inside), max(choice.candidates[i].speed for i in inside)
+    lo, hi = min(c.speed for c in inside), max(c.speed for c in inside)
 
-    def distance(i: int) -> int:
-        v = choice.candidates[i].speed
-        gap = lo - v if v < lo else (v - hi if v > hi else Fraction(0))
-        return int(gap / enc.tick) if choice.candidates[i].kind == "timer" else int(gap)
+    def distance(c) -> Fraction:
+        v = c.speed
+        return lo - v if v < lo else (v - hi if v > hi else Fraction(0))
 
-    term = enc.t.add(*(enc.t.ite(enc.sel[tid][i], distance(i), 0) for i in outside)) if outside else 0
-    res = engine.run([Objective(f"hint {st.key}", "min", term, lambda c, ev: distance(c.index(tid)))], others)
-    if res.status == "unsat":
+    def objective(enc):
+        cands = enc.choices[tid].candidates
+        scale = (lambda c: int(distance(c) / enc.tick) if c.kind == "timer" else int(distance(c)))
+        term = enc.t.add(*(enc.t.ite(enc.sel[tid][i], scale(c), 0) for i, c in enumerate(cands) if c in outside))
+        return Objective(f"hint {st.key}", "min", term, lambda config, ev: scale(cands[config.index(tid)]))
+
+    found = _relaxed_run(problem, {st.key}, budget, objective)
+    if found is None:
         return f"widening `{st.text}` of `{tid}` alone is not enough"
+    res, sub = found
     if res.config is None:
         return ""
-    chosen = choice.candidates[res.config.index(tid)]
+    chosen = sub.choices[tid].candidates[res.config.index(tid)]
     return f"`{tid}` would need `{chosen.text()}`, outside `{st.text}`"
 
 

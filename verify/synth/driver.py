@@ -26,7 +26,7 @@ from ..units import fmt_time
 from .candidates import Candidate
 from .core import Explanation, explain_unsat, unsat_diagnostic
 from .problem import Config, Evaluation, Problem, build_problem
-from .solve import Budget, Engine, Objective, lex_better
+from .solve import Budget, Engine, Objective, lex_better, quick_answer
 from .statements import Statement
 
 DEFAULT_RLIMIT = 50_000_000  # Z3 resource units for one run (deterministic); --rlimit changes it
@@ -171,6 +171,10 @@ def synthesize(source, system: str | None = None, *, objective: str | list[Goal]
     problem = build_problem(model, scope)
     stats = {"candidates": sum(len(c.candidates) for c in problem.choices.values()), "pruned": problem.pruned}
     reason = problem.infeasible
+    quick = quick_answer(problem) if reason is None and not goals else None
+    if quick is not None:  # any accepted configuration will do: found without the solver
+        stats.update(solver_calls=0, analyses=problem.analyses, lemmas=0, rejected=0, rlimit_used=0)
+        return _answer(model, problem, goals, *quick, True, stats)
     if reason is None:
         enc = problem.encoding(z3.Context())
         engine = Engine(problem, enc, budget)
@@ -232,7 +236,7 @@ def _show(goal: Goal, value) -> str:
 
 
 def _unsat(model, scope, problem, goals, reason, budget: Budget, stats, explain: bool) -> SynthResult:
-    expl = explain_unsat(model, scope, budget) if explain else None
+    expl = explain_unsat(model, scope, budget, culprit=problem.culprit) if explain else None
     if expl is not None and expl.status == "sat":  # the tracked search found what the untracked one missed
         ev = expl.problem.evaluate(expl.sat_config)
         result = SynthResult("sat", model.name, tuple(goals), tuple(goal_value(g, ev.result) for g in goals), False,

@@ -520,7 +520,7 @@ class Encoding:
         self.latency[(chain.name, "data_age")] = totals["data_age"]
         self.latency[(chain.name, "jitter")] = totals["jitter"]
         for st in self.statements:
-            if st.kind == "spec" and st.chain == chain.name:
+            if st.kind == "spec" and st.chain == chain.name and getattr(chain, st.spec_kind) is not None:
                 bound = self.ticks(getattr(chain, st.spec_kind))
                 self.specs.append((st, totals[st.spec_kind], bound))
                 self.guard(st.key, t.le(totals[st.spec_kind], bound))

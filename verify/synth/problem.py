@@ -16,7 +16,7 @@ from typing import Mapping
 from ..model import SystemModel
 from ..resolve import SystemScope
 from ..timing import AnalysisResult, analyze
-from .candidates import Candidate, Choice, build_choices
+from .candidates import Candidate, Choice, build_choices, make_choice
 from .prune import Pruner
 from .statements import Statement, collect_statements, configured_model, statement_index
 from .structure import Structure, analyse_structure, topological, trigger_graph
@@ -54,6 +54,7 @@ class Problem:
     tracked: bool
     pruned: int = 0
     infeasible: str | None = None
+    culprit: tuple[tuple[str, ...], tuple[str, ...]] | None = None  # (chains, tasks) pruning blamed
     analyses: int = field(default=0)
     _seed: tuple | None = field(default=None, repr=False)
     _cache: dict = field(default_factory=dict, repr=False)
@@ -101,18 +102,36 @@ def build_problem(model: SystemModel, scope: SystemScope | None = None, *, track
                   prune: bool = True) -> Problem:
     statements = collect_statements(model, scope)
     choices = build_choices(model, scope, statements, tracked)
-    pruned, infeasible = 0, None
+    return problem_of(model, scope, statements, choices, tracked=tracked, prune=prune)
+
+
+def relaxed_problem(problem: Problem, off: frozenset[str]) -> Problem:
+    """The untracked, pruned problem of a tracked ``problem`` with the statements in ``off`` relaxed
+    and every other one in force: the model relaxed as ``configured_model`` does, each choice reduced
+    to the candidates no statement in force forbids (specs/synthesis.md §6). Its configurations are
+    exactly the tracked problem's configurations with that ``off`` set."""
+    model = configured_model(problem.model, {}, problem.statements, off)
+    choices = {}
+    for tid, ch in problem.choices.items():
+        keep = ch.allowed(off)
+        choices[tid] = make_choice(tid, tuple(ch.candidates[i] for i in keep), tuple(() for _ in keep), ch.hole)
+    return problem_of(model, problem.scope, problem.statements, choices, tracked=False, prune=True)
+
+
+def problem_of(model: SystemModel, scope: SystemScope | None, statements: tuple[Statement, ...],
+               choices: dict[str, Choice], *, tracked: bool, prune: bool) -> Problem:
+    pruned, infeasible, culprit = 0, None, None
     if not tracked and prune:
         graph, _ = trigger_graph(model, choices)
         order, cyclic = topological(graph)
         pruner = Pruner(model, choices, order, cyclic)
         choices = pruner.run()
-        pruned, infeasible = pruner.removed, pruner.infeasible
+        pruned, infeasible, culprit = pruner.removed, pruner.infeasible, pruner.culprit
     if infeasible is None and any(not ch.candidates for ch in choices.values()):
         infeasible = "a hole has no candidate"
     atoms, bits = _atoms(model, choices, statements, tracked)
     structure = analyse_structure(model, choices, bits)
-    return Problem(model, scope, statements, choices, structure, atoms, tracked, pruned, infeasible)
+    return Problem(model, scope, statements, choices, structure, atoms, tracked, pruned, infeasible, culprit)
 
 
 def _atoms(model: SystemModel, choices: Mapping[str, Choice], statements: tuple[Statement, ...],

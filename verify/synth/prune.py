@@ -101,6 +101,8 @@ class Pruner:
         self.model, self.choices, self.order, self.cyclic = model, dict(choices), order, cyclic
         self.removed = 0
         self.infeasible: str | None = None
+        # what the infeasibility is about, when one rule names it: (chains, tasks)
+        self.culprit: tuple[tuple[str, ...], tuple[str, ...]] | None = None
 
     # -------------------------------------------------------------- bounds
 
@@ -153,6 +155,7 @@ class Pruner:
             if t.id not in self.choices and isinstance(t.activation, DataTriggered) and not self._rate_ok(
                     t, _FIXED_TRIGGER, tasks.get(t.id, UNKNOWN)):
                 self.infeasible = f"`{t.id}` is activated outside its activation constraint in every configuration"
+                self.culprit = ((), (t.id,))
         dead |= self._schedulability()
         dead |= self._sampling(tasks, per)
         dead |= self._utilisation(tasks, per)
@@ -220,6 +223,7 @@ class Pruner:
                 dead.add((reader.id, index))
             elif bad:
                 self.infeasible = f"`{reader.id}` violates its {direction}sampling tolerance on `{port}` in every configuration"
+                self.culprit = ((), (reader.id, writer))
         wchoice = self.choices.get(writer)
         if wchoice is not None and not _triggered_by(reader, choice, port):
             r = tasks.get(reader.id, UNKNOWN)
@@ -240,6 +244,7 @@ class Pruner:
                 floor += t.wcet * (b.fh[0] if b.fh is not None else ZERO)
             if floor > 1:
                 self.infeasible = f"core `{core}` is above 100 % utilisation even at the slowest candidates"
+                self.culprit = ((), tuple(t.id for t in by_core[core]))
                 return dead
             for t in by_core[core]:
                 choice = self.choices.get(t.id)
@@ -258,13 +263,15 @@ class Pruner:
             for bound, kind in ((chain.reaction_time, "reaction"), (chain.data_age, "age")):
                 if bound is None:
                     continue
-                if chain_lower_bound(self, chain, kind, tasks, per, None) > bound:
+                lower = ChainLowerBound(self, chain, kind, tasks, per)
+                if lower.total > bound:
                     self.infeasible = f"chain `{chain.name}` cannot meet its {kind} bound at any candidate"
+                    self.culprit = ((chain.name,), ())
                     return dead
                 for tid in dict.fromkeys(chain.tasks):
                     choice = self.choices.get(tid)
                     for i in range(len(choice.candidates) if choice else 0):
-                        if chain_lower_bound(self, chain, kind, tasks, per, (tid, i)) > bound:
+                        if lower.pinned(tid, i) > bound:
                             dead.add((tid, i))
         return dead
 
@@ -292,41 +299,75 @@ def _r_min(task: TaskModel) -> Fraction:
     return task.wcrt_bound if task.wcrt_bound is not None else task.wcet
 
 
-def chain_lower_bound(p: Pruner, chain: ChainModel, kind: str, tasks, per, fixed) -> Fraction:
-    """A lower bound on the reaction time or data age of ``chain``; ``fixed`` = (task, candidate)
-    pins one choice. Every term of §7 is at least the WCET (or user bound) of the task it ends in,
-    plus the delay, plus a sampling wait: a register read waits up to ``A⁺ ≥ P⁺`` (reaction: of the
-    reader; data age: of the writer), a prescaler-k trigger ``(k−1)·P⁺`` of the writer."""
+class ChainLowerBound:
+    """A lower bound on the reaction time or data age of ``chain`` over every remaining
+    configuration (``total``), and with one choice pinned to a candidate (``pinned``). Every term of
+    §7 is at least the WCET (or user bound) of the task it ends in, plus the delay, plus a sampling
+    wait: a register read waits up to ``A⁺ ≥ P⁺`` (reaction: of the reader; data age: of the
+    writer), a prescaler-k trigger ``(k−1)·P⁺`` of the writer. The bound is a sum of terms, each
+    depending on at most two tasks, so pinning one task recomputes only its own terms."""
 
-    def options(tid: str):
+    def __init__(self, p: Pruner, chain: ChainModel, kind: str, tasks, per):
+        self.p, self.chain, self.kind, self.tasks, self.per = p, chain, kind, tasks, per
+        self._options = {tid: self.options(tid, None) for tid in dict.fromkeys(chain.tasks)}
+        self._p_min = {tid: min(pm for _, pm in opts) for tid, opts in self._options.items()}
+        self.terms = [self.term(n, None) for n in range(len(chain.hops) + 1)]
+        self.total = sum(self.terms, ZERO)
+        self._involved: dict[str, list[int]] = {}
+        for n in range(len(chain.hops) + 1):
+            for tid in self.involves(n):
+                self._involved.setdefault(tid, []).append(n)
+
+    def options(self, tid: str, fixed):
+        p = self.p
         choice = p.choices.get(tid)
-        task = p.model.task(tid)
         if fixed is not None and fixed[0] == tid:
-            return [(choice.candidates[fixed[1]].activation(), per.get(fixed, UNKNOWN).p_min)]
+            return [(choice.candidates[fixed[1]].activation(), self.per.get(fixed, UNKNOWN).p_min)]
         if choice is None:
-            return [(task.activation, tasks.get(tid, UNKNOWN).p_min)]
-        return [(c.activation(), per.get((tid, i), UNKNOWN).p_min) for i, c in enumerate(choice.candidates)]
+            return [(p.model.task(tid).activation, self.tasks.get(tid, UNKNOWN).p_min)]
+        return [(c.activation(), self.per.get((tid, i), UNKNOWN).p_min) for i, c in enumerate(choice.candidates)]
 
-    def p_min(tid: str) -> Fraction:
-        return min(pm for _, pm in options(tid))
+    def involves(self, n: int) -> tuple[str, ...]:
+        """The tasks whose choice term ``n`` depends on (0: the first task; n ≥ 1: hop n − 1)."""
+        if n == 0:
+            return (self.chain.tasks[0],) if self.kind == "reaction" else ()
+        hop = self.chain.hops[n - 1]
+        return (hop.reader, hop.writer)
 
-    first = chain.tasks[0]
-    total = (p_min(first) + _r_min(p.model.task(first))) if kind == "reaction" else ZERO
-    for hop in chain.hops:
+    def term(self, n: int, fixed) -> Fraction:
+        """Term 0: the first task's wait and response (reaction time) or the last task's response
+        (data age); term n ≥ 1: hop n − 1."""
+        model = self.p.model
+
+        def options(tid: str):
+            return self.options(tid, fixed) if fixed is not None and fixed[0] == tid else self._options[tid]
+
+        def p_min(tid: str) -> Fraction:
+            return min(pm for _, pm in options(tid)) if fixed is not None and fixed[0] == tid else self._p_min[tid]
+
+        if n == 0:
+            first, last = self.chain.tasks[0], self.chain.tasks[-1]
+            if self.kind == "reaction":
+                return p_min(first) + _r_min(model.task(first))
+            return _r_min(model.task(last))
+        hop = self.chain.hops[n - 1]
         member = hop.link.target.split(".", 1)[1]
-        d = hop.link.delay_max
         waits = []
         for act, pm in options(hop.reader):
             triggered = isinstance(act, DataTriggered) and member in act.members
-            if kind == "reaction":
+            if self.kind == "reaction":
                 if triggered and act.mode != "and" and act.prescaler > 1:
                     waits.append(min(pm, (act.prescaler - 1) * p_min(hop.writer)))
                 else:
                     waits.append(ZERO if triggered else pm)
             else:
                 waits.append(ZERO if triggered and act.mode == "single" else p_min(hop.writer))
-        end = hop.reader if kind == "reaction" else hop.writer
-        total += d + _r_min(p.model.task(end)) + min(waits)
-    if kind == "age":
-        total += _r_min(p.model.task(chain.tasks[-1]))
-    return total
+        end = hop.reader if self.kind == "reaction" else hop.writer
+        return hop.link.delay_max + _r_min(model.task(end)) + min(waits)
+
+    def pinned(self, tid: str, index: int) -> Fraction:
+        """The bound with the choice of ``tid`` pinned to candidate ``index``."""
+        total = self.total
+        for n in self._involved.get(tid, ()):
+            total += self.term(n, (tid, index)) - self.terms[n]
+        return total

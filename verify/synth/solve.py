@@ -27,6 +27,8 @@ import z3
 
 from .encode import Encoding
 from .problem import Config, Evaluation, Problem
+from .repair import repair
+from .statements import statement_index
 
 RANDOM_SEED = 0
 
@@ -122,7 +124,51 @@ def strictly_better(enc: Encoding, objectives: list[Objective], values: tuple):
     return z3.Or(*cases)
 
 
+def failing_checks(problem: Problem, ev: Evaluation) -> set[str] | None:
+    """The statements whose checks reject ``ev`` (spec bounds, activation-constraint ends, sampling
+    tolerances); an empty set when some failure needs no statement (E311, E312); None when a failure
+    cannot be attributed (then the whole configuration is blocked)."""
+    from ..timing.rates import _tolerance_violation
+
+    slots = statement_index(problem.statements)
+    result, checks = ev.result, set()
+    for d in result.diagnostics:
+        if d.severity.value == "error" and d.code in ("E311", "E312"):
+            return set()
+    for chain in result.chains:
+        checks |= {f"spec:{chain.name}:{s.kind}" for s in chain.specs if not s.ok}
+    for info in result.tasks:
+        task, rate = problem.model.task(info.id), info.rate
+        if info.activation.kind != "trigger" or rate is None:
+            continue
+        mine = slots.get(info.id, {})
+        if task.min_rate is not None and rate.low < task.min_rate:
+            checks.add(mine.get("min_rate") or mine.get("rate"))
+        if task.max_rate is not None and rate.high > task.max_rate:
+            checks.add(mine.get("max_rate") or mine.get("rate"))
+    for s in result.links:
+        read = next((r for r in problem.model.task(s.reader).reads if r.port == s.target.split(".", 1)[1]), None)
+        if read is None:
+            continue
+        for direction, tol, flagged, factor in (("over", read.oversampling, s.oversampled, s.oversampling),
+                                                ("under", read.undersampling, s.undersampled, s.undersampling)):
+            if _tolerance_violation(tol, flagged, factor) is not None:
+                checks.add(slots.get(s.reader, {}).get(f"tolerance:{read.port}:{direction}"))
+    if None in checks or not checks:
+        return None
+    return checks
+
+
 # ================================================================== the loop
+
+
+def quick_answer(problem: Problem) -> tuple[Config, Evaluation] | None:
+    """An accepted configuration found without the solver, if a cheap one exists: the seed (every
+    choice at its slowest, often good enough), else the seed with its failing chains sped up."""
+    config, ev = problem.seed()
+    if ev.accepted:
+        return config, ev
+    return repair(problem, config, ev)
 
 
 @dataclass
@@ -231,8 +277,24 @@ class Engine:
             lits.append(z3.Not(lit) if key in config.off else lit)
         return lits
 
-    def block(self, config: Config) -> None:
-        lits = self._config_literals(config)
+    def block(self, config: Config, ev: Evaluation | None = None) -> None:
+        """Exclude a rejected configuration. With tracked statements only what the verdict depends on
+        is named: the choices, the execution times in force (a larger ``C`` only makes the timing
+        worse, so one rejected with a ``wcet`` relaxed stays rejected with it in force), the core
+        assignments, and — when every failure is a check a statement asks for — that one of those
+        statements is in force. Other statements (ranges, fixed rates) do not change the model."""
+        lits = [self.enc.sel[tid][i] for tid, i in config.choice]
+        checks = None if ev is None else failing_checks(self.problem, ev)
+        if not self.problem.tracked or checks is None:
+            lits += [z3.Not(lit) if key in config.off else lit for key, lit in sorted(self.enc.lits.items())]
+        else:
+            for key, lit in sorted(self.enc.lits.items()):
+                if key.startswith("wcet:") and key not in config.off:
+                    lits.append(lit)
+                elif key.startswith("core:"):
+                    lits.append(z3.Not(lit) if key in config.off else lit)
+            if checks:
+                lits.append(z3.Or(*[self.enc.lit(k) for k in sorted(checks)]))
         self.enc.add(z3.Not(z3.And(*lits)) if lits else False)
         self.stats.blocked += 1
 
@@ -313,15 +375,22 @@ class Engine:
 
     # -------------------------------------------------------------- search
 
+    def start(self) -> tuple[Config, Evaluation] | None:
+        return quick_answer(self.problem)
+
     def run(self, objectives: list[Objective] = (), assumptions: list = ()) -> Outcome:
         """The best accepted configuration under ``assumptions`` (any one without objectives)."""
         objectives = list(objectives)
-        if not objectives and not assumptions and not self.problem.tracked:
-            config, ev = self.problem.seed()  # the slowest configuration is often good enough
-            if ev.accepted:
-                return Outcome("sat", config, ev)
         best: Outcome | None = None
         guard = None
+        start = self.start() if not assumptions and not self.problem.tracked else None
+        if start is not None:
+            if not objectives:
+                return Outcome("sat", *start)
+            values = tuple(o.real(*start) for o in objectives)
+            best = Outcome("sat", *start, values)
+            guard = self._fresh("better")
+            self.enc.add(z3.Implies(guard, strictly_better(self.enc, objectives, values)))
         scope = self._fresh("run")  # run-local exclusions hang on it
         seen: set[Config] = set()
         while True:
@@ -341,7 +410,7 @@ class Engine:
             self.learn(config, ev, answer)
             if not ev.accepted:
                 self.stats.rejected += 1
-                self.block(config)
+                self.block(config, ev)
                 continue
             if not objectives:
                 return Outcome("sat", config, ev)
