@@ -15,7 +15,7 @@ import importlib
 _EXPORTS = {
     "BruteResult": "driver", "DEFAULT_RLIMIT": "driver", "Goal": "driver", "ObjectiveError": "driver",
     "SynthResult": "driver", "brute_force": "driver", "parse_objective": "driver", "synthesize": "driver",
-    "Candidate": "candidates", "DEFAULT_PERIODS": "candidates", "PRESCALER_CAP": "candidates",
+    "Candidate": "candidates", "DEFAULT_PERIODS": "candidates", "DEFAULT_PRESCALERS": "candidates",
     "TooManyCandidates": "candidates",
 }
 __all__ = sorted(_EXPORTS)

@@ -7,13 +7,17 @@ tracked for an unsat core — every task whose rate a relaxable statement fixes 
 * ``timer ? in LOW .. HIGH`` (no step): LOW, HIGH, the default grid inside the range, and the
   fastest and slowest period the activation constraint allows if they lie inside.
 * ``timer ?``: the default grid plus the fastest and slowest period the constraint allows.
-* ``every ? in A .. B``: A … B; ``every ?``: 1 … ``PRESCALER_CAP``.
+* ``every ? in A .. B``: A … B; ``every ?``: the default prescalers ``DEFAULT_PRESCALERS``.
 * ``activation ?``: the timer candidates of ``timer ?`` and, for every in-port or compound in-port the
-  task may trigger on (it reads every member; the members are connected), prescalers 1 … cap.
+  task may trigger on (it reads every member; the members are connected), the default prescalers.
+
+The default prescalers are the usual divisors 1 … 100 with few prime factors (their least common
+multiple is 1,200, where that of all of 1 … 100 has 41 digits: exact rates stay small integers in
+the encoding even through chains of triggers); ``every ? in 1 .. 100`` asks for every value.
 
 Each candidate records the statements that forbid it (``excluded``): a range, a fixed rate, an end of
 the activation constraint. A relaxed timer may take the default grid, a relaxed prescaler
-``RELAXED_PRESCALERS``. Untracked problems drop those candidates; tracked ones keep them and let
+the default prescalers. Untracked problems drop those candidates; tracked ones keep them and let
 the statement's literal forbid them. Candidates are ordered canonically (timers by period, then
 triggers by port name and prescaler), never by declaration order. Default grid: the usual robotics
 and automotive periods (WATERS 2015 and ROS drivers), ``DEFAULT_PERIODS``.
@@ -31,9 +35,9 @@ from .statements import Statement, statement_index
 
 MS = Fraction(1, 1000)
 DEFAULT_PERIODS: tuple[Fraction, ...] = tuple(ms * MS for ms in (1, 2, 5, 10, 20, 25, 40, 50, 100, 200, 250, 500, 1000))
-PRESCALER_CAP = 100  # default upper end of `every ?` and of the prescalers of `activation ?`
-#: what a relaxed prescaler (an explicit `every K`, or a prescaler range) may take besides its own values
-RELAXED_PRESCALERS: tuple[int, ...] = (1, 2, 3, 4, 5, 6, 8, 10, 12, 16, 20, 25, 50, 100)
+#: the prescalers of `every ?` and `activation ?`, and what a relaxed prescaler (an explicit `every K`,
+#: or a prescaler range) may take besides its own values
+DEFAULT_PRESCALERS: tuple[int, ...] = (1, 2, 3, 4, 5, 6, 8, 10, 12, 16, 20, 25, 50, 100)
 MAX_CANDIDATES = 4096  # per choice; a finer grid is refused (E403)
 
 
@@ -160,7 +164,7 @@ def period_values(h: s.PeriodHole, task: TaskModel) -> tuple[list[Fraction] | No
 
 def prescaler_values(h: s.PrescalerHole, task: TaskModel) -> tuple[list[int] | None, list[int]]:
     if h.low is None:
-        return None, list(range(1, PRESCALER_CAP + 1))
+        return None, list(DEFAULT_PRESCALERS)
     lo, hi = int(h.low.value), int(h.high.value)
     if hi - lo + 1 > MAX_CANDIDATES:
         raise TooManyCandidates(task, hi - lo + 1)
@@ -227,7 +231,7 @@ def task_choice(model: SystemModel, task: TaskModel, scope: SystemScope | None, 
             b.add(cand, slots["rate"] if cand != bound else None)
         hole = None
     elif tracked and isinstance(act, DataTriggered) and "rate" in slots:
-        for k in sorted({act.prescaler, *RELAXED_PRESCALERS}):
+        for k in sorted({act.prescaler, *DEFAULT_PRESCALERS}):
             b.add(Candidate("trigger", port=act.port, members=act.members, mode=act.mode, prescaler=k),
                   slots["rate"] if k != act.prescaler else None)
         hole = None
@@ -254,7 +258,7 @@ def _hole_candidates(b: _Builder, model: SystemModel, task: TaskModel, node: s.A
     elif isinstance(node, s.Trigger):
         mode, members = trigger_ports(model, task, scope).get(node.port.text, ("single", (node.port.text,)))
         own, values = prescaler_values(node.prescaler, task)
-        extra = RELAXED_PRESCALERS if tracked and own is not None else ()
+        extra = DEFAULT_PRESCALERS if tracked and own is not None else ()
         for k in sorted(set(values) | set(extra)):
             b.add(Candidate("trigger", port=node.port.text, members=members, mode=mode, prescaler=k),
                   rng if own is not None and k not in own else None)
@@ -262,7 +266,7 @@ def _hole_candidates(b: _Builder, model: SystemModel, task: TaskModel, node: s.A
         for p in _timer_defaults(task):
             b.add(Candidate("timer", p))
         for port, (mode, members) in trigger_ports(model, task, scope).items():
-            for k in range(1, PRESCALER_CAP + 1):
+            for k in DEFAULT_PRESCALERS:
                 b.add(Candidate("trigger", port=port, members=members, mode=mode, prescaler=k))
 
 

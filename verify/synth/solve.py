@@ -234,17 +234,24 @@ class Engine:
 
     def _best(self, objectives: list[Objective], assumptions: list):
         """The encoded lexicographic optimum under ``assumptions``, by strengthening: ask for a value
-        better than the last answer by a step that doubles while answers come, then bisect between the
-        best answer and the closest value found impossible. The last, unsatisfiable question proves it."""
+        better than the last answer by a step (a sixteenth of it at first) that doubles while answers
+        come; then alternately bisect between the best answer and the closest value found impossible
+        and ask for anything better than the best answer at all (which often ends the search at
+        once). The last, unsatisfiable question proves it."""
         status, answer = self._check(assumptions)
         if status != "sat" or not objectives:
             return status, answer
         fixed: list = []
         for obj in objectives:
-            best, bound, step = self._value(answer, obj.term), None, 1
+            best, bound = self._value(answer, obj.term), None
+            step, probe = max(1, abs(best) // 16), False
             sign = 1 if obj.sense == "min" else -1
             while bound is None or abs(best - bound) > 1:
-                target = best - sign * step if bound is None else (best + bound) // 2
+                if bound is None:
+                    target = best - sign * step
+                else:  # alternate: is anything better than the incumbent at all? bisect the gap
+                    target = best - sign if probe else (best + bound) // 2
+                    probe = not probe
                 lit = self._fresh("goal")
                 term = self.enc.t.lift(obj.term)
                 self.enc.add(z3.Implies(lit, term <= target if sign > 0 else term >= target))
