@@ -170,6 +170,14 @@ def test_core_seeded_from_the_blamed_chain_is_unsat_and_minimal(seed):
         assert accepted(configured_model(problem.model, problem.candidates(witness), problem.statements, witness.off))
 
 
+def test_spec_hint_with_other_conflicts_names_a_reached_latency_and_a_lower_bound():
+    result = synthesize(_generated(120, 1, hole_share=F(1, 5), infeasible=True))
+    assert result.status == "unsat"
+    hint = next(h for h in result.explanation.hints if h.startswith("relax `"))
+    assert "once the other conflicting specs are relaxed too" in hint
+    assert "a configuration reaches it; none gets below" in hint or "to at least" in hint
+
+
 # ------------------------------------------------------------------ the command line
 
 

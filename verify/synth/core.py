@@ -25,6 +25,8 @@ from ..resolve import SystemScope
 from ..source import NO_SPAN, Span
 from ..units import fmt_rate, fmt_time
 from .problem import Config, Problem, build_problem, relaxed_problem
+from .prune import ChainLowerBound, Pruner
+from .repair import fastest_chain
 from .solve import Budget, Engine, Objective, quick_answer
 from .statements import Statement
 
@@ -179,10 +181,9 @@ def _spec_hint(expl: Explanation, st: Statement, problem: Problem, budget: Budge
         return Objective(f"hint {st.key}", "min", enc.latency[(st.chain, st.spec_kind)], _spec_real(st, enc))
 
     found, caveat = _relaxed_run(problem, {st.key}, budget, objective), ""
-    if found is None:
-        specs = {key.key for key in problem.statements if key.kind == "spec"}
-        found = _relaxed_run(problem, specs, budget, objective)
+    if found is None:  # other conflicts remain: the chain at its fastest with every spec relaxed
         caveat = " (once the other conflicting specs are relaxed too)"
+        return _fastest_chain_hint(st, problem, caveat)
     if found is None or not found[0].values or found[0].values[0] is None:
         return f"relaxing `{st.text}` of `{st.chain}` alone is not enough"
     res, sub = found
@@ -192,6 +193,30 @@ def _spec_hint(expl: Explanation, st: Statement, problem: Problem, budget: Budge
     if not caveat:
         expl.smallest[st.key] = value
     return f"relax `{st.text}` of `{st.chain}` to at least {fmt_time(value)}{caveat}"
+
+
+def _fastest_chain_hint(st: Statement, problem: Problem, caveat: str) -> str:
+    """With every spec bound relaxed: the latency of the chain run as fast as the rest allows (a
+    configuration the analysis accepts reaches it), against the lower bound of pruning."""
+    sub = relaxed_problem(problem, frozenset(key.key for key in problem.statements if key.kind == "spec"))
+    found = None
+    if sub.infeasible is None:
+        found = fastest_chain(sub, st.chain) or (sub.seed() if sub.seed()[1].accepted else None)
+    problem.analyses += sub.analyses
+    value = _spec_real(st, None)(*found) if found is not None else None
+    if value is None:
+        return f"relaxing `{st.text}` of `{st.chain}` alone is not enough"
+    lower = None
+    if st.spec_kind in ("reaction_time", "data_age"):
+        pruner = Pruner(sub.model, sub.choices, sub.structure.order, sub.structure.cyclic)
+        chain = next(c for c in sub.model.chains if c.name == st.chain)
+        kind = "reaction" if st.spec_kind == "reaction_time" else "age"
+        lower = ChainLowerBound(pruner, chain, kind, *pruner.bounds()).total
+    if lower is not None and lower >= value:
+        return f"relax `{st.text}` of `{st.chain}` to at least {fmt_time(value)}{caveat}"
+    below = f"; none gets below {fmt_time(lower)}" if lower is not None else ""
+    return (f"relax `{st.text}` of `{st.chain}` to {fmt_time(value)}{caveat} (a configuration reaches it"
+            f"{below})")
 
 
 def _spec_real(st: Statement, enc):

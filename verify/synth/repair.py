@@ -72,27 +72,51 @@ def fastest_in_group(choice: Choice, index: int) -> int:
 def repair(problem: Problem, config: Config, ev: Evaluation) -> tuple[Config, Evaluation] | None:
     """An accepted configuration reached from ``config`` by speeding up the failing chains, or None."""
     for _ in range(ROUNDS):
-        if any(not r.startswith(("chain `", "E305:")) for r in ev.reasons):
-            return None  # overload, sampling, a fixed rate: speeding up does not cure those
-        choice = dict(config.choice)
         failing = {c.name for c in ev.result.chains if any(not s.ok for s in c.specs)}
-        chained = {tid for chain in problem.model.chains if chain.name in failing for tid in chain.tasks}
-        for tid in sorted(upstream(ev.model, sorted(chained)) & problem.choices.keys()):
-            choice[tid] = fastest_in_group(problem.choices[tid], choice[tid])
-        below, above = rate_misses(problem, ev)
-        for tid in sorted(below | above):
-            fitted = fitted_prescaler(problem, ev, tid, choice[tid]) if tid in choice else None
-            if fitted is not None:
-                choice[tid] = fitted
-            elif tid in above:
-                return None
-            else:  # a timer or a fixed binding too slow for its constraint: speed up what triggers it
-                for up in sorted(upstream(ev.model, [tid]) & problem.choices.keys()):
-                    choice[up] = fastest_in_group(problem.choices[up], choice[up])
-        faster = Config(tuple((tid, choice[tid]) for tid, _ in config.choice), config.off)
-        if faster == config:
+        step = speed_up(problem, config, ev, failing)
+        if step is None:
             return None
-        config, ev = faster, problem.evaluate(faster)
+        config, ev = step
+        if ev.accepted:
+            return config, ev
+    return None
+
+
+def speed_up(problem: Problem, config: Config, ev: Evaluation, chains: set[str]) -> tuple[Config, Evaluation] | None:
+    """One round: the tasks of ``chains`` and what triggers them at their fastest, triggered tasks
+    outside their activation constraint refitted; None when nothing changes or speeding up cannot cure
+    what ``ev`` failed for."""
+    if any(not r.startswith(("chain `", "E305:")) for r in ev.reasons):
+        return None  # overload, sampling, a fixed rate: speeding up does not cure those
+    choice = dict(config.choice)
+    chained = {tid for chain in problem.model.chains if chain.name in chains for tid in chain.tasks}
+    for tid in sorted(upstream(ev.model, sorted(chained)) & problem.choices.keys()):
+        choice[tid] = fastest_in_group(problem.choices[tid], choice[tid])
+    below, above = rate_misses(problem, ev)
+    for tid in sorted(below | above):
+        fitted = fitted_prescaler(problem, ev, tid, choice[tid]) if tid in choice else None
+        if fitted is not None:
+            choice[tid] = fitted
+        elif tid in above:
+            return None
+        else:  # a timer or a fixed binding too slow for its constraint: speed up what triggers it
+            for up in sorted(upstream(ev.model, [tid]) & problem.choices.keys()):
+                choice[up] = fastest_in_group(problem.choices[up], choice[up])
+    faster = Config(tuple((tid, choice[tid]) for tid, _ in config.choice), config.off)
+    if faster == config:
+        return None
+    return faster, problem.evaluate(faster)
+
+
+def fastest_chain(problem: Problem, chain: str) -> tuple[Config, Evaluation] | None:
+    """An accepted configuration with ``chain`` as fast as the seed allows: its tasks (and what
+    triggers them) at their fastest candidates, the rest at the seed's, refitted for a few rounds."""
+    config, ev = problem.seed()
+    for n in range(ROUNDS):
+        step = speed_up(problem, config, ev, {chain} if n == 0 else set())
+        if step is None:
+            return None
+        config, ev = step
         if ev.accepted:
             return config, ev
     return None
