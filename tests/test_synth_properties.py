@@ -161,7 +161,7 @@ def load(text: str):
 OBJECTIVES = ["utilisation", "slack", "latency:ch", "age:ch,utilisation"]
 
 
-@settings(max_examples=40, **SETTINGS)
+@settings(max_examples=100, **SETTINGS)
 @given(systems(), st.sampled_from(OBJECTIVES))
 def test_synth_agrees_with_brute_force(system, objective):
     text = render(system)
@@ -176,7 +176,7 @@ def test_synth_agrees_with_brute_force(system, objective):
         simulated_within_bounds(result.model, runs=1, horizon=F(1))
 
 
-@settings(max_examples=25, **SETTINGS)
+@settings(max_examples=50, **SETTINGS)
 @given(systems())
 def test_unsat_cores_are_minimal(system):
     system.reaction = min(system.reaction or 1000, 25)  # make conflicts likely
