@@ -109,6 +109,8 @@ def load_project(root: str, sink: DiagnosticSink) -> Project:
         stack.pop()
 
     visit(root, None)
+    del visit  # (a closure that refers to itself: left alone, the cycle would keep every module alive until the
+    # next full collection, which ``gcpause`` defers)
     return Project(root, tuple(modules), sources)
 
 

@@ -12,6 +12,7 @@ from fractions import Fraction
 from typing import Literal, Union
 
 from . import syntax as s
+from .construct import direct_constructor
 from .resolve import SystemScope
 from .source import NO_SPAN, Span
 
@@ -184,6 +185,13 @@ class SystemModel:
             object.__setattr__(self, "_lookup", index)
         return index
 
+    def _with_chains(self, chains: tuple[ChainModel, ...]) -> SystemModel:
+        """This system with ``chains``; it shares the lookup tables, which do not depend on the chains."""
+        other = SystemModel(self.name, self.cores, self.tasks, self.links, chains, self.span)
+        if "_lookup" in self.__dict__:
+            object.__setattr__(other, "_lookup", self.__dict__["_lookup"])
+        return other
+
     def link_into(self, port: str) -> LinkModel | None:
         """The connection into in-port ``inst.port`` (at most one: rule E211)."""
         return self._index()["into"].get(port)
@@ -210,6 +218,13 @@ class SystemModel:
 
 # ------------------------------------------------------------------ building
 
+
+#: a 10,000-task system has as many of these (``verify.construct``)
+_new_task = direct_constructor(TaskModel)
+_new_read = direct_constructor(ReadModel)
+_new_periodic = direct_constructor(Periodic)
+_new_link = direct_constructor(LinkModel)
+_new_hop = direct_constructor(HopModel)
 
 #: each unit's factor to seconds or hertz as (numerator, denominator)
 _UNIT_RATIOS = {unit: factor.as_integer_ratio() for unit, factor in {**s.TIME_UNITS, **s.FREQUENCY_UNITS}.items()}
@@ -245,22 +260,32 @@ def _seconds(q: s.Quantity | None) -> Fraction | None:
     return None if q is None else quantity_seconds(q)
 
 
-def activation_model(act: s.Activation, scope_members: dict[str, tuple[str, tuple[str, ...]]]) -> ActivationModel:
-    """The semantic activation of a (validated) binding. ``scope_members`` maps trigger ports to
-    (mode, members) for the task's component."""
+def activation_model(act: s.Activation, component: s.Component) -> ActivationModel:
+    """The semantic activation of a (validated) binding of a task of ``component``."""
     if isinstance(act, s.Timer):
         if isinstance(act.period, s.PeriodHole):
             return Hole(act)
-        return Periodic(quantity_seconds(act.period), _seconds(act.phase))
+        return _new_periodic(quantity_seconds(act.period), _seconds(act.phase))
     if isinstance(act, s.Sporadic):
         a, b = quantity_seconds(act.low), quantity_seconds(act.high)
         return SporadicSource(min(a, b), max(a, b))
     if isinstance(act, s.Trigger):
         if isinstance(act.prescaler, s.PrescalerHole):
             return Hole(act)
-        mode, members = scope_members[act.port.text]
+        mode, members = _trigger_members(component, act.port.text)
         return DataTriggered(act.port.text, members, mode, int(act.prescaler.value))
     return Hole(act)
+
+
+def _trigger_members(component: s.Component, port: str) -> tuple[str, tuple[str, ...]]:
+    """(mode, member in-ports) of the trigger port ``port``: a compound's, else ("single", (port,)) for
+    an in-port (the last declaration of a name counts, as in a dict of them)."""
+    for c in reversed(component.compounds):
+        if c.name.text == port:
+            return c.mode, tuple(m.text for m in c.members)
+    if any(p.name.text == port for p in component.in_ports):
+        return "single", (port,)
+    raise KeyError(port)
 
 
 def build_system(scope: SystemScope) -> SystemModel:
@@ -268,12 +293,10 @@ def build_system(scope: SystemScope) -> SystemModel:
     system = scope.system
     tasks: list[TaskModel] = []
     for inst in system.instances:
-        comp = scope.component_of[inst.name.text]
-        triggers = {p.name.text: ("single", (p.name.text,)) for p in comp.component.in_ports}
-        triggers.update({c.name.text: (c.mode, tuple(m.text for m in c.members)) for c in comp.component.compounds})
-        for task in comp.component.tasks:
+        component = scope.component_of[inst.name.text].component
+        for task in component.tasks:
             binding = scope.bindings[(inst.name.text, task.name.text)]
-            tasks.append(_task_model(inst, task, binding, triggers))
+            tasks.append(_task_model(inst, task, binding, component))
     producers = {f"{t.instance}.{p}": t.id for t in tasks for p in t.produces}
     readers: dict[str, list[str]] = {}
     for t in tasks:
@@ -284,13 +307,13 @@ def build_system(scope: SystemScope) -> SystemModel:
                   for c in system.cores)
     model = SystemModel(system.name.text, cores, tuple(tasks), links, (), system.span)
     chains = tuple(_chain_model(ch, model, scope) for ch in system.chains)
-    return SystemModel(model.name, cores, model.tasks, links, chains, system.span)
+    return model._with_chains(chains)
 
 
-def _task_model(inst: s.Instance, task: s.Task, binding: s.TaskBinding, triggers) -> TaskModel:
+def _task_model(inst: s.Instance, task: s.Task, binding: s.TaskBinding, component: s.Component) -> TaskModel:
     core = (binding.core or inst.core).text  # validation guarantees one of them
     c = task.constraint
-    return TaskModel(
+    return _new_task(
         id=f"{inst.name.text}.{task.name.text}",
         instance=inst.name.text,
         name=task.name.text,
@@ -300,9 +323,9 @@ def _task_model(inst: s.Instance, task: s.Task, binding: s.TaskBinding, triggers
         priority=int(binding.priority.value),
         bcet=quantity_seconds(task.bcet) if task.bcet else Fraction(0),
         wcet=quantity_seconds(task.wcet),
-        reads=tuple(ReadModel(r.port.text, r.optional, r.oversampling, r.undersampling) for r in task.reads),
+        reads=tuple([_new_read(r.port.text, r.optional, r.oversampling, r.undersampling) for r in task.reads]),
         produces=tuple(p.text for p in task.produces),
-        activation=activation_model(binding.activation, triggers),
+        activation=activation_model(binding.activation, component),
         min_rate=quantity_hertz(c.min) if c and c.min else None,
         max_rate=quantity_hertz(c.max) if c and c.max else None,
         changeable=c.changeable if c else True,
@@ -316,7 +339,7 @@ def _task_model(inst: s.Instance, task: s.Task, binding: s.TaskBinding, triggers
 def _link_model(conn: s.Connection, producers: dict[str, str], readers: dict[str, list[str]]) -> LinkModel:
     low = _seconds(conn.delay_min) or Fraction(0)
     high = _seconds(conn.delay_max) or Fraction(0)
-    return LinkModel(str(conn.source), str(conn.target), producers[str(conn.source)],
+    return _new_link(str(conn.source), str(conn.target), producers[str(conn.source)],
                      tuple(readers.get(str(conn.target), ())), low, high, conn.span)
 
 
@@ -348,7 +371,7 @@ def chain_path(chain: s.Chain, model: SystemModel, scope: SystemScope):
             reader = readers[0]
         if not candidates:
             return tasks, hops, (i, "unreachable", reader)
-        hops.append(HopModel(tasks[-1], reader, candidates[0]))
+        hops.append(_new_hop(tasks[-1], reader, candidates[0]))
         tasks.append(reader)
     return tasks, hops, None
 

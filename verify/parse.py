@@ -6,7 +6,6 @@ in the language's own words: never ``__ANON_0`` or ``$END``. The transformer onl
 """
 from __future__ import annotations
 
-import dataclasses
 import functools
 import re
 from fractions import Fraction
@@ -16,6 +15,7 @@ from lark import Lark, Token, Tree
 from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken
 
 from . import syntax as s
+from .construct import direct_constructor
 from .diagnostics import DiagnosticSink
 from .lalr import FastParser, Unparsable, position
 from .source import Span
@@ -234,39 +234,9 @@ def _fast_parser() -> FastParser | None:
     return FastParser.build(_parser())
 
 
-def _plain_frozen(cls, names: tuple[str, ...]) -> bool:
-    """``cls`` is a frozen dataclass with exactly these fields, an instance ``__dict__`` and no
-    ``__post_init__``: an instance is fully described by its ``__dict__``."""
-    return (dataclasses.is_dataclass(cls) and cls.__dataclass_params__.frozen
-            and tuple(f.name for f in dataclasses.fields(cls)) == names
-            and not hasattr(cls, "__post_init__") and "__slots__" not in cls.__dict__)
-
-
-def _direct_constructors():
-    """Constructors of ``Span`` and ``syntax.Name`` that fill the instance ``__dict__`` in one step.
-
-    A frozen dataclass's ``__init__`` sets each field with a Python-level ``object.__setattr__``
-    call; a 10,000-task file has about 400,000 spans and 150,000 names, and this saves a tenth of the
-    parse. The instances are the same (same class, same ``__dict__``). If either class stops being a
-    plain frozen dataclass with these fields, its own constructor is used."""
-    new, set_dict = object.__new__, object.__setattr__
-
-    def direct_span(file, line, column, end_line, end_column):
-        obj = new(Span)
-        set_dict(obj, "__dict__", {"file": file, "line": line, "column": column, "end_line": end_line,
-                                   "end_column": end_column})
-        return obj
-
-    def direct_name(text, span):
-        obj = new(s.Name)
-        set_dict(obj, "__dict__", {"text": text, "span": span})
-        return obj
-
-    return (direct_span if _plain_frozen(Span, ("file", "line", "column", "end_line", "end_column")) else Span,
-            direct_name if _plain_frozen(s.Name, ("text", "span")) else s.Name)
-
-
-_new_span, _new_name = _direct_constructors()
+#: a 10,000-task file has about 400,000 spans and 150,000 names: they are built directly (``verify.construct``)
+_new_span = direct_constructor(Span)
+_new_name = direct_constructor(s.Name)
 
 
 class _NumberError(Exception):
@@ -286,29 +256,43 @@ def _exact(text: str, where, sink: DiagnosticSink) -> Fraction:
         sink.emit("E005", f"number has {len(text)} characters; at most {MAX_NUMBER_LENGTH} are allowed",
                   where(), "too long", help="use a larger unit, e.g. `2 s` instead of `2000000000 ns`")
         raise _NumberError
-    if "/" in text:
-        num, den = text.split("/")
-        if Fraction(den) == 0:
-            sink.emit("E005", "division by zero in a rational number", where(), "denominator is 0",
-                      help="write a non-zero denominator, e.g. `100/3 ms`")
-            raise _NumberError
-        return Fraction(num) / Fraction(den)
-    return Fraction(text)
+    if "/" not in text:  # a decimal: its digits over a power of ten (the value of Fraction(text), no regex)
+        whole, _, digits = text.partition(".")
+        return Fraction(int(whole + digits), 10 ** len(digits))
+    num, den = text.split("/")
+    if Fraction(den) == 0:
+        sink.emit("E005", "division by zero in a rational number", where(), "denominator is 0",
+                  help="write a non-zero denominator, e.g. `100/3 ms`")
+        raise _NumberError
+    return Fraction(num) / Fraction(den)
 
 
 def _text(text: str, start: int, end: int) -> str:
     return text
 
 
-class _Number:
-    """A NUMBER token: its value is read (and its span made) only where a rule needs them."""
+def _token_builders(path: str, sink: DiagnosticSink):
+    """The three functions the parser calls most, as closures over the file: ``span(start, end)``, the
+    span between two positions (``lalr.position``; the file's first position if empty), and the values of
+    a NAME and of a NUMBER token, ``name(text, start, end)`` and ``number(text, start, end)``."""
+    new_span, new_name = _new_span, _new_name
+    numbers: dict[str, Fraction] = {}  # a file repeats its numbers: each text is read once
 
-    __slots__ = ("text", "start", "end")
+    def span(start: int | None, end: int | None) -> Span:
+        if start is None:
+            return Span(path, 1, 1, 1, 1)
+        return new_span(path, start >> 32, start & 0xFFFFFFFF, end >> 32, end & 0xFFFFFFFF)
 
-    def __init__(self, text: str, start: int, end: int):
-        self.text = text
-        self.start = start
-        self.end = end
+    def name(text: str, start: int, end: int) -> s.Name:
+        return new_name(text, new_span(path, start >> 32, start & 0xFFFFFFFF, end >> 32, end & 0xFFFFFFFF))
+
+    def number(text: str, start: int, end: int) -> tuple[Fraction, int, int]:
+        value = numbers.get(text)
+        if value is None:
+            value = numbers[text] = _exact(text, lambda: span(start, end), sink)
+        return value, start, end
+
+    return span, name, number
 
 
 class _Builder:
@@ -316,14 +300,15 @@ class _Builder:
 
     One method per rule (its alias or name), called with the rule's start and end positions
     (``lalr.position``; None for an empty rule) and its children as Lark's tree would hold them: nodes built by these
-    methods and the tokens the rule keeps (``tokens``: a NAME is a ``syntax.Name``, a NUMBER a
-    :class:`_Number`, an RBRACE its ``Span``, a UNIT or STRING its text). ``verify.lalr`` calls them while parsing;
-    ``transform`` applies them to a Lark tree (the error-recovering path)."""
+    methods and the tokens the rule keeps (``tokens``: a NAME is a ``syntax.Name``, a NUMBER the tuple (value,
+    start, end) — its span is made only where a rule keeps one —, an RBRACE its ``Span``, a UNIT or STRING its
+    text). ``verify.lalr`` calls them while parsing; ``transform`` applies them to a Lark tree (the
+    error-recovering path)."""
 
     def __init__(self, path: str, sink: DiagnosticSink):
         self.path = path
         self.sink = sink
-        self._numbers: dict[str, Fraction] = {}
+        self._span, self._name, self._number_token = _token_builders(path, sink)
 
     def callbacks(self) -> dict:
         return {name: getattr(self, name) for name in _fast_parser().callback_names()}
@@ -340,30 +325,16 @@ class _Builder:
                                         children)
 
     # ---------------------------------------------------------------- helpers
-    def _span(self, start: int | None, end: int | None) -> Span:
-        """The span between two positions (``lalr.position``); the file's first position if empty."""
-        if start is None:
-            return Span(self.path, 1, 1, 1, 1)
-        return _new_span(self.path, start >> 32, start & 0xFFFFFFFF, end >> 32, end & 0xFFFFFFFF)
-
     def tokens(self) -> dict:
         """The value of each kind of token the tree keeps (``lalr.FastParser.parse``)."""
-        return {"NAME": self._name, "NUMBER": _Number, "RBRACE": self._span_of}
+        return {"NAME": self._name, "NUMBER": self._number_token, "RBRACE": self._span_of}
 
     def _span_of(self, text: str, start: int, end: int) -> Span:
         return self._span(start, end)
 
-    def _name(self, text: str, start: int, end: int) -> s.Name:
-        return _new_name(text, _new_span(self.path, start >> 32, start & 0xFFFFFFFF, end >> 32, end & 0xFFFFFFFF))
-
-    def _value(self, tok: _Number) -> Fraction:
-        value = self._numbers.get(tok.text)
-        if value is None:
-            value = self._numbers[tok.text] = _exact(tok.text, lambda: self._span(tok.start, tok.end), self.sink)
-        return value
-
-    def _number(self, tok: _Number) -> s.Number:
-        return s.Number(self._value(tok), self._span(tok.start, tok.end))
+    def _number(self, tok: tuple[Fraction, int, int]) -> s.Number:
+        value, start, end = tok
+        return s.Number(value, self._span(start, end))
 
     # ---------------------------------------------------------------- file
     def start(self, start, end, items):
@@ -378,7 +349,7 @@ class _Builder:
     # ---------------------------------------------------------------- quantities
     def quantity(self, start, end, children):
         num, unit = children
-        return s.Quantity(self._value(num), unit, self._span(start, end))
+        return s.Quantity(num[0], unit, self._span(start, end))
 
     # ---------------------------------------------------------------- components
     def component(self, start, end, children):

@@ -2,50 +2,66 @@
 from __future__ import annotations
 
 from fractions import Fraction
+from math import gcd
 
 from .syntax import Quantity
 
 
 def fmt_number(value: Fraction) -> str:
     """An exact rendering: an integer, a terminating decimal, or ``p/q``."""
-    value = Fraction(value)
-    if value.denominator == 1:
-        return str(value.numerator)
-    den = value.denominator
-    twos = fives = 0
-    while den % 2 == 0:
-        den //= 2
-        twos += 1
-    while den % 5 == 0:
-        den //= 5
+    if not isinstance(value, (int, Fraction)):
+        value = Fraction(value)
+    return _fmt_lowest_terms(value.numerator, value.denominator)
+
+
+def _fmt_ratio(num: int, den: int) -> str:
+    """``fmt_number(Fraction(num, den))`` for integers (den > 0), without building the Fraction: reports
+    render tens of thousands of numbers."""
+    common = gcd(num, den)
+    return _fmt_lowest_terms(num // common, den // common)
+
+
+def _fmt_lowest_terms(num: int, den: int) -> str:
+    """``fmt_number`` of num/den in lowest terms (den > 0)."""
+    if den == 1:
+        return str(num)
+    rest = den
+    twos = (rest & -rest).bit_length() - 1  # the factors 2 of the denominator
+    rest >>= twos
+    fives = 0
+    while rest % 5 == 0:
+        rest //= 5
         fives += 1
-    if den != 1:
-        return f"{value.numerator}/{value.denominator}"
+    if rest != 1:
+        return f"{num}/{den}"
     digits = max(twos, fives)
-    scaled = abs(value) * 10**digits
-    whole, frac = divmod(int(scaled), 10**digits)
+    whole, frac = divmod(abs(num) * 10**digits // den, 10**digits)  # (exact: den divides 10**digits)
     text = f"{whole}.{str(frac).rjust(digits, '0')}".rstrip("0")
-    return ("-" if value < 0 else "") + text
+    return ("-" if num < 0 else "") + text
 
 
 def fmt_quantity(q: Quantity) -> str:
     return f"{fmt_number(q.value)} {q.unit}"
 
 
-_TIME_SCALES = ((Fraction(1), "s"), (Fraction(1, 1000), "ms"), (Fraction(1, 10**6), "us"), (Fraction(1, 10**9), "ns"))
+#: the units of ``fmt_time``, largest first, as (10**k, unit): a value of n/d seconds is n·10**k/d units
+_TIME_SCALES = ((1, "s"), (1000, "ms"), (10**6, "us"), (10**9, "ns"))
 
 
 def fmt_time(seconds: Fraction | None) -> str:
     """A time in the largest unit in which it is at least 1 (``0.5 ms``, ``25 ms``, ``1.2 s``)."""
     if seconds is None:
         return "unbounded"
-    seconds = Fraction(seconds)
-    if seconds == 0:
+    if not isinstance(seconds, (int, Fraction)):
+        seconds = Fraction(seconds)
+    num, den = seconds.numerator, seconds.denominator
+    if num == 0:
         return "0 ms"
-    for scale, unit in _TIME_SCALES:
-        if abs(seconds) >= scale:
-            return f"{fmt_number(seconds / scale)} {unit}"
-    return f"{fmt_number(seconds * 10**9)} ns"
+    size = abs(num)
+    for factor, unit in _TIME_SCALES:
+        if size * factor >= den:  # |seconds| >= 1 unit
+            return f"{_fmt_ratio(num * factor, den)} {unit}"
+    return f"{_fmt_ratio(num * 10**9, den)} ns"
 
 
 def fmt_rate(hertz: Fraction | None) -> str:

@@ -438,9 +438,13 @@ def _check_trigger_connected(inst, act: s.Trigger, comp: ComponentScope, incomin
 # ------------------------------------------------------------------ trigger cycles
 
 
-def _trigger_graph(scope: SystemScope) -> tuple[nx.DiGraph, set[str]]:
-    """Edges writer task → triggered task; and the set of tasks with an independent source."""
-    graph = nx.DiGraph()
+def _trigger_graph(scope: SystemScope) -> tuple[list[str], list[tuple[str, str]], dict[str, str], set[str]]:
+    """The trigger graph: its nodes (task ids, in the order they first appear: each bound task, then the
+    writers triggering it), its edges writer task → triggered task, the mode ("and" | "or") of each
+    triggered task, and the set of tasks with an independent source."""
+    nodes: dict[str, None] = {}  # (an ordered set)
+    edges: list[tuple[str, str]] = []
+    modes: dict[str, str] = {}
     sources: set[str] = set()
     writer_of: dict[str, str] = {}
     for conn in scope.system.connections:
@@ -452,38 +456,53 @@ def _trigger_graph(scope: SystemScope) -> tuple[nx.DiGraph, set[str]]:
                 writer_of[str(conn.target)] = f"{conn.source.instance.text}.{task.name.text}"
     for (inst, task), binding in scope.bindings.items():
         tid = f"{inst}.{task}"
-        graph.add_node(tid)
+        nodes[tid] = None
         act = binding.activation
         if not isinstance(act, s.Trigger):
             sources.add(tid)
             continue
         node = scope.component_of[inst].get(act.port.text)
         members = [m.text for m in node.members] if isinstance(node, s.CompoundPort) else [act.port.text]
-        mode = node.mode if isinstance(node, s.CompoundPort) else "and"
-        graph.nodes[tid]["mode"] = mode
+        modes[tid] = node.mode if isinstance(node, s.CompoundPort) else "and"
         for m in members:
             w = writer_of.get(f"{inst}.{m}")
             if w is not None:
-                graph.add_edge(w, tid)
-    return graph, sources
+                nodes.setdefault(w, None)
+                edges.append((w, tid))
+    return list(nodes), edges, modes, sources
+
+
+def _activated(edges: list[tuple[str, str]], modes: dict[str, str], sources: set[str]) -> set[str]:
+    """The tasks that can be activated: the sources, and (to the least fixed point) every task whose
+    trigger fires once its writers are: any of them for "or", all of them for "and"."""
+    writers: dict[str, set[str]] = {}
+    triggered: dict[str, set[str]] = {}
+    for w, tid in edges:
+        writers.setdefault(tid, set()).add(w)
+        triggered.setdefault(w, set()).add(tid)
+    live = set(sources)
+    waiting = {tid: len(ws) for tid, ws in writers.items()}  # writers not yet known to be activated
+    work = list(sources)
+    while work:
+        for tid in triggered.get(work.pop(), ()):
+            if tid in live:
+                continue
+            waiting[tid] -= 1
+            if modes.get(tid, "and") == "or" or not waiting[tid]:
+                live.add(tid)
+                work.append(tid)
+    return live
 
 
 def _check_trigger_sources(scope: SystemScope, sink: DiagnosticSink) -> None:
     """E210: tasks activated only by data triggers that, around a cycle, can never be activated."""
-    graph, sources = _trigger_graph(scope)
-    live = set(sources)
-    changed = True
-    while changed:
-        changed = False
-        for node in graph.nodes:
-            if node in live:
-                continue
-            preds = list(graph.predecessors(node))
-            mode = graph.nodes[node].get("mode", "and")
-            fires = preds and (any(p in live for p in preds) if mode == "or" else all(p in live for p in preds))
-            if fires:
-                live.add(node)
-                changed = True
+    nodes, edges, modes, sources = _trigger_graph(scope)
+    live = _activated(edges, modes, sources)
+    if len(live) == len(nodes):  # (the common case: nothing to report)
+        return
+    graph = nx.DiGraph()
+    graph.add_nodes_from(nodes)
+    graph.add_edges_from(edges)
     dead = graph.subgraph(n for n in graph.nodes if n not in live)
     for component in sorted(nx.strongly_connected_components(dead), key=sorted):
         members = sorted(component, key=list(graph.nodes).index)

@@ -9,10 +9,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from fractions import Fraction
+from typing import Mapping, Sequence
 
+from ..construct import direct_constructor
 from ..model import SystemModel
 from ..source import NO_SPAN, Span
-from ..timing import AnalysisResult
+from ..timing import ChainBounds, TaskResponse
 from .scenario import Target
 from .verdict import Verdict, sim_kind
 
@@ -35,31 +37,37 @@ class Obligation:
         return self.bound is not None and self.bound <= self.spec
 
     def verdict(self, status: str, method: str, **extra) -> Verdict:
-        return Verdict(self.subject, self.name, self.kind, self.spec, status, method, self.bound,
-                       variant=self.variant, span=self.span, related=self.related, **extra)
+        return _new_verdict(self.subject, self.name, self.kind, self.spec, status, method, self.bound,
+                            variant=self.variant, span=self.span, related=self.related, **extra)
 
 
-def obligations(model: SystemModel, analysis: AnalysisResult) -> list[Obligation]:
-    """Chain specs in system order, then task deadlines in task order."""
+_new_verdict = direct_constructor(Verdict)
+_new_obligation = direct_constructor(Obligation)
+_new_target = direct_constructor(Target)
+
+
+def obligations(model: SystemModel, variant: str, responses: Mapping[str, TaskResponse],
+                chains: Sequence[ChainBounds]) -> list[Obligation]:
+    """Chain specs in system order, then task deadlines in task order, from the analysis' bounds
+    (``timing.response_and_chain_bounds``: the data-age variant, the responses and the chain bounds)."""
     out: list[Obligation] = []
-    chains = {c.name: c for c in analysis.chains}
-    tasks = {t.id: t for t in analysis.tasks}
+    by_name = {c.name: c for c in chains}
     for chain in model.chains:
-        bounds = chains[chain.name]
+        bounds = by_name[chain.name]
         related = tuple((hop.link.span, f"hop {n}: {hop.link.source} -> {hop.link.target}")
                         for n, hop in enumerate(chain.hops, 1))
         for check in bounds.specs:
-            kind = sim_kind(check.kind, analysis.data_age_variant)
-            variant = "non-reduced" if check.kind == "reaction_time" else analysis.data_age_variant
-            out.append(Obligation("chain", chain.name, check.kind, check.spec, check.bound,
-                                  Target(kind, chain.name), variant,
-                                  chain.spec_spans.get(check.kind, chain.span), related))
+            kind = sim_kind(check.kind, variant)
+            out.append(_new_obligation("chain", chain.name, check.kind, check.spec, check.bound,
+                                       _new_target(kind, chain.name),
+                                       "non-reduced" if check.kind == "reaction_time" else variant,
+                                       chain.spec_spans.get(check.kind, chain.span), related))
     for task in model.tasks:
-        r = tasks[task.id].response
+        r = responses[task.id]
         if r.deadline is None:
             continue
-        out.append(Obligation("task", task.id, "deadline", r.deadline, r.wcrt, Target("response", task.id), "",
-                              task.span, (), r.deadline_rule))
+        out.append(_new_obligation("task", task.id, "deadline", r.deadline, r.wcrt,
+                                   _new_target("response", task.id), "", task.span, (), r.deadline_rule))
     return out
 
 

@@ -131,6 +131,10 @@ def _cell(x) -> str:
     return "-" if x is None else fmt_time(x)
 
 
+def _task_proved_by_bound(v: Verdict) -> bool:
+    return v.subject == "task" and v.status == "proved" and v.method == "bound"
+
+
 def to_text(model, proof: ProofResult) -> str:
     from .trace import to_text as timeline
 
@@ -140,10 +144,10 @@ def to_text(model, proof: ProofResult) -> str:
              f"{len(proof.verdicts)} properties: {counts['proved']} proved, {counts['violated']} violated, "
              f"{counts['undecided']} undecided", ""]
     rows = [["property", "status", "method", "spec", "bound", "exact worst", "margin"]]
-    tasks_by_bound = [v for v in proof.verdicts if v.subject == "task" and v.status == "proved" and v.method == "bound"]
-    collapse = len(tasks_by_bound) > COLLAPSE
+    tasks_by_bound = sum(_task_proved_by_bound(v) for v in proof.verdicts)
+    collapse = tasks_by_bound > COLLAPSE
     for v in proof.verdicts:
-        if collapse and v in tasks_by_bound:
+        if collapse and _task_proved_by_bound(v):
             continue
         exact_cell = _cell(v.exact)
         if v.kind == "jitter" and v.exact is not None:
@@ -156,7 +160,7 @@ def to_text(model, proof: ProofResult) -> str:
     for r in rows:
         lines.append("  " + "  ".join(c.ljust(w) for c, w in zip(r, widths)).rstrip())
     if collapse:
-        lines.append(f"  ... and {len(tasks_by_bound)} task deadlines proved by bound")
+        lines.append(f"  ... and {tasks_by_bound} task deadlines proved by bound")
     for v in proof.verdicts:
         if v.counterexample is not None:
             lines += ["", timeline(model, v)]

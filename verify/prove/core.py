@@ -13,8 +13,9 @@ import time
 from fractions import Fraction
 
 from ..diagnostics import DiagnosticSink, Label
+from ..gcpause import paused_gc
 from ..model import SystemModel
-from ..timing import analyze
+from ..timing import response_and_chain_bounds
 from ..units import fmt_time
 from . import bound as bound_mod
 from .bound import Obligation
@@ -35,21 +36,23 @@ def prove(model: SystemModel, *, budget: int = DEFAULT_BUDGET, rlimit: int = DEF
     ``timeout`` (seconds, wall clock) is off unless given. Deterministic for fixed arguments."""
     if model.holes:
         raise ValueError("prove needs a configured system: use verify.api.require_configured first")
-    analysis = analyze(model, data_age=data_age)
-    obs = bound_mod.obligations(model, analysis)
-    verdicts: dict[int, Verdict] = {}
-    open_: list[tuple[int, Obligation]] = []
-    for i, ob in enumerate(obs):
-        if ob.proved_by_bound:
-            verdicts[i] = bound_mod.by_bound(ob)
-        else:
-            open_.append((i, ob))
+    with paused_gc():  # (the searches below run with the collector as the caller has it)
+        variant, responses, chains = response_and_chain_bounds(model, data_age=data_age)
+        obs = bound_mod.obligations(model, variant, responses, chains)
+        verdicts: dict[int, Verdict] = {}
+        open_: list[tuple[int, Obligation]] = []
+        for i, ob in enumerate(obs):
+            if ob.proved_by_bound:
+                verdicts[i] = bound_mod.by_bound(ob)
+            else:
+                open_.append((i, ob))
     budget_obj = Budget(budget, None if timeout is None else time.monotonic() + timeout)
     if open_:
         verdicts.update(_decide(model, open_, budget_obj, rlimit, use_z3))
-    ordered = tuple(verdicts[i] for i in range(len(obs)))
-    return ProofResult(model.name, ordered, tuple(diagnostics(model, ordered)), analysis.data_age_variant,
-                       budget_obj.used, budget)
+    with paused_gc():
+        ordered = tuple(verdicts[i] for i in range(len(obs)))
+        return ProofResult(model.name, ordered, tuple(diagnostics(model, ordered)), variant, budget_obj.used,
+                           budget)
 
 
 # ------------------------------------------------------------------ deciding what the bound left open

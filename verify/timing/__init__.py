@@ -17,6 +17,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from fractions import Fraction
 
+from ..construct import direct_constructor
 from ..diagnostics import Diagnostic, DiagnosticSink
 from ..gcpause import paused_gc
 from ..model import SystemModel, TaskModel
@@ -30,7 +31,7 @@ from .rta import response_times  # noqa: F401 - the reference statement of one r
 
 __all__ = ["ActivationInfo", "AnalysisResult", "Bound", "ChainBounds", "CoreLoad", "EventModel",
            "LinkSampling", "RateInterval", "SpecCheck", "Step", "TaskResponse", "TaskTiming", "Term",
-           "analyze", "diagnostics_of"]
+           "analyze", "diagnostics_of", "response_and_chain_bounds"]
 
 MAX_ROUNDS = 200  # CPA global iterations before reporting non-convergence
 VARIANTS = ("reduced", "non-reduced")
@@ -78,6 +79,9 @@ class TaskTiming:
         return self.response.bcrt
 
 
+_new_task_timing = direct_constructor(TaskTiming)  # (``verify.construct``: one per task)
+
+
 @dataclass(frozen=True)
 class AnalysisResult:
     """The analysis of one system. ``converged`` is False if the CPA iteration hit ``MAX_ROUNDS``
@@ -110,22 +114,45 @@ class AnalysisResult:
 def analyze(system: SystemModel, *, data_age: str = "reduced") -> AnalysisResult:
     """Analyse a configured system. ``data_age`` selects the variant checked against ``data_age`` and
     ``jitter`` specs: "reduced" (from the first task's read, the default) or "non-reduced"."""
-    variant = data_age.replace("_", "-")
-    if variant not in VARIANTS:
-        raise ValueError(f"data_age must be one of {VARIANTS}, not {data_age!r}")
+    variant = _variant(data_age)
     with paused_gc():
         return _analyze(system, variant)
 
 
-def _analyze(system: SystemModel, variant: str) -> AnalysisResult:
-    sink = DiagnosticSink()
+def response_and_chain_bounds(system: SystemModel, *, data_age: str = "reduced"
+                              ) -> tuple[str, dict[str, TaskResponse], tuple[ChainBounds, ...]]:
+    """The part of ``analyze`` that proofs by bound need: (data-age variant, every task's
+    ``TaskResponse`` by id, every chain's ``ChainBounds``), computed as ``analyze`` computes them, without
+    the sampling relations, core loads, per-task summaries and diagnostics."""
+    variant = _variant(data_age)
+    with paused_gc():
+        _, _, responses, chains, _, _ = _bounds(system, variant)
+        return variant, responses, chains
+
+
+def _variant(data_age: str) -> str:
+    variant = data_age.replace("_", "-")
+    if variant not in VARIANTS:
+        raise ValueError(f"data_age must be one of {VARIANTS}, not {data_age!r}")
+    return variant
+
+
+def _bounds(system: SystemModel, variant: str):
+    """Rates, event models, response times (the CPA fixed point) and chain bounds: (infos, events,
+    responses, chains, rounds, converged)."""
     order = trigger_order(system)
     infos = activation_rates(system, order)
     events, responses, rounds, converged = _fixed_point(system, infos, order[0])
-    loads = core_loads(system, infos)
-    samplings = sampling_relations(system, infos)
     timing = Timing(system, infos, events, responses)
     chains = tuple(chain_bounds(timing, c, variant) for c in system.chains)
+    return infos, events, responses, chains, rounds, converged
+
+
+def _analyze(system: SystemModel, variant: str) -> AnalysisResult:
+    sink = DiagnosticSink()
+    infos, events, responses, chains, rounds, converged = _bounds(system, variant)
+    loads = core_loads(system, infos)
+    samplings = sampling_relations(system, infos)
     check_trigger_constraints(system, infos, sink)
     check_sampling(system, samplings, sink)
     check_utilisation(system, loads, infos, sink)
@@ -141,7 +168,8 @@ def diagnostics_of(result: AnalysisResult) -> list[Diagnostic]:
 
 
 def _task_timing(task: TaskModel, info: ActivationInfo, events: EventModel, response: TaskResponse) -> TaskTiming:
-    return TaskTiming(task.id, task.core, task.priority, task.kind, task.bcet, task.wcet, info, events, response)
+    return _new_task_timing(task.id, task.core, task.priority, task.kind, task.bcet, task.wcet, info, events,
+                            response)
 
 
 def _fixed_point(system: SystemModel, infos, order):

@@ -23,6 +23,7 @@ from dataclasses import dataclass
 from fractions import Fraction
 from typing import Mapping
 
+from ..construct import direct_constructor
 from ..model import ChainModel, DataTriggered, HopModel, SystemModel
 from ..units import fmt_time
 from .rates import ActivationInfo, EventModel, arrival_model, combine_and, exact_sum
@@ -141,6 +142,14 @@ class ChainBounds:
         return self.reaction_time.jitter
 
 
+#: the constructors of the objects above, built by the thousand (``verify.construct``)
+_new_term = direct_constructor(Term)
+_new_step = direct_constructor(Step)
+_new_bound = direct_constructor(Bound)
+_new_spec_check = direct_constructor(SpecCheck)
+_new_chain_bounds = direct_constructor(ChainBounds)
+
+
 # ================================================================== context
 
 
@@ -169,7 +178,7 @@ def _total(parts) -> Fraction | None:
 
 
 def _term(rule: str, parts, note: str = "") -> Term:
-    return Term(rule, _total(parts), tuple(parts), note)
+    return _new_term(rule, _total(parts), tuple(parts), note)
 
 
 def _le(a: Term, b: Term) -> bool:
@@ -194,12 +203,12 @@ def delta_plus(t: Timing, writer: str, k: int) -> Fraction | None:
 def first_step(t: Timing, task: str) -> Step:
     """τ₁ samples the stimulus: reaction ``W⁺₁ + R₁`` (§7.2)."""
     parts = ((f"W⁺({task})", t.events[task].sampling_wait), (f"R({task})", t.R(task)))
-    return Step("first", task, None, task, None, None, _term(FIRST, parts), None, t.bcet(task))
+    return _new_step("first", task, None, task, None, None, _term(FIRST, parts), None, t.bcet(task))
 
 
 def last_step(t: Timing, task: str) -> Step:
     """τₙ's job completes within Rₙ of the read it starts with: data age ``Rₙ`` (§7.4)."""
-    return Step("last", task, None, task, None, None, None, _term(LAST, ((f"R({task})", t.R(task)),)), ZERO)
+    return _new_step("last", task, None, task, None, None, None, _term(LAST, ((f"R({task})", t.R(task)),)), ZERO)
 
 
 def register_reaction(t: Timing, hop: HopModel) -> Term:
@@ -269,19 +278,19 @@ def hop_step(t: Timing, hop: HopModel) -> Step:
         if _le(candidate, register_r):
             reaction = candidate
         else:
-            reaction = Term(register_r.rule, register_r.value, register_r.parts,
-                            f"tighter here than {candidate.rule} ({fmt_time(candidate.value)})")
+            reaction = _new_term(register_r.rule, register_r.value, register_r.parts,
+                                 f"tighter here than {candidate.rule} ({fmt_time(candidate.value)})")
         if act.mode == "single":
             age = trigger_age(t, hop, k)
         else:
-            age = Term(register_a.rule, register_a.value, register_a.parts,
-                       "the reader may be released by another member, so this value is read as a register")
+            age = _new_term(register_a.rule, register_a.value, register_a.parts,
+                            "the reader may be released by another member, so this value is read as a register")
     elif isinstance(act, DataTriggered):
-        reaction = Term(register_r.rule, register_r.value, register_r.parts,
-                        f"`{hop.reader}` is triggered by `{act.port}`, not by this port")
+        reaction = _new_term(register_r.rule, register_r.value, register_r.parts,
+                             f"`{hop.reader}` is triggered by `{act.port}`, not by this port")
     label = f"{hop.writer} → {hop.reader}"
     best = hop.link.delay_min + t.bcet(hop.reader)
-    return Step("hop", label, hop.writer, hop.reader, hop.link.source, hop.link.target, reaction, age, best)
+    return _new_step("hop", label, hop.writer, hop.reader, hop.link.source, hop.link.target, reaction, age, best)
 
 
 # ================================================================== chain totals
@@ -346,34 +355,35 @@ def chain_bounds(t: Timing, chain: ChainModel, variant: str = "reduced") -> Chai
     reaction = reaction_time(steps)
     age = data_age(steps)
     bounds = dict(
-        reaction_time=Bound(reaction, best, "§7.5 W⁺₁ + R₁ + Σ hop reaction terms"),
-        reaction_time_reduced=Bound(_minus(reaction, wait), best, "§7.5 R₁ + Σ hop reaction terms"),
-        data_age_reduced=Bound(age, best, "§7.5 Σ hop data-age terms + Rₙ"),
-        data_age_non_reduced=Bound(_plus(age, a_max), best + read_gap_min(t, first),
-                                   "§7.5 reduced data age + A⁺₁"),
+        reaction_time=_new_bound(reaction, best, "§7.5 W⁺₁ + R₁ + Σ hop reaction terms"),
+        reaction_time_reduced=_new_bound(_minus(reaction, wait), best, "§7.5 R₁ + Σ hop reaction terms"),
+        data_age_reduced=_new_bound(age, best, "§7.5 Σ hop data-age terms + Rₙ"),
+        data_age_non_reduced=_new_bound(_plus(age, a_max), best + read_gap_min(t, first),
+                                        "§7.5 reduced data age + A⁺₁"),
     )
     specs = _spec_checks(chain, bounds, variant)
-    return ChainBounds(chain.name, chain.tasks, steps, data_age_variant=variant, specs=specs,
-                       dominating_reaction=_dominating(steps, "reaction"),
-                       dominating_data_age=_dominating(steps, "data_age"), **bounds)
+    return _new_chain_bounds(chain.name, chain.tasks, steps, data_age_variant=variant, specs=specs,
+                             dominating_reaction=_dominating(steps, "reaction"),
+                             dominating_data_age=_dominating(steps, "data_age"), **bounds)
 
 
 def _spec_checks(chain: ChainModel, bounds: dict[str, Bound], variant: str) -> tuple[SpecCheck, ...]:
     age = bounds["data_age_reduced" if variant == "reduced" else "data_age_non_reduced"]
     checks = []
     if chain.reaction_time is not None:
-        checks.append(SpecCheck("reaction_time", chain.reaction_time, bounds["reaction_time"].worst, "non-reduced"))
+        checks.append(_new_spec_check("reaction_time", chain.reaction_time, bounds["reaction_time"].worst,
+                                      "non-reduced"))
     if chain.data_age is not None:
-        checks.append(SpecCheck("data_age", chain.data_age, age.worst, variant))
+        checks.append(_new_spec_check("data_age", chain.data_age, age.worst, variant))
     if chain.jitter is not None:
-        checks.append(SpecCheck("jitter", chain.jitter, age.jitter, f"data age ({variant})"))
+        checks.append(_new_spec_check("jitter", chain.jitter, age.jitter, f"data age ({variant})"))
     return tuple(checks)
 
 
 def _broken(chain: ChainModel, variant: str, problem: str) -> ChainBounds:
-    unknown = Bound(None, ZERO, "not analysed")
+    unknown = _new_bound(None, ZERO, "not analysed")
     bounds = dict(reaction_time=unknown, reaction_time_reduced=unknown, data_age_reduced=unknown,
                   data_age_non_reduced=unknown)
-    return ChainBounds(chain.name, chain.tasks, (), data_age_variant=variant,
-                       specs=_spec_checks(chain, bounds, variant), dominating_reaction=None,
-                       dominating_data_age=None, problem=problem, **bounds)
+    return _new_chain_bounds(chain.name, chain.tasks, (), data_age_variant=variant,
+                             specs=_spec_checks(chain, bounds, variant), dominating_reaction=None,
+                             dominating_data_age=None, problem=problem, **bounds)

@@ -34,9 +34,12 @@ from fractions import Fraction
 from math import lcm
 from typing import Mapping
 
+from ..construct import direct_constructor
 from ..model import DataTriggered, Hole, SystemModel
 from .rates import EventModel
 from .rta import (MAX_JOBS, MAX_STEPS, ZERO, TaskResponse, carry_in, deadline_of, ratio)
+
+_new_response = direct_constructor(TaskResponse)  # (``verify.construct``: one per task)
 
 
 class Static:
@@ -514,8 +517,8 @@ class Round:
             used = computed
             rule = f"busy window, {q} job{'s' if q != 1 else ''}" if computed is not None else "unbounded"
         deadline, deadline_rule = self.deadlines[n]
-        return TaskResponse(task.id, task.core, task.priority, task.bcet, used, computed, rule, deadline,
-                            deadline_rule, blocking, self.hold(n), q, crit, names, failure)
+        return _new_response(task.id, task.core, task.priority, task.bcet, used, computed, rule, deadline,
+                             deadline_rule, blocking, self.hold(n), q, crit, names, failure)
 
 
 def _cap(prescalers: tuple[int, ...], carry: int, q: int) -> int:

@@ -25,6 +25,7 @@ from fractions import Fraction
 from typing import Mapping
 
 
+from ..construct import direct_constructor
 from ..diagnostics import DiagnosticSink, Label
 from ..model import DataTriggered, LinkModel, Periodic, SporadicSource, SystemModel, TaskModel
 from ..units import fmt_number, fmt_rate, fmt_time
@@ -66,7 +67,7 @@ class RateInterval:
         return self.low == self.high
 
     def divided(self, k: int) -> RateInterval:
-        return RateInterval(self.low / k, self.high / k)
+        return _new_rate_interval(self.low / k, self.high / k)
 
     def __str__(self) -> str:
         if self.is_point:
@@ -107,6 +108,12 @@ class ActivationInfo:
     in_cycle: bool = False
 
 
+#: the constructors of the objects above, built by the thousand (``verify.construct``)
+_new_rate_interval = direct_constructor(RateInterval)
+_new_source = direct_constructor(Source)
+_new_activation_info = direct_constructor(ActivationInfo)
+
+
 def trigger_sources(system: SystemModel, task: TaskModel) -> tuple[Source, ...]:
     """The members of ``task``'s data trigger with the connection into each (``model.link_into``)."""
     act = task.activation
@@ -116,7 +123,7 @@ def trigger_sources(system: SystemModel, task: TaskModel) -> tuple[Source, ...]:
     for member in act.members:
         port = f"{task.instance}.{member}"
         link = system.link_into(port)
-        out.append(Source(member, port, link.writer if link else None, link))
+        out.append(_new_source(member, port, link.writer if link else None, link))
     return tuple(out)
 
 
@@ -231,21 +238,21 @@ def _activation_info(system: SystemModel, task: TaskModel, known: Mapping[str, A
         found = timers.get(key) if timers is not None else None
         if found is None:
             rate = Fraction(1) / act.period
-            found = (RateInterval(rate, rate), f"timer {fmt_time(act.period)}")
+            found = (_new_rate_interval(rate, rate), f"timer {fmt_time(act.period)}")
             if timers is not None:
                 timers[key] = found
-        return ActivationInfo(task.id, "timer", found[0], found[1], period=act.period, phase=act.phase)
+        return _new_activation_info(task.id, "timer", found[0], found[1], period=act.period, phase=act.phase)
     if isinstance(act, SporadicSource):
-        rate = RateInterval(1 / act.max_interarrival, 1 / act.min_interarrival)
-        return ActivationInfo(task.id, "sporadic", rate,
-                              f"sporadic {fmt_time(act.min_interarrival)} .. {fmt_time(act.max_interarrival)}",
-                              interarrival=(act.min_interarrival, act.max_interarrival))
+        rate = _new_rate_interval(1 / act.max_interarrival, 1 / act.min_interarrival)
+        text = f"sporadic {fmt_time(act.min_interarrival)} .. {fmt_time(act.max_interarrival)}"
+        return _new_activation_info(task.id, "sporadic", rate, text,
+                                    interarrival=(act.min_interarrival, act.max_interarrival))
     if isinstance(act, DataTriggered):
         sources = trigger_sources(system, task)
         rate, text = _trigger_rate(act, sources, known, in_cycle)
-        return ActivationInfo(task.id, "trigger", rate, text, trigger_port=act.port, mode=act.mode,
-                              prescaler=act.prescaler, sources=sources, in_cycle=in_cycle)
-    return ActivationInfo(task.id, "hole", None, "not bounded: unresolved synthesis hole")
+        return _new_activation_info(task.id, "trigger", rate, text, trigger_port=act.port, mode=act.mode,
+                                    prescaler=act.prescaler, sources=sources, in_cycle=in_cycle)
+    return _new_activation_info(task.id, "hole", None, "not bounded: unresolved synthesis hole")
 
 
 def _trigger_rate(act: DataTriggered, sources: tuple[Source, ...], known: Mapping[str, ActivationInfo],
@@ -256,7 +263,7 @@ def _trigger_rate(act: DataTriggered, sources: tuple[Source, ...], known: Mappin
     rates: list[RateInterval | None] = []
     for src in sources:
         if src.writer is None:
-            rates.append(RateInterval(ZERO, ZERO))
+            rates.append(_new_rate_interval(ZERO, ZERO))
         else:
             rates.append(known[src.writer].rate)
     parts = [("0 Hz (unconnected)" if s.writer is None else str(r) if r is not None else "unbounded")
@@ -264,10 +271,10 @@ def _trigger_rate(act: DataTriggered, sources: tuple[Source, ...], known: Mappin
     if any(r is None for r in rates):
         return None, "not bounded: a writer's rate is not bounded"
     if act.mode == "and":
-        combined = RateInterval(min(r.low for r in rates), min(r.high for r in rates))
+        combined = _new_rate_interval(min(r.low for r in rates), min(r.high for r in rates))
         text = f"min({', '.join(parts)})"
     elif act.mode == "or":
-        combined = RateInterval(sum((r.low for r in rates), ZERO), sum((r.high for r in rates), ZERO))
+        combined = _new_rate_interval(sum((r.low for r in rates), ZERO), sum((r.high for r in rates), ZERO))
         text = " + ".join(parts)
     else:
         combined, text = rates[0], parts[0]
@@ -342,6 +349,9 @@ class EventModel:
         return max(self.a_max, self.first_max)
 
 
+_new_event_model = direct_constructor(EventModel)  # (``verify.construct``: built by the thousand)
+
+
 SILENT = EventModel(None, None, None, None, None, silent=True)
 UNBOUNDED = EventModel(None, None, None, None, None)
 
@@ -356,9 +366,9 @@ def source_event_model(task: TaskModel) -> EventModel:
     act = task.activation
     if isinstance(act, Periodic):
         first = act.phase if act.phase is not None else act.period
-        return EventModel(act.period, ZERO, act.period, ZERO, first)
+        return _new_event_model(act.period, ZERO, act.period, ZERO, first)
     if isinstance(act, SporadicSource):
-        return EventModel(act.min_interarrival, ZERO, act.max_interarrival, ZERO, act.max_interarrival)
+        return _new_event_model(act.min_interarrival, ZERO, act.max_interarrival, ZERO, act.max_interarrival)
     return UNBOUNDED
 
 
@@ -376,8 +386,8 @@ def arrival_model(writer: EventModel, wcrt: Fraction | None, bcrt: Fraction, lin
         return SILENT
     extra = output_jitter(wcrt, bcrt, link)
     first = _add(_add(writer.first_max, wcrt), link.delay_max)
-    return EventModel(writer.period_min, _add(writer.jitter_min, extra), writer.period_max,
-                      _add(writer.jitter_max, extra), first)
+    return _new_event_model(writer.period_min, _add(writer.jitter_min, extra), writer.period_max,
+                            _add(writer.jitter_max, extra), first)
 
 
 def combine_or(members: list[EventModel]) -> EventModel:
@@ -399,8 +409,8 @@ def combine_or(members: list[EventModel]) -> EventModel:
     best = min(bounded, key=lambda m: (m.sampling_wait, m.period_max)) if bounded else None
     firsts = [m.first_max for m in live if m.first_max is not None]
     jitter_max = None if best is None else best.jitter_max + max(ZERO, best.first_max - best.period_max)
-    return EventModel(period, jitter, best.period_max if best else None, jitter_max,
-                      min(firsts) if firsts else None)
+    return _new_event_model(period, jitter, best.period_max if best else None, jitter_max,
+                            min(firsts) if firsts else None)
 
 
 def combine_and(members: list[EventModel]) -> EventModel:
@@ -415,9 +425,9 @@ def combine_and(members: list[EventModel]) -> EventModel:
     gap = None if any(g is None for g in gaps) else max(gaps)
     firsts = [m.first_max for m in members]
     first = None if any(f is None for f in firsts) else max(firsts)
-    return EventModel(slowest.period_min if slowest else None,
-                      slowest.jitter_min + slowest.period_min if slowest else None,
-                      gap, ZERO if gap is not None else None, first)
+    return _new_event_model(slowest.period_min if slowest else None,
+                            slowest.jitter_min + slowest.period_min if slowest else None,
+                            gap, ZERO if gap is not None else None, first)
 
 
 def first_of_k(stream: EventModel, members: list[EventModel], mode: str, k: int) -> Fraction | None:
@@ -436,8 +446,8 @@ def prescaled(stream: EventModel, k: int, first: Fraction | None) -> EventModel:
     if stream.silent or k == 1:
         return stream if k == 1 else SILENT
     mul = lambda p: None if p is None else p * k  # noqa: E731
-    return EventModel(mul(stream.period_min), stream.jitter_min, mul(stream.period_max),
-                      stream.jitter_max, first)
+    return _new_event_model(mul(stream.period_min), stream.jitter_min, mul(stream.period_max),
+                            stream.jitter_max, first)
 
 
 def trigger_stream(members: list[EventModel], mode: str) -> EventModel:
@@ -527,6 +537,9 @@ class LinkSampling:
     by_trigger: bool = False
 
 
+_new_link_sampling = direct_constructor(LinkSampling)  # (``verify.construct``: built by the thousand)
+
+
 def sampling_relations(system: SystemModel, infos: Mapping[str, ActivationInfo]) -> tuple[LinkSampling, ...]:
     """Every (connection, reader) pair, in connection order."""
     return tuple(_sampling(system, link, reader, infos) for link in system.links for reader in link.readers)
@@ -543,12 +556,12 @@ def _sampling(system: SystemModel, link: LinkModel, reader: str,
     member = link.target.split(".", 1)[1]
     if isinstance(act, DataTriggered) and act.mode == "single" and act.port == member:
         k = Fraction(act.prescaler)
-        return LinkSampling(link.source, link.target, link.writer, reader, w, r,
-                            "matched" if k == 1 else "undersampled", False, None, k > 1,
-                            k if k > 1 else None, by_trigger=True)
+        return _new_link_sampling(link.source, link.target, link.writer, reader, w, r,
+                                  "matched" if k == 1 else "undersampled", False, None, k > 1,
+                                  k if k > 1 else None, by_trigger=True)
     if w is None or r is None:
-        return LinkSampling(link.source, link.target, link.writer, reader, w, r, "unknown",
-                            False, None, False, None)
+        return _new_link_sampling(link.source, link.target, link.writer, reader, w, r, "unknown",
+                                  False, None, False, None)
     over, under = _ratio(r.high, w.low), _ratio(w.high, r.low)
     is_over = over is None or over > 1
     is_under = under is None or under > 1
@@ -558,8 +571,8 @@ def _sampling(system: SystemModel, link: LinkModel, reader: str,
         is_under = False
     relation = {(False, False): "matched", (True, False): "oversampled",
                 (False, True): "undersampled", (True, True): "varies"}[(is_over, is_under)]
-    return LinkSampling(link.source, link.target, link.writer, reader, w, r, relation,
-                        is_over, over if is_over else None, is_under, under if is_under else None)
+    return _new_link_sampling(link.source, link.target, link.writer, reader, w, r, relation,
+                              is_over, over if is_over else None, is_under, under if is_under else None)
 
 
 def _factor_text(value: Fraction | None) -> str:

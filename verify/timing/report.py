@@ -31,8 +31,10 @@ def exact(value: Fraction | int | None) -> dict | None:
     """``{"exact": "p/q", "decimal": "0.25" | null}``, or None (unbounded)."""
     if value is None:
         return None
-    value = Fraction(value)
-    text = str(value.numerator) if value.denominator == 1 else f"{value.numerator}/{value.denominator}"
+    if not isinstance(value, (int, Fraction)):
+        value = Fraction(value)
+    num, den = value.numerator, value.denominator  # (a Fraction is in lowest terms)
+    text = str(num) if den == 1 else f"{num}/{den}"
     decimal = fmt_number(value)
     return {"exact": text, "decimal": None if "/" in decimal else decimal}
 
