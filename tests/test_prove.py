@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import random
+from dataclasses import replace
 import xml.etree.ElementTree as ET
 from fractions import Fraction as F
 from importlib import resources
@@ -18,7 +19,7 @@ from verify.cli import main
 from verify.prove import ConcreteScenario, Target, prove, replay
 from verify.prove.exact import (Budget, count_representatives, enumerate_exact, exact_class, grid_of,
                                 representatives, scenario_of, weak_orders)
-from verify.prove.scenario import extremes, measure_periodic
+from verify.prove.scenario import extremes, measure_periodic, measure_periodic_reference
 from verify.sim import chain_latencies, simulate
 from verify.timing import analyze
 
@@ -319,6 +320,52 @@ def test_no_run_exceeds_the_exact_supremum(sysm, rnd):
             s = m.values[t].worst
             if s is not None and ex.worst[t].value is not None:
                 assert s.value <= ex.worst[t].value, (t, phases, s.value, ex.worst[t].value)
+
+
+@st.composite
+def rigid_systems_with_siblings(draw):
+    """``rigid_systems``, sometimes made cooperative, with a cooperative sibling in the chain's first
+    instance (token hand-over) and an interferer of equal priority (rank ties)."""
+    sysm = draw(rigid_systems())
+    if not draw(st.booleans()):
+        return sysm
+    kind = draw(st.sampled_from(["preemptive", "cooperative"]))
+    tasks = [replace(t, kind=kind) for t in sysm.tasks]
+    first = tasks[0]
+    tasks.append(task(f"{first.instance}.U", timer(draw(st.sampled_from([2, 4])), None if
+                      draw(st.booleans()) else 1), wcet=MS, prio=first.priority, core=first.core,
+                      kind="cooperative"))
+    return replace(sysm, tasks=tuple(tasks))
+
+
+def _same_measurement(sysm, scenario, targets, hyper):
+    fast = measure_periodic(sysm, scenario, targets, hyper)
+    ref = measure_periodic_reference(sysm, scenario, targets, hyper)
+    assert fast == ref, (scenario, fast, ref)
+    return fast
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(rigid_systems_with_siblings(), st.randoms(use_true_random=False))
+def test_integer_evaluator_matches_the_reference_simulator(sysm, rnd):
+    """verify/prove/rigid.py against verify.sim: the same extremes (samples, jobs, values), periodic
+    start, period, horizon and event count, on every representative and on off-grid phases; the
+    exact worst case of the enumeration and its counterexample scenario replay in verify.sim."""
+    targets = [Target(k, "ch") for k in KINDS] + [Target("response", t.id) for t in sysm.tasks]
+    grid = grid_of(sysm)
+    if count_representatives(grid) > 60:
+        return
+    for phases, counters in representatives(grid):
+        _same_measurement(sysm, scenario_of(phases, counters), targets, grid.hyper)
+    for _ in range(3):
+        phases = {a: F(rnd.randrange(p * 97), 97) * grid.tick for a, p in zip(grid.timers, grid.periods)}
+        counters = {tid: rnd.randrange(k) for tid, k in grid.counters}
+        _same_measurement(sysm, scenario_of(phases, counters), targets, grid.hyper)
+    ex = enumerate_exact(sysm, targets, Budget(3000))
+    for t in targets:
+        m = ex.worst[t].measured
+        if m is not None:
+            assert extremes(replay(sysm, m.scenario), sysm, t).worst == m.values[t].worst
 
 
 @settings(max_examples=3, deadline=None, suppress_health_check=[HealthCheck.too_slow])

@@ -366,6 +366,18 @@ def _covered(trace: Trace, model: SystemModel, target: Target, mark: Fraction, p
 def measure_periodic(model: SystemModel, scenario: ConcreteScenario, targets: Iterable[Target],
                      hyper: Fraction, max_periods: int = 64,
                      max_events: int = DEFAULT_MAX_EVENTS) -> Measured:
+    """``measure_periodic_reference``, by the integer evaluator of ``rigid.py`` whenever the scenario
+    is rigid (the same run, samples and extremes; tests/test_prove.py compares the two)."""
+    from .rigid import measure_rigid, rigid_scenario
+
+    if rigid_scenario(model, scenario):
+        return measure_rigid(model, scenario, targets, hyper, max_periods, max_events)
+    return measure_periodic_reference(model, scenario, targets, hyper, max_periods, max_events)
+
+
+def measure_periodic_reference(model: SystemModel, scenario: ConcreteScenario, targets: Iterable[Target],
+                               hyper: Fraction, max_periods: int = 64,
+                               max_events: int = DEFAULT_MAX_EVENTS) -> Measured:
     """Run a rigid system (constant execution times and delays, no sporadic source) until its timing
     state at a multiple of ``hyper`` repeats, then until every sample class is present; return the
     extremes of every target, which are then those of the infinite run (proof spec §4.3).
