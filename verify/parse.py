@@ -157,7 +157,7 @@ def _repair_by_insertion(err: UnexpectedToken) -> None:
                                                          _INSERTION_ORDER.index(n) if n in _INSERTION_ORDER else 0, n))
     for name in expected:
         filler = Token(name, _placeholder(name), line=err.token.line, column=err.token.column)
-        trial = parser.copy()
+        trial = parser.copy(deepcopy_values=False)  # trial feeds only build new nodes
         try:
             trial.feed_token(filler)
             trial.feed_token(err.token)
