@@ -3,6 +3,7 @@
     text = generate_system(1000, seed=1)                       # configured, feasible (tightness 3/2)
     text = generate_system(500, seed=2, hole_share=Fraction(1, 5))   # holes for `synth`
     text = generate_system(500, seed=3, infeasible=True)       # specs that cannot hold
+    text = generate_chain_system(10, seed=1)                   # one chain for prove's exact search
 
     python -m benchmarks.generate --tasks 1000 --seed 1 -o out.vfy
 
@@ -51,6 +52,11 @@ How a system is made (``draw_system``; ``render`` turns it into text):
    timer task of `fixed` rate and get ``reaction_time <= T₁/2``, below its own period (the worst-case
    reaction time is at least T₁), so no configuration can meet it. A ``tightness`` well below 1 makes
    the other specs likely infeasible too.
+
+``generate_chain_system`` (``draw_chain``, ``render_chain``) makes a different kind of system, for the
+exact worst-case search of ``prove``: one chain of ``n_tasks`` tasks in prove's exact class (constant
+execution times and delays), one free phase, a hyperperiod of up to ``1000 · n_tasks`` jobs, and specs
+below the analysis' own bound so that only the exact search can decide them (see its docstring).
 """
 from __future__ import annotations
 
@@ -60,7 +66,7 @@ import sys
 import time
 from dataclasses import dataclass, field
 from fractions import Fraction
-from math import isqrt
+from math import gcd, isqrt
 from random import Random
 
 # --------------------------------------------------------------------------- WATERS 2015 constants
@@ -577,6 +583,179 @@ def generate_system(n_tasks: int, seed: int, *, cores: int = 4, chains: int | No
     """
     return render(draw_system(n_tasks, seed, cores=cores, chains=chains, tightness=tightness,
                               hole_share=hole_share, infeasible=infeasible))
+
+
+# ------------------------------------------------------------------------ one chain for the exact search
+
+CHAIN_TIMER_SHARE = Fraction(2, 5)  # of the tasks after the head that run on their own (fixed-phase) timer (at least 1)
+CHAIN_DELAY_SHARE = Fraction(1, 4)  # of the hops that carry a constant 1 ms delay
+CHAIN_HEAD_PERIODS = (4, 5, 6, 8, 10)  # ms: the free-phase head timer (its period sets the phase search)
+CHAIN_PERIODS = tuple(range(4, 41))  # ms: the other timers
+CHAIN_MAX_UTILISATION = Fraction(4, 5)  # per core
+
+
+@dataclass
+class ChainTask:
+    index: int
+    period_ms: int | None  # None: data-triggered by its predecessor (prescaler 1)
+    phase_ms: int | None  # None: a free phase (only the head)
+    wcet_ms: int
+    core: int = 0
+    priority: int = 0
+    delay_ms: int = 0  # constant delay of the connection into this task
+
+
+@dataclass
+class ChainSystem:
+    """One chain of ``len(tasks)`` tasks in the exact class of ``prove`` (constant execution times and
+    delays, one free phase); ``jobs`` jobs in one hyperperiod of ``hyperperiod_ms``."""
+
+    name: str
+    seed: int
+    tasks: list[ChainTask]
+    hyperperiod_ms: int
+    jobs: int
+    reaction_time: Fraction | None = None  # seconds
+    data_age: Fraction | None = None
+
+
+def _chain_periods(tasks: list[ChainTask]) -> list[int]:
+    """The effective period of every task (a data-triggered task runs at its predecessor's rate)."""
+    out: list[int] = []
+    for t in tasks:
+        out.append(t.period_ms if t.period_ms is not None else out[-1])
+    return out
+
+
+def draw_chain(n_tasks: int, seed: int, *, jobs: int | None = None, cores: int = 2) -> ChainSystem:
+    """A chain ``t0 -> t1 -> … -> t(n-1)`` for the exact worst-case search (no specs yet).
+
+    ``t0`` is a timer with a free phase (period 4–10 ms); after it a share of the tasks run on timers of
+    their own with a fixed phase (periods 4–40 ms), the others are triggered by their predecessor's
+    output. Execution times are constant (1–2 ms, ``bcet = wcet``), a quarter of the hops carry a
+    constant 1 ms delay, cores are drawn, priorities rate-monotonic and unique per core. The timer
+    periods are drawn (20,000 tries up to 10 tasks, fewer for longer chains; stopping at the first
+    within 10 % below ``jobs``) so that one hyperperiod holds as many jobs as possible but at most
+    ``jobs`` (default ``1000 · n_tasks``: 10,000 for ten tasks) and no core is loaded above 80 %.
+    Every number is a whole millisecond, so the tick is a whole millisecond and the exact search has
+    at most ``3 · T₀ / 1 ms`` (≤ 30) phase representatives."""
+    if n_tasks < 1:
+        raise ValueError("a chain needs at least one task")
+    if cores < 1:
+        raise ValueError("a system needs at least one core")
+    jobs = 1000 * n_tasks if jobs is None else jobs
+    if jobs < n_tasks:
+        raise ValueError("a hyperperiod holds at least one job per task")
+    rng = Random(seed)
+    own = (n_tasks - 1) * CHAIN_TIMER_SHARE.numerator // CHAIN_TIMER_SHARE.denominator
+    timers = [0] + sorted(rng.sample(range(1, n_tasks), max(own, min(1, n_tasks - 1))))
+    shape = [ChainTask(i, 0 if i in timers else None, None, 1,
+                       delay_ms=1 if i and _chance(rng, CHAIN_DELAY_SHARE) else 0) for i in range(n_tasks)]
+    for t in shape:
+        t.wcet_ms = 1 + rng.randrange(2)
+        t.core = rng.randrange(cores)
+    best: tuple[int, list[int], int] | None = None  # (jobs, timer periods, hyperperiod)
+    for _ in range(min(20_000, max(500, 200_000 // n_tasks))):  # 20,000 tries up to 10 tasks
+        periods = [rng.choice(CHAIN_HEAD_PERIODS)] + [rng.choice(CHAIN_PERIODS) for _ in timers[1:]]
+        for i, p in zip(timers, periods):
+            shape[i].period_ms = p
+        eff = _chain_periods(shape)
+        hyper = 1
+        for p in eff:
+            hyper = hyper * p // gcd(hyper, p)
+        count = sum(hyper // p for p in eff)
+        if count > jobs or (best is not None and count <= best[0]):
+            continue
+        load = [Fraction(0)] * cores
+        for t, p in zip(shape, eff):
+            load[t.core] += Fraction(t.wcet_ms, p)
+        if max(load) > CHAIN_MAX_UTILISATION:
+            continue
+        best = (count, periods, hyper)
+        if 10 * count >= 9 * jobs:
+            break
+    if best is None:
+        raise ValueError(f"no periods found for a {n_tasks}-task chain within {jobs} jobs per hyperperiod")
+    count, periods, hyper = best
+    for i, p in zip(timers, periods):
+        shape[i].period_ms = p
+    for i in timers[1:]:
+        shape[i].phase_ms = rng.randrange(shape[i].period_ms)
+    eff = _chain_periods(shape)
+    for core in range(cores):
+        on = sorted((t for t in shape if t.core == core), key=lambda t: (eff[t.index], t.index))
+        for rank, t in enumerate(on):
+            t.priority = len(on) - rank
+    return ChainSystem(f"Chain{n_tasks}s{seed}", seed, shape, hyper, count)
+
+
+def render_chain(system: ChainSystem) -> str:
+    n, cores = len(system.tasks), 1 + max(t.core for t in system.tasks)
+    out = ["// Generated by benchmarks.generate.generate_chain_system: one chain in the exact class of `prove`",
+           f"// tasks {n}, seed {system.seed}, hyperperiod {system.hyperperiod_ms} ms with {system.jobs} jobs",
+           ""]
+    for t in system.tasks:
+        out.append(f"component C{t.index} {{")
+        if t.index:
+            out.append(f"  in i : M{t.index - 1}")
+        out += [f"  out o : M{t.index}", "  task Run {"]
+        if t.index:
+            out.append("    reads i")
+        out += ["    produces o", f"    bcet {t.wcet_ms} ms", f"    wcet {t.wcet_ms} ms", "  }", "}"]
+    out += ["", f"system {system.name} {{"]
+    out += [f"  core cpu{k}" for k in range(cores)]
+    for t in system.tasks:
+        if t.period_ms is None:
+            act = "trigger i"
+        else:
+            act = f"timer {t.period_ms} ms" + (f" phase {t.phase_ms} ms" if t.phase_ms is not None else "")
+        out.append(f"  instance t{t.index} : C{t.index} on cpu{t.core} {{ task Run priority {t.priority} {act} }}")
+    for t in system.tasks[1:]:
+        out.append(f"  connect t{t.index - 1}.o -> t{t.index}.i" + (f" delay {t.delay_ms} ms" if t.delay_ms else ""))
+    specs = []
+    if system.reaction_time is not None:
+        specs.append(f"reaction_time <= {_time(system.reaction_time)}")
+    if system.data_age is not None:
+        specs.append(f"data_age <= {_time(system.data_age)}")
+    if n > 1:
+        out.append("  chain c0: " + " -> ".join(f"t{t.index}.o" for t in system.tasks) + " { " + " ".join(specs) + " }")
+    out += ["}", ""]
+    return "\n".join(out)
+
+
+def generate_chain_system(n_tasks: int, seed: int, *, jobs: int | None = None, cores: int = 2,
+                          tightness: Fraction = Fraction(9, 10)) -> str:
+    """The DSL text of one chain (``draw_chain``) whose ``reaction_time`` and ``data_age`` specs are
+    ``tightness`` times the bounds of verify's own analysis (``verify.timing.analyze``), rounded down to
+    a millisecond: with ``tightness`` < 1 the bound cannot prove them, so ``prove`` must decide them by
+    its exact search over the hyperperiod (proved when the exact worst case is below the spec,
+    violated with a counterexample otherwise)."""
+    tightness = _exact(tightness)
+    if tightness <= 0:
+        raise ValueError("tightness must be positive")
+    system = draw_chain(n_tasks, seed, jobs=jobs, cores=cores)
+    text = render_chain(system)
+    if n_tasks < 2:
+        return text
+    import verify  # only here: the specs are set from the analysis' own bounds
+    from verify.timing import analyze
+
+    loaded = verify.load_text(text)
+    if loaded.diagnostics:
+        first = loaded.diagnostics[0]
+        raise AssertionError(f"generated chain does not load: {first.code} {first.message}")
+    bounds = analyze(loaded.system()).chain("c0")
+    ms = Fraction(1, 1000)
+
+    def spec(bound):
+        if bound is None:
+            return None
+        scaled = tightness * bound / ms
+        return max(ms, scaled.numerator // scaled.denominator * ms)
+
+    system.reaction_time = spec(bounds.reaction_time.worst)
+    system.data_age = spec(bounds.data_age_reduced.worst)
+    return render_chain(system)
 
 
 # ------------------------------------------------------------------------------------ CLI

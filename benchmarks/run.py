@@ -1,54 +1,64 @@
 """The benchmark runner: time each stage on generated systems of several sizes.
 
-    python -m benchmarks                                  # every available stage, default sizes
+    python -m benchmarks                                  # every available stage at its own default sizes
     python -m benchmarks --sizes 10,100,1000,10000 --repeat 3 --stages parse+check
-    python -m benchmarks --quick                          # tiny sizes, one repetition (smoke test)
+    python -m benchmarks --quick                          # every stage at tiny sizes, one repetition (smoke test)
+    python -m benchmarks --stages unsat-core --profile    # also a cProfile of the stage at its largest size
 
 For each (stage, size) the runner generates one system (``benchmarks.generate``, untimed), prepares
 what the stage needs (untimed: e.g. the loaded model for ``analyze``), then runs the stage ``--repeat``
 times for wall time (``time.perf_counter``, garbage collector on, as a user would run it) and as many
 times again under ``tracemalloc`` for the peak memory the stage allocates (tracing slows a run down, so
-the two are never mixed). It prints a Markdown table (median and min–max of both) and writes JSON to
-``benchmarks/out/results.json`` (or ``--out``).
+the two are never mixed). It prints a Markdown table (median and min–max of both, and what the stage
+found: its ``result`` column) and writes JSON to ``benchmarks/out/results.json`` (or ``--out``).
 
-Stages live in the registry ``STAGES`` (name -> callable taking an :class:`Instance`); register one with
-``@stage(...)``. Implemented:
+Stages live in the registry ``STAGES`` (name -> callable taking an :class:`Instance` and the stage's
+parameters); register one with ``@stage(...)``. A stage measures real work, never a stand-in, and checks
+that the work did what it is measured for (else :class:`BenchmarkError`: an error row, with the time it
+took). It may return a dict of result fields (status, evaluations, ...), shown in the ``result`` column.
 
 - ``parse+check``: ``verify.load_text`` on the text (parse, resolve, validate, build the model, chain
   checks). The system must load without a single diagnostic.
-- ``analyze``: ``verify.timing.analyze`` on the loaded model (registered only when it is importable).
+- ``analyze``: ``verify.timing.analyze`` on the loaded model.
+- ``prove-bound``: ``verify.load_text`` + ``verify.prove.prove`` *from the text* (parsing included), on
+  systems with one chain per five tasks; every verdict must be *proved* (target: 10,000 tasks / 2,000
+  chains < 2 s).
+- ``prove-exact``: ``prove`` of one chain (``generate.generate_chain_system``; the size is the number of
+  tasks of the chain, its hyperperiod holds up to 1,000 jobs per task) whose specs are below the
+  analysis' bound, so the exact search must decide them (target: 10 tasks, up to 10,000 jobs, < 2 s).
+- ``synth-feasibility``: ``verify.synth.driver.synthesize(..., objective="none")`` on systems with holes
+  (``hole_share`` 1/5, one chain per five tasks); status must be ``sat`` (target: 1,000 tasks < 2 s).
+- ``synth-optimum``: ``synthesize`` with the default objective (utilisation); ``sat`` and proven optimal
+  (target: 500 tasks < 10 s).
+- ``unsat-core``: ``synthesize`` on ``infeasible=True`` instances with holes; ``unsat`` with an E401
+  (target: 500 tasks < 5 s).
+- Baselines on the ``synth-feasibility`` / ``synth-optimum`` instances, side by side in the same run:
+  ``baseline-brute-force`` (``driver.brute_force``: unpruned enumeration up to an evaluation limit),
+  ``baseline-random-search`` (random candidate combinations of the unpruned problem, each analysed by
+  ``Problem.evaluate``, up to a limit) and ``baseline-z3-direct`` (the solver loop of ``synthesize`` on
+  the problem built with ``prune=False``).
 
-Extension points — planned stages, not implemented yet (add each with ``@stage`` once the feature
-exists; a stage must measure real work, never a stand-in):
-
-- ``prove-bound``: proof of every spec by the analytic bound (target: 10,000 tasks / 2,000 chains
-  < 2 s including parsing — measure it together with ``parse+check``);
-- ``prove-exact``: the exact worst case of a chain by exploring its hyperperiod (target: a 10-task
-  chain with a hyperperiod of up to 10,000 jobs < 2 s);
-- ``synth-feasibility``: any assignment of the holes that meets every spec (target: 1,000 tasks and
-  200 chains < 2 s; instances with ``hole_share`` > 0);
-- ``synth-optimum``: a proven optimal assignment (target: 500 tasks / 100 chains < 10 s);
-- ``unsat-core``: the minimal set of conflicting specs and constraints of an infeasible system
-  (target: 500 tasks < 5 s; instances with ``infeasible=True``);
-- baselines for the synthesis stages: ``baseline-brute-force`` and ``baseline-random-search`` over
-  the hole candidates, and ``baseline-z3-direct`` (the whole problem handed to Z3 without the
-  analytic pruning).
-
-A stage that needs other instances than the configured default states generator options in
-``@stage(options=...)`` (e.g. ``{"hole_share": Fraction(1, 5)}``); instances are cached per size and
-options.
+A stage states its generator options (``options=``, e.g. ``{"hole_share": Fraction(1, 5)}``; instances
+are cached per size, options and chain count), its own parameters (``params=``, with ``quick_params=``
+for ``--quick``), its chain count per task (``chains_per_task=``; ``--chains`` overrides it), its default
+sizes (``sizes=``, ``quick_sizes=``; ``--sizes`` overrides them for every stage) and its generator
+(``generator=``).
 """
 from __future__ import annotations
 
 import argparse
 import gc
 import json
+import math
 import os
 import platform
+import random
+import re
 import statistics
 import sys
 import time
 import tracemalloc
+from collections import Counter
 from dataclasses import dataclass, field
 from datetime import datetime, timezone
 from fractions import Fraction
@@ -58,16 +68,23 @@ from typing import Callable
 
 import verify
 
-from .generate import generate_system
+from .generate import generate_chain_system, generate_system
 
 DEFAULT_OUT = Path(__file__).resolve().parent / "out" / "results.json"
 DEFAULT_SIZES = (10, 100, 1000)
 QUICK_SIZES = (10, 30)
-SCHEMA = "verify.benchmarks/1"
+SCHEMA = "verify.benchmarks/2"
+ONE_PER_FIVE = Fraction(1, 5)  # chains per task of the targets (2,000 for 10,000 tasks; 200 for 1,000)
 
 
 class BenchmarkError(Exception):
-    """A stage did not do what it is measured for (e.g. the system did not load cleanly)."""
+    """A stage did not do what it is measured for (e.g. the system did not load cleanly, a synthesis
+    was not proven optimal). ``result`` holds what it found; the runner adds ``seconds``."""
+
+    def __init__(self, message: str, result: dict | None = None):
+        super().__init__(message)
+        self.result = dict(result or {})
+        self.seconds: float | None = None
 
 
 @dataclass
@@ -76,20 +93,25 @@ class Instance:
 
     n_tasks: int
     seed: int
-    options: dict = field(default_factory=dict)  # keyword arguments of generate_system
+    options: dict = field(default_factory=dict)  # keyword arguments of the generator
     chains: int | None = None
+    generator: Callable[..., str] = generate_system
     generate_seconds: float = 0.0  # set when the text is generated
 
     @cached_property
     def text(self) -> str:
+        kwargs = dict(self.options)
+        if self.chains is not None:
+            kwargs["chains"] = self.chains
         start = time.perf_counter()
-        text = generate_system(self.n_tasks, self.seed, chains=self.chains, **self.options)
+        text = self.generator(self.n_tasks, self.seed, **kwargs)
         self.generate_seconds = time.perf_counter() - start
         return text
 
     @property
     def name(self) -> str:
-        return f"waters-{self.n_tasks}-s{self.seed}.vfy"
+        kind = "chain" if self.generator is generate_chain_system else "waters"
+        return f"{kind}-{self.n_tasks}-s{self.seed}.vfy"
 
     @cached_property
     def loaded(self) -> verify.LoadResult:
@@ -101,8 +123,30 @@ class Instance:
         return self.loaded.system()
 
     @cached_property
+    def scope(self):
+        """The resolved scope of the system (source spans for synthesis diagnostics), as
+        ``synthesize`` takes it from a ``LoadResult``."""
+        resolution = self.loaded.resolution
+        return resolution.systems.get(self.model.name) if resolution is not None else None
+
+    @cached_property
     def chain_count(self) -> int:
         return sum(1 for line in self.text.splitlines() if line.lstrip().startswith("chain "))
+
+    @cached_property
+    def hyperperiod_jobs(self) -> int | None:
+        """Jobs in one hyperperiod, as the chain generator states it in its header."""
+        found = re.search(r"hyperperiod (\d+) ms with (\d+) jobs", self.text[:400])
+        return int(found.group(2)) if found else None
+
+    @cached_property
+    def unpruned_space(self) -> tuple[int, float]:
+        """(holes, log10 of the number of candidate combinations) of the problem without pruning."""
+        from verify.synth.problem import build_problem
+
+        problem = build_problem(self.model, self.scope, prune=False)
+        sizes = [len(c.candidates) for c in problem.choices.values()]
+        return len(sizes), sum(math.log10(n) for n in sizes if n)
 
 
 def _load_clean(inst: Instance) -> verify.LoadResult:
@@ -116,34 +160,69 @@ def _load_clean(inst: Instance) -> verify.LoadResult:
 
 # ------------------------------------------------------------------------------ the registry
 
-#: stage name -> the measured callable
-STAGES: dict[str, Callable[[Instance], object]] = {}
+#: stage name -> the measured callable, ``fn(inst, **params)``
+STAGES: dict[str, Callable[..., object]] = {}
 #: stage name -> one line saying what it measures
 DESCRIPTIONS: dict[str, str] = {}
 #: stage name -> attributes of the Instance to compute before timing (untimed preparation)
 NEEDS: dict[str, tuple[str, ...]] = {}
 #: stage name -> generator options of its instances
 OPTIONS: dict[str, dict] = {}
+#: stage name -> keyword arguments of the stage callable (``QUICK_PARAMS`` override them for --quick)
+PARAMS: dict[str, dict] = {}
+QUICK_PARAMS: dict[str, dict] = {}
+#: stage name -> default sizes and --quick sizes
+SIZES: dict[str, tuple[int, ...]] = {}
+QUICK: dict[str, tuple[int, ...]] = {}
+#: stage name -> the generator of its instances (``generate_system`` or ``generate_chain_system``)
+GENERATORS: dict[str, Callable[..., str]] = {}
+#: stage name -> chains per task (None: the WATERS default of 30-60 chains)
+CHAINS_PER_TASK: dict[str, Fraction | None] = {}
 #: stage name -> why it is not available here (import failed)
 UNAVAILABLE: dict[str, str] = {}
 
 
-def stage(name: str, description: str, *, needs: tuple[str, ...] = (), options: dict | None = None):
+def stage(name: str, description: str, *, needs: tuple[str, ...] = (), options: dict | None = None,
+          params: dict | None = None, quick_params: dict | None = None, sizes: tuple[int, ...] = DEFAULT_SIZES,
+          quick_sizes: tuple[int, ...] = QUICK_SIZES, generator: Callable[..., str] = generate_system,
+          chains_per_task: Fraction | None = None):
     """Register the decorated callable as stage ``name``."""
 
-    def register(fn: Callable[[Instance], object]) -> Callable[[Instance], object]:
+    def register(fn: Callable[..., object]) -> Callable[..., object]:
         STAGES[name] = fn
         DESCRIPTIONS[name] = description
         NEEDS[name] = needs
         OPTIONS[name] = dict(options or {})
+        PARAMS[name] = dict(params or {})
+        QUICK_PARAMS[name] = {**PARAMS[name], **(quick_params or {})}
+        SIZES[name] = tuple(sizes)
+        QUICK[name] = tuple(quick_sizes)
+        GENERATORS[name] = generator
+        CHAINS_PER_TASK[name] = chains_per_task
         return fn
 
     return register
 
 
-@stage("parse+check", "verify.load_text: parse, resolve, validate, build the model, check the chains")
-def parse_and_check(inst: Instance) -> verify.LoadResult:
-    return _load_clean(inst)
+def instance_key(name: str, size: int, chains: int | None) -> tuple:
+    return (GENERATORS[name].__name__, size, chains,
+            tuple(sorted((k, str(v)) for k, v in OPTIONS[name].items())))
+
+
+def chains_for(name: str, size: int, override: int | None) -> int | None:
+    """The chain count of stage ``name``'s instance of ``size`` tasks (None: the generator's default)."""
+    if GENERATORS[name] is not generate_system:
+        return None
+    if override is not None:
+        return override
+    ratio = CHAINS_PER_TASK[name]
+    return None if ratio is None else max(1, math.floor(size * ratio))
+
+
+@stage("parse+check", "verify.load_text: parse, resolve, validate, build the model, check the chains",
+       sizes=(10, 100, 1000, 10000))
+def parse_and_check(inst: Instance) -> None:
+    _load_clean(inst)
 
 
 def _register_analyze() -> None:
@@ -155,11 +234,207 @@ def _register_analyze() -> None:
 
     @stage("analyze", "verify.timing.analyze on the loaded model: rates, response times, chain latencies",
            needs=("model",))
-    def analyze_stage(inst: Instance) -> object:
-        return analyze(inst.model)
+    def analyze_stage(inst: Instance) -> None:
+        analyze(inst.model)
+
+
+def _ms(seconds: Fraction | None) -> str:
+    if seconds is None:
+        return "–"
+    from verify.units import fmt_time
+
+    return fmt_time(seconds)
+
+
+def _register_prove() -> None:
+    try:
+        from verify.prove.core import prove
+    except Exception as err:
+        for name in ("prove-bound", "prove-exact"):
+            UNAVAILABLE[name] = f"verify.prove.core.prove is not importable ({type(err).__name__}: {err})"
+        return
+
+    @stage("prove-bound", "verify.load_text + verify.prove.prove from the text (parsing included); every "
+           "verdict proved", sizes=(100, 1000, 10000), chains_per_task=ONE_PER_FIVE)
+    def prove_bound(inst: Instance) -> dict:
+        proof = prove(_load_clean(inst).system())
+        statuses = Counter(v.status for v in proof.verdicts)
+        by_bound = sum(1 for v in proof.verdicts if v.status == "proved" and v.method == "bound")
+        result = {"verdicts": len(proof.verdicts), "proved": statuses["proved"], "by bound": by_bound}
+        if statuses["proved"] != len(proof.verdicts):
+            bad = next(v for v in proof.verdicts if v.status != "proved")
+            raise BenchmarkError(f"{len(proof.verdicts) - statuses['proved']} verdict(s) not proved, first "
+                                 f"{bad.name} {bad.kind}: {bad.status} by {bad.method}", result)
+        return result
+
+    @stage("prove-exact", "verify.prove.prove of one chain (size = its tasks) whose specs the bound cannot "
+           "prove: the exact search over the hyperperiod decides", needs=("model", "hyperperiod_jobs"),
+           sizes=(10,), quick_sizes=(4,), generator=generate_chain_system)
+    def prove_exact(inst: Instance) -> dict:
+        proof = prove(inst.model)
+        chain = [v for v in proof.verdicts if v.subject == "chain"]
+        result = {"jobs/hyperperiod": inst.hyperperiod_jobs, "scenarios": proof.explored}
+        for v in chain:
+            result[v.kind] = f"{v.status} by {v.method} (exact {_ms(v.exact)}, spec {_ms(v.spec)}, bound {_ms(v.bound)})"
+        if not chain:
+            raise BenchmarkError("the chain has no spec", result)
+        undecided = [v for v in proof.verdicts if v.status == "undecided"]
+        if undecided:
+            raise BenchmarkError(f"{len(undecided)} verdict(s) undecided, first {undecided[0].name} "
+                                 f"{undecided[0].kind}: {undecided[0].note}", result)
+        inexact = [v for v in chain if not v.method.startswith("exact")]
+        if inexact:
+            raise BenchmarkError(f"chain {inexact[0].kind} was decided by {inexact[0].method}, not by the exact "
+                                 "search", result)
+        return result
+
+
+def _synth_result(r) -> dict:
+    stats = r.stats or {}
+    out = {"status": r.status}
+    if r.status == "sat" and r.goals:
+        out["optimal"] = "yes" if r.optimal else "no"
+    if r.values and r.goals:  # also the best configuration found by an undecided run
+        out.update({g.name if r.status == "sat" else f"best found {g.name}": _objective_text(g, v)
+                    for g, v in zip(r.goals, r.values)})
+    out["holes"] = len(r.problem.choices) if r.problem is not None else "–"
+    for key, label in (("solver_calls", "solver calls"), ("analyses", "analyses"), ("rlimit_used", "rlimit")):
+        if key in stats:
+            out[label] = stats[key]
+    if r.status == "unsat" and r.explanation is not None:
+        out["core"] = f"{len(r.explanation.core)} statement(s)" + (", minimal" if r.explanation.minimal else
+                                                                   f" (explanation {r.explanation.status}, not minimal)")
+    if r.status != "sat" and r.reason:
+        out["reason"] = r.reason
+    return out
+
+
+def _objective_text(goal, value) -> str:
+    if value is None:
+        return "unbounded"
+    if goal.kind == "utilisation":
+        return f"{float(value):.4f}"
+    return _ms(value)
+
+
+def _register_synth() -> None:
+    try:
+        import z3
+
+        from verify.synth.driver import (DEFAULT_RLIMIT, brute_force, goal_value, objectives_for, parse_objective,
+                                         synthesize)
+        from verify.synth.problem import Config, build_problem
+        from verify.synth.solve import Budget, Engine
+    except Exception as err:
+        for name in ("synth-feasibility", "synth-optimum", "unsat-core", "baseline-brute-force",
+                     "baseline-random-search", "baseline-z3-direct"):
+            UNAVAILABLE[name] = f"verify.synth is not importable ({type(err).__name__}: {err})"
+        return
+
+    holes = {"hole_share": Fraction(1, 5)}
+    synth_sizes = (100, 500, 1000)
+
+    @stage("synth-feasibility", "synthesize(objective=\"none\"): any hole assignment meeting every spec; sat",
+           needs=("loaded",), options=holes, sizes=synth_sizes, chains_per_task=ONE_PER_FIVE)
+    def synth_feasibility(inst: Instance) -> dict:
+        r = synthesize(inst.loaded, objective="none")
+        result = _synth_result(r)
+        if r.status != "sat":
+            raise BenchmarkError(f"status {r.status}: {r.reason}", result)
+        return result
+
+    @stage("synth-optimum", "synthesize (objective utilisation): a proven optimal assignment; sat and optimal",
+           needs=("loaded",), options=holes, sizes=synth_sizes, chains_per_task=ONE_PER_FIVE)
+    def synth_optimum(inst: Instance) -> dict:
+        r = synthesize(inst.loaded)
+        result = _synth_result(r)
+        if r.status != "sat" or not r.optimal:
+            raise BenchmarkError(f"not proven optimal: status {r.status}"
+                                 + (f" ({r.reason})" if r.reason else ", optimum not proven"), result)
+        return result
+
+    @stage("unsat-core", "synthesize on an infeasible system with holes: unsat with a minimal core (E401)",
+           needs=("loaded",), options={**holes, "infeasible": True}, sizes=synth_sizes, quick_sizes=(10,),
+           chains_per_task=ONE_PER_FIVE)
+    def unsat_core(inst: Instance) -> dict:
+        r = synthesize(inst.loaded, objective="none")
+        result = _synth_result(r)
+        codes = [d.code for d in r.diagnostics]
+        if r.status != "unsat" or "E401" not in codes:
+            raise BenchmarkError(f"expected unsat with E401, got status {r.status} and {codes or 'no diagnostic'}",
+                                 result)
+        return result
+
+    def gave_up(result: dict, evaluations: int, limit: int) -> None:
+        holes_, log_space = result.pop("_space")
+        result["evaluations"] = evaluations
+        result["space"] = f"{holes_} holes, 10^{log_space:.1f} combinations"
+        if result["status"] == "not found" and evaluations >= limit:
+            result["status"] = f"gave up after {evaluations} evaluations (limit)"
+
+    @stage("baseline-brute-force", "driver.brute_force(objective=\"none\"): unpruned enumeration of every "
+           "candidate combination up to an evaluation limit", needs=("loaded", "unpruned_space"), options=holes,
+           sizes=synth_sizes, chains_per_task=ONE_PER_FIVE, params={"limit": 200}, quick_params={"limit": 20})
+    def baseline_brute_force(inst: Instance, limit: int) -> dict:
+        r = brute_force(inst.loaded, objective="none", limit=limit)
+        # brute_force says "unsat" both when it enumerated everything and when it stopped at the limit
+        exhausted = r.status == "unsat" and r.evaluated < limit
+        result = {"status": "found" if r.status == "sat" else "unsat (space exhausted)" if exhausted else "not found",
+                  "_space": inst.unpruned_space}
+        gave_up(result, r.evaluated, limit)
+        return result
+
+    @stage("baseline-random-search", "random candidate combinations of the unpruned problem (fixed seed), each "
+           "analysed by Problem.evaluate, until one is accepted or a limit", needs=("loaded", "unpruned_space"),
+           options=holes, sizes=synth_sizes, chains_per_task=ONE_PER_FIVE, params={"limit": 200},
+           quick_params={"limit": 20})
+    def baseline_random_search(inst: Instance, limit: int) -> dict:
+        problem = build_problem(inst.model, inst.scope, prune=False)
+        names = list(problem.choices)
+        counts = [len(problem.choices[n].candidates) for n in names]
+        rng = random.Random(f"baseline-random-search/{inst.seed}")
+        result = {"status": "not found", "_space": inst.unpruned_space}
+        evaluations = 0
+        if all(counts):
+            while evaluations < limit:
+                evaluations += 1
+                config = Config(tuple((n, rng.randrange(k)) for n, k in zip(names, counts)))
+                if problem.evaluate(config).accepted:
+                    result["status"] = "found"
+                    break
+        gave_up(result, evaluations, limit)
+        return result
+
+    @stage("baseline-z3-direct", "the solver loop of synthesize (objective utilisation) on the problem built "
+           "without pruning (build_problem(prune=False))", needs=("model", "scope"), options=holes,
+           sizes=synth_sizes, chains_per_task=ONE_PER_FIVE, params={"objective": "utilisation"})
+    def baseline_z3_direct(inst: Instance, objective: str) -> dict:
+        model = inst.model
+        goals = parse_objective(objective, model)
+        budget = Budget(DEFAULT_RLIMIT, None)
+        problem = build_problem(model, inst.scope, prune=False)
+        result: dict = {"objective": objective, "holes": len(problem.choices)}
+        if problem.infeasible is not None:
+            result.update(status="unsat", reason=problem.infeasible)
+            return result
+        enc = problem.encoding(z3.Context())
+        engine = Engine(problem, enc, budget)
+        out = engine.run(objectives_for(goals, enc))
+        status = {"optimal": "sat", "unknown": "undecided"}.get(out.status, out.status)
+        result["status"] = status
+        if out.config is not None:
+            result["optimal"] = "yes" if out.status == "optimal" or (out.status == "sat" and not goals) else "no"
+            label = "" if out.status != "unknown" else "best found "
+            result.update({label + g.name: _objective_text(g, goal_value(g, out.evaluation.result)) for g in goals})
+        result.update({"solver calls": engine.stats.checks, "analyses": problem.analyses, "rlimit": budget.used})
+        if out.status == "unknown":
+            result["reason"] = out.reason or budget.reason
+        return result
 
 
 _register_analyze()
+_register_prove()
+_register_synth()
 
 
 # ------------------------------------------------------------------------------ measuring
@@ -169,18 +444,35 @@ def _summary(values: list) -> dict:
     return {"median": statistics.median(values), "min": min(values), "max": max(values)}
 
 
-def measure(name: str, inst: Instance, repeat: int, memory: bool = True, budget: float | None = None) -> dict:
+def _run(fn: Callable[..., object], inst: Instance, params: dict) -> tuple[float, object]:
+    start = time.perf_counter()
+    try:
+        result = fn(inst, **params)
+    except BenchmarkError as err:
+        err.seconds = time.perf_counter() - start
+        raise
+    return time.perf_counter() - start, result
+
+
+def prepare(name: str, inst: Instance) -> None:
+    for attr in ("text",) + NEEDS[name]:
+        getattr(inst, attr)
+
+
+def measure(name: str, inst: Instance, repeat: int, memory: bool = True, budget: float | None = None,
+            params: dict | None = None) -> dict:
     """Run stage ``name`` on ``inst``: ``repeat`` timed runs, then ``repeat`` traced runs. A run that takes
     longer than ``budget`` seconds ends the repetitions of its kind (the row says how many ran)."""
     fn = STAGES[name]
-    for attr in ("text",) + NEEDS[name]:
-        getattr(inst, attr)
+    params = PARAMS[name] if params is None else params
+    prepare(name, inst)
     seconds, peaks = [], []
+    outcome = None
     for _ in range(repeat):
         gc.collect()
-        start = time.perf_counter()
-        result = fn(inst)
-        seconds.append(time.perf_counter() - start)
+        elapsed, result = _run(fn, inst, params)
+        seconds.append(elapsed)
+        outcome = result if isinstance(result, dict) else outcome
         del result
         if budget is not None and seconds[-1] > budget:
             break
@@ -190,37 +482,42 @@ def measure(name: str, inst: Instance, repeat: int, memory: bool = True, budget:
             start = time.perf_counter()
             tracemalloc.start()
             try:
-                result = fn(inst)
+                fn(inst, **params)
                 peaks.append(tracemalloc.get_traced_memory()[1])
             finally:
                 tracemalloc.stop()
-            del result
             if budget is not None and time.perf_counter() - start > budget:
                 break
     row = {"stage": name, "tasks": inst.n_tasks, "seed": inst.seed, "chains": inst.chain_count,
            "lines": inst.text.count("\n"), "options": {k: str(v) for k, v in inst.options.items()},
-           "runs": len(seconds), "generate_seconds": inst.generate_seconds,
+           "params": params, "runs": len(seconds), "generate_seconds": inst.generate_seconds,
            "seconds": seconds, "seconds_summary": _summary(seconds)}
+    if outcome is not None:
+        row["result"] = outcome
     if peaks:
         row.update(memory_runs=len(peaks), peak_bytes=peaks, peak_bytes_summary=_summary(peaks))
     return row
 
 
-def profile(name: str, inst: Instance, path: Path, top: int = 30) -> str:
+def profile(name: str, inst: Instance, path: Path, top: int = 30, params: dict | None = None) -> str:
     """One run of stage ``name`` under cProfile; the top functions by cumulative time, also written to
-    ``path``."""
+    ``path``. A stage that ends in a BenchmarkError is profiled all the same (its work was real)."""
     import cProfile
     import io
     import pstats
 
-    for attr in ("text",) + NEEDS[name]:
-        getattr(inst, attr)
+    params = PARAMS[name] if params is None else params
+    prepare(name, inst)
     profiler = cProfile.Profile()
-    profiler.runcall(STAGES[name], inst)
+    note = ""
+    try:
+        profiler.runcall(STAGES[name], inst, **params)
+    except BenchmarkError as err:
+        note = f"(the run ended in an error row: {err})\n"
     out = io.StringIO()
     pstats.Stats(profiler, stream=out).sort_stats("cumulative").print_stats(top)
     text = f"cProfile of stage {name} on {inst.n_tasks} tasks (seed {inst.seed}), top {top} by cumulative time\n"
-    text += out.getvalue()
+    text += note + out.getvalue()
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(text, encoding="utf-8")
     return text
@@ -236,8 +533,29 @@ def machine() -> dict:
                     break
     except OSError:
         pass
+    try:
+        load = round(os.getloadavg()[0], 2)
+    except OSError:
+        load = None
     return {"date": datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M:%S UTC"), "nproc": os.cpu_count(),
-            "cpu": cpu, "python": platform.python_version(), "platform": platform.platform()}
+            "cpu": cpu, "python": platform.python_version(), "platform": platform.platform(),
+            "loadavg_1min": load, **revision()}
+
+
+def revision() -> dict:
+    """The git commit of the measured code and the files of ``verify/`` changed since (numbers of a
+    dirty tree are those of the working tree, not of the commit); empty without git."""
+    import subprocess
+
+    root = Path(__file__).resolve().parent.parent
+    try:
+        commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=root, capture_output=True, text=True,
+                                timeout=10, check=True).stdout.strip()
+        status = subprocess.run(["git", "status", "--porcelain", "--", "verify"], cwd=root, capture_output=True,
+                                text=True, timeout=10, check=True).stdout
+    except (OSError, subprocess.SubprocessError):
+        return {}
+    return {"commit": commit, "verify_changed": sorted(line[3:] for line in status.splitlines() if line.strip())}
 
 
 # ------------------------------------------------------------------------------ reporting
@@ -251,21 +569,36 @@ def _bytes(x: int) -> str:
     return f"{x / 2**20:.1f} MiB" if x >= 2**20 else f"{x / 2**10:.0f} KiB"
 
 
+def _cell(text: str) -> str:
+    return str(text).replace("|", "\\|").replace("\n", " ")
+
+
+def result_text(result: dict | None) -> str:
+    if not result:
+        return ""
+    return "; ".join(f"{k} {v}" if k != "status" else str(v) for k, v in result.items())
+
+
 def markdown(rows: list[dict]) -> str:
     head = ("| stage | tasks | chains | lines | runs | time (median) | time (min–max) | peak memory (median) "
-            "| peak memory (min–max) |")
-    out = [head, "|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
+            "| peak memory (min–max) | result |")
+    out = [head, "|---|---:|---:|---:|---:|---:|---:|---:|---:|---|"]
     for r in rows:
         if "error" in r or "skipped" in r:
-            what = f"error: {r['error']}" if "error" in r else f"skipped: {r['skipped']}"
-            out.append(f"| {r['stage']} | {r['tasks']} | | | 0 | {what} | | | |")
+            if "error" in r:
+                what = f"error: {r['error']}" + (f" (after {_seconds(r['seconds'][0])})" if r.get("seconds") else "")
+            else:
+                what = f"skipped: {r['skipped']}"
+            out.append(f"| {r['stage']} | {r['tasks']} | {r.get('chains', '')} | {r.get('lines', '')} | 0 | "
+                       f"{_cell(what)} | | | | {_cell(result_text(r.get('result')))} |")
             continue
         t = r["seconds_summary"]
         m = r.get("peak_bytes_summary")
         mem = (_bytes(m["median"]), f"{_bytes(m['min'])} – {_bytes(m['max'])}") if m else ("–", "–")
         runs = f"{r['runs']}" + (f" (+{r['memory_runs']} traced)" if m else "")
         out.append(f"| {r['stage']} | {r['tasks']} | {r['chains']} | {r['lines']} | {runs} | "
-                   f"{_seconds(t['median'])} | {_seconds(t['min'])} – {_seconds(t['max'])} | {mem[0]} | {mem[1]} |")
+                   f"{_seconds(t['median'])} | {_seconds(t['min'])} – {_seconds(t['max'])} | {mem[0]} | {mem[1]} | "
+                   f"{_cell(result_text(r.get('result')))} |")
     return "\n".join(out)
 
 
@@ -285,49 +618,63 @@ def _sizes(text: str) -> list[int]:
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(prog="python -m benchmarks", description="Time verify's stages on generated "
                                 "WATERS-2015-like systems of several sizes.")
-    p.add_argument("--sizes", type=_sizes, help=f"task counts (default {','.join(map(str, DEFAULT_SIZES))})")
+    p.add_argument("--sizes", type=_sizes, help="task counts for every stage (default: each stage's own; "
+                   "see --list)")
     p.add_argument("--repeat", type=int, help="repetitions per stage and size (default 3)")
     p.add_argument("--stages", help="comma-separated stage names (default: every available stage)")
     p.add_argument("--seed", type=int, default=1)
-    p.add_argument("--chains", type=int, default=None, help="chains per system (default: WATERS, 30-60)")
-    p.add_argument("--quick", action="store_true", help=f"sizes {','.join(map(str, QUICK_SIZES))}, one repetition")
+    p.add_argument("--chains", type=int, default=None,
+                   help="chains per system, for every stage on WATERS systems (default: the stage's own, "
+                        "one per five tasks for prove and synth stages, else WATERS' 30-60)")
+    p.add_argument("--quick", action="store_true", help="each stage's tiny sizes and parameters, one repetition")
     p.add_argument("--no-memory", action="store_true", help="skip the tracemalloc runs")
     p.add_argument("--budget", type=float, default=60.0,
                    help="seconds: a run longer than this ends its repetitions, and a size that would take "
                         "longer even with linear growth from the last one is skipped (default 60; 0: no limit)")
-    p.add_argument("--profile", action="store_true",
-                   help="also profile each stage once at its largest measured size (cProfile, written next "
-                        "to --out as profile-STAGE-TASKS.txt)")
+    p.add_argument("--profile", nargs="?", const="all", default=None, metavar="STAGES",
+                   help="also profile stages once at their largest measured size (cProfile, written next "
+                        "to --out as profile-STAGE-TASKS.txt): every stage, or the comma-separated STAGES")
     p.add_argument("--out", type=Path, default=DEFAULT_OUT, help=f"JSON results (default {DEFAULT_OUT})")
     p.add_argument("--list", action="store_true", help="list the stages and exit")
     args = p.parse_args(argv)
 
     if args.list:
         for name in STAGES:
-            print(f"{name}: {DESCRIPTIONS[name]}")
+            sizes = ",".join(map(str, SIZES[name]))
+            print(f"{name}: {DESCRIPTIONS[name]} [sizes {sizes}; quick {','.join(map(str, QUICK[name]))}]")
         for name, why in UNAVAILABLE.items():
             print(f"{name}: unavailable: {why}")
         return 0
-    sizes = args.sizes or (list(QUICK_SIZES) if args.quick else list(DEFAULT_SIZES))
     repeat = args.repeat if args.repeat is not None else 1 if args.quick else 3
     if repeat < 1:
         p.error("--repeat must be at least 1")
+    if args.chains is not None and args.chains < 0:
+        p.error("--chains must be at least 0")
     names = [s.strip() for s in args.stages.split(",")] if args.stages else list(STAGES)
     for name in names:
         if name not in STAGES:
             why = UNAVAILABLE.get(name, "known stages: " + ", ".join(list(STAGES) + list(UNAVAILABLE)))
             p.error(f"stage {name!r} is not available: {why}")
+    to_profile = set(names) if args.profile == "all" else \
+        {s.strip() for s in args.profile.split(",")} if args.profile else set()
+    for name in to_profile - set(names):
+        p.error(f"--profile {name!r}: not among the stages run")
 
     verify.load_text(generate_system(4, 0))  # warm-up, untimed: builds the parser once
     info = machine()
-    print(f"verify benchmarks — {info['date']}; {info['nproc']} CPUs ({info['cpu']}); Python {info['python']}",
-          file=sys.stderr)
+    dirty = f" + {len(info['verify_changed'])} changed file(s) in verify/" if info.get("verify_changed") else ""
+    print(f"verify benchmarks — {info['date']}; {info['nproc']} CPUs ({info['cpu']}); Python {info['python']}; "
+          f"load {info['loadavg_1min']}; commit {info.get('commit', '?')}{dirty}", file=sys.stderr)
     budget = args.budget or None
     instances: dict[tuple, Instance] = {}
     rows: list[dict] = []
     largest: dict[str, Instance] = {}
+    stage_sizes: dict[str, list[int]] = {}
     failed = False
     for name in names:
+        sizes = args.sizes or list(QUICK[name] if args.quick else SIZES[name])
+        stage_sizes[name] = sizes
+        params = QUICK_PARAMS[name] if args.quick else PARAMS[name]
         last = None  # (size, median seconds) of the last measured size
         for size in sizes:
             if budget is not None and last is not None and last[1] * size / last[0] > budget:
@@ -336,31 +683,43 @@ def main(argv: list[str] | None = None) -> int:
                                         f"the budget of {args.budget:g} s"})
                 last = (size, last[1] * size / last[0])
                 continue
-            key = (size, tuple(sorted((k, str(v)) for k, v in OPTIONS[name].items())))
-            inst = instances.setdefault(key, Instance(size, args.seed, OPTIONS[name], args.chains))
+            chains = chains_for(name, size, args.chains)
+            inst = instances.setdefault(instance_key(name, size, chains),
+                                        Instance(size, args.seed, OPTIONS[name], chains, GENERATORS[name]))
             print(f"  {name} on {size} tasks ...", file=sys.stderr, flush=True)
             try:
-                row = measure(name, inst, repeat, memory=not args.no_memory, budget=budget)
+                row = measure(name, inst, repeat, memory=not args.no_memory, budget=budget, params=params)
             except Exception as err:  # recorded, and the run goes on with the other stages and sizes
                 failed = True
                 what = str(err) if isinstance(err, BenchmarkError) else f"{type(err).__name__}: {err}"
-                rows.append({"stage": name, "tasks": size, "seed": args.seed, "error": what})
+                row = {"stage": name, "tasks": size, "seed": args.seed, "error": what, "params": params}
+                if "text" in inst.__dict__:
+                    row.update(chains=inst.chain_count, lines=inst.text.count("\n"))
+                if isinstance(err, BenchmarkError):
+                    row["result"] = err.result
+                    if err.seconds is not None:
+                        row["seconds"] = [err.seconds]
+                        largest[name] = inst
+                        last = (size, err.seconds)
+                rows.append(row)
+                print(f"    error: {what}", file=sys.stderr, flush=True)
                 continue
             rows.append(row)
             largest[name] = inst
             last = (size, row["seconds_summary"]["median"])
     profiles = {}
-    if args.profile:
-        for name, inst in largest.items():
-            path = args.out.parent / f"profile-{name.replace('+', '-')}-{inst.n_tasks}.txt"
-            print(f"  profiling {name} on {inst.n_tasks} tasks -> {path}", file=sys.stderr, flush=True)
-            profile(name, inst, path)
-            profiles[name] = str(path)
+    for name, inst in largest.items():
+        if name not in to_profile:
+            continue
+        path = args.out.parent / f"profile-{name.replace('+', '-')}-{inst.n_tasks}.txt"
+        print(f"  profiling {name} on {inst.n_tasks} tasks -> {path}", file=sys.stderr, flush=True)
+        profile(name, inst, path, params=QUICK_PARAMS[name] if args.quick else PARAMS[name])
+        profiles[name] = str(path)
     table = markdown(rows)
     print(table)
     doc = {"schema": SCHEMA, "machine": info,
-           "config": {"sizes": sizes, "repeat": repeat, "seed": args.seed, "chains": args.chains,
-                      "memory": not args.no_memory, "stages": names},
+           "config": {"sizes": stage_sizes, "repeat": repeat, "seed": args.seed, "chains": args.chains,
+                      "memory": not args.no_memory, "budget": args.budget, "quick": args.quick, "stages": names},
            "unavailable": UNAVAILABLE, "results": rows, "profiles": profiles, "markdown": table}
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(doc, indent=2, default=_json_default) + "\n", encoding="utf-8")

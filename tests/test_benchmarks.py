@@ -1,9 +1,12 @@
 """Smoke tests of the benchmark suite: the generator's systems load cleanly, are deterministic and
-follow the WATERS 2015 statistics; the infeasible option is infeasible; the runner's quick mode works."""
+follow the WATERS 2015 statistics; the infeasible option is infeasible; the chain generator for the
+exact search gives what ``prove-exact`` needs; the runner's quick mode runs every stage, per-stage
+defaults and overrides hold, and a failing stage becomes an error row with its time."""
 from __future__ import annotations
 
 import json
 import re
+import time
 from collections import Counter
 from fractions import Fraction
 
@@ -11,7 +14,8 @@ import pytest
 
 import verify
 from benchmarks import run
-from benchmarks.generate import PERIOD_SHARES, draw_system, generate_system, main as generate_main, render
+from benchmarks.generate import (PERIOD_SHARES, draw_chain, draw_system, generate_chain_system, generate_system,
+                                 main as generate_main, render)
 from verify.model import DataTriggered, Periodic
 
 
@@ -168,16 +172,106 @@ def test_generate_cli_refuses_to_overwrite(tmp_path, capsys):
 
 def test_runner_quick_mode_writes_json(tmp_path, capsys):
     out = tmp_path / "out" / "results.json"
-    assert run.main(["--quick", "--out", str(out)]) == 0
+    assert run.main(["--quick", "--out", str(out)]) == 0  # 0: no stage failed
     doc = json.loads(out.read_text(encoding="utf-8"))
     assert doc["schema"] == run.SCHEMA
-    rows = [r for r in doc["results"] if r["stage"] == "parse+check"]
-    assert [r["tasks"] for r in rows] == list(run.QUICK_SIZES)
-    for r in rows:
-        assert r["runs"] == 1 and len(r["seconds"]) == 1 and r["seconds"][0] > 0
-        assert r["peak_bytes"][0] > 0 and r["chains"] >= 1
-    assert {r["stage"] for r in doc["results"]} == set(run.STAGES)
-    assert "| parse+check | 10 |" in capsys.readouterr().out
+    results = doc["results"]
+    assert not [r for r in results if "error" in r or "skipped" in r]
+    assert {r["stage"] for r in results} == set(run.STAGES)
+    by_stage = {name: [r for r in results if r["stage"] == name] for name in run.STAGES}
+    for name, rows in by_stage.items():
+        assert [r["tasks"] for r in rows] == list(run.QUICK[name]), name
+        for r in rows:
+            assert r["runs"] == 1 and len(r["seconds"]) == 1 and r["seconds"][0] > 0
+            assert r["peak_bytes"][0] > 0 and r["chains"] >= 1
+    assert [r["tasks"] for r in by_stage["parse+check"]] == list(run.QUICK_SIZES)
+    for r in by_stage["prove-bound"]:
+        assert r["result"]["proved"] == r["result"]["verdicts"] > 0
+        assert r["chains"] == max(1, r["tasks"] // 5)
+    (exact,) = by_stage["prove-exact"]
+    assert exact["chains"] == 1 and exact["result"]["jobs/hyperperiod"] > 0
+    assert all(" by exact-" in exact["result"][k] for k in ("reaction_time", "data_age"))
+    assert all(r["result"]["status"] == "sat" for r in by_stage["synth-feasibility"])
+    assert all(r["result"]["status"] == "sat" and r["result"]["optimal"] == "yes" for r in by_stage["synth-optimum"])
+    assert all(r["result"]["status"] == "unsat" and "core" in r["result"] for r in by_stage["unsat-core"])
+    for name in ("baseline-brute-force", "baseline-random-search"):
+        limit = run.QUICK_PARAMS[name]["limit"]
+        for r in by_stage[name]:
+            res = r["result"]
+            assert 1 <= res["evaluations"] <= limit and "combinations" in res["space"]
+            gave_up = res["evaluations"] == limit and res["status"] != "found"
+            assert res["status"] == ("gave up after %d evaluations (limit)" % limit if gave_up else res["status"])
+            assert res["status"] in ("found", "unsat (space exhausted)") or gave_up
+    assert all(r["result"]["status"] in ("sat", "unsat", "undecided") for r in by_stage["baseline-z3-direct"])
+    table = capsys.readouterr().out
+    assert "| parse+check | 10 |" in table and "| prove-exact | 4 | 1 |" in table
+    assert table.splitlines()[0].endswith("| result |")
+
+
+def test_stage_defaults_and_overrides(tmp_path):
+    assert run.SIZES["prove-bound"] == (100, 1000, 10000)
+    assert run.SIZES["prove-exact"] == (10,)
+    assert run.SIZES["synth-feasibility"] == (100, 500, 1000)
+    # the targets' instances: one chain per five tasks unless --chains says otherwise
+    assert run.chains_for("prove-bound", 10000, None) == 2000
+    assert run.chains_for("synth-feasibility", 1000, None) == 200
+    assert run.chains_for("parse+check", 1000, None) is None  # WATERS: 30-60
+    assert run.chains_for("prove-bound", 10000, 7) == 7
+    assert run.chains_for("prove-exact", 10, 7) is None  # one chain, whatever --chains says
+    assert run.OPTIONS["unsat-core"] == {"hole_share": Fraction(1, 5), "infeasible": True}
+    out = tmp_path / "r.json"
+    assert run.main(["--stages", "prove-bound,parse+check", "--sizes", "15", "--repeat", "2", "--no-memory",
+                     "--out", str(out)]) == 0
+    doc = json.loads(out.read_text(encoding="utf-8"))
+    assert doc["config"]["sizes"] == {"prove-bound": [15], "parse+check": [15]}
+    rows = doc["results"]
+    assert [(r["stage"], r["tasks"], r["runs"]) for r in rows] == [("prove-bound", 15, 2), ("parse+check", 15, 2)]
+    assert rows[0]["chains"] == 3 and "peak_bytes" not in rows[0]
+
+
+def test_a_failing_stage_is_an_error_row_with_its_time(tmp_path, monkeypatch, capsys):
+    for registry in ("STAGES", "DESCRIPTIONS", "NEEDS", "OPTIONS", "PARAMS", "QUICK_PARAMS", "SIZES", "QUICK",
+                     "GENERATORS", "CHAINS_PER_TASK"):
+        monkeypatch.setattr(run, registry, dict(getattr(run, registry)))
+
+    @run.stage("failing", "stands for a synthesis that is not proven optimal", sizes=(5, 6, 7), params={"pause": 0.01})
+    def failing(inst, pause):
+        time.sleep(pause)
+        raise run.BenchmarkError("not proven optimal: status undecided", {"status": "undecided"})
+
+    out = tmp_path / "r.json"
+    assert run.main(["--stages", "failing,parse+check", "--repeat", "1", "--budget", "0.05", "--out", str(out)]) == 1
+    doc = json.loads(out.read_text(encoding="utf-8"))
+    first, second, third = [r for r in doc["results"] if r["stage"] == "failing"]
+    assert first["error"] == "not proven optimal: status undecided" and first["result"] == {"status": "undecided"}
+    assert first["seconds"][0] >= 0.01 and first["lines"] > 0
+    assert "error" in second  # 6 tasks: 0.01 s * 6/5 is within the budget
+    assert "skipped" in third or "error" in third
+    assert any(r["stage"] == "parse+check" and "error" not in r for r in doc["results"])  # the run went on
+    assert "| failing | 5 |" in capsys.readouterr().out
+
+
+def test_chain_system_for_the_exact_search():
+    from verify.prove.exact import count_representatives, exact_class, grid_of
+    from verify.prove.scenario import hyperperiod
+    from verify.timing import analyze
+
+    text = generate_chain_system(6, 3)
+    assert text == generate_chain_system(6, 3) != generate_chain_system(6, 4)
+    model = load_clean(text)
+    drawn = draw_chain(6, 3)
+    assert len(model.tasks) == 6 and [len(c.tasks) for c in model.chains] == [6]
+    assert exact_class(model) is None  # constant execution times and delays: the exact search applies
+    assert count_representatives(grid_of(model)) <= 1000  # within prove's default budget
+    hyper = hyperperiod(model)
+    assert hyper == Fraction(drawn.hyperperiod_ms, 1000)
+    assert sum(hyper / p for p in _periods(model).values()) == drawn.jobs <= 6000
+    chain, bounds = model.chains[0], analyze(model).chain("c0")
+    assert chain.reaction_time < bounds.reaction_time.worst  # the bound cannot prove the specs
+    assert chain.data_age < bounds.data_age_reduced.worst
+    ten = draw_chain(10, 1)
+    assert 9000 <= ten.jobs <= 10_000 and len(ten.tasks) == 10  # the target: up to 10,000 jobs
+    assert draw_chain(10, 1, jobs=500).jobs <= 500
 
 
 def test_runner_rejects_unknown_stage(tmp_path):
