@@ -399,6 +399,19 @@ def to_sample(t: tuple, unit: Fraction) -> Sample:
 # ------------------------------------------------------------------ one scenario, completely
 
 
+def repetition(run_to, timing_state, hyper, max_periods: int):
+    """(t₀, P) of specs/proof.md §4.3: drive a run to the multiples of ``hyper`` until its timing
+    state at one equals that at an earlier one; (None, None) if none repeats within ``max_periods``."""
+    seen: dict[tuple, int] = {}
+    for k in range(max_periods + 1):
+        run_to(k * hyper)
+        state = timing_state(k * hyper)
+        if state in seen:
+            return seen[state] * hyper, (k - seen[state]) * hyper
+        seen[state] = k
+    return None, None
+
+
 def measure_rigid(model: SystemModel, scenario, targets, hyper: Fraction, max_periods: int, max_events: int):
     """``scenario.measure_periodic`` for a rigid scenario (``rigid_scenario``): the same detection
     of the periodic timing state at multiples of ``hyper``, the same coverage steps and the same
@@ -409,17 +422,7 @@ def measure_rigid(model: SystemModel, scenario, targets, hyper: Fraction, max_pe
     sim = RigidSimulator(model, dict(scenario.phases), dict(scenario.counters), max_events, (hyper,))
     unit = sim.unit
     big_h = _ticks(hyper, unit)
-    seen: dict[tuple, int] = {}
-    t0 = period = None
-    k = 0
-    while k <= max_periods:
-        sim.run_to(k * big_h)
-        state = sim.timing_state(k * big_h)
-        if state in seen:
-            t0, period = seen[state] * big_h, (k - seen[state]) * big_h
-            break
-        seen[state] = k
-        k += 1
+    t0, period = repetition(sim.run_to, sim.timing_state, big_h, max_periods)
     horizon = sim.now
     complete = False
     chains = {c.name: c for c in model.chains}

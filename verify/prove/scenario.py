@@ -386,17 +386,9 @@ def measure_periodic_reference(model: SystemModel, scenario: ConcreteScenario, t
     hyperperiods; the extremes are then those of the simulated prefix only."""
     targets = tuple(targets)
     sim = _Simulator(model, scenario.with_horizon(hyper * (max_periods + 2)).to_sim(model), max_events)
-    seen: dict[tuple, int] = {}
-    t0 = period = None
-    k = 0
-    while k <= max_periods:
-        _run_to(sim, k * hyper)
-        state = timing_state(sim, k * hyper)
-        if state in seen:
-            t0, period = seen[state] * hyper, (k - seen[state]) * hyper
-            break
-        seen[state] = k
-        k += 1
+    from .rigid import repetition
+
+    t0, period = repetition(lambda t: _run_to(sim, t), lambda t: timing_state(sim, t), hyper, max_periods)
     horizon = sim.now
     complete = False
     if t0 is not None:
