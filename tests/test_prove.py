@@ -325,7 +325,7 @@ def test_no_run_exceeds_the_exact_supremum(sysm, rnd):
 @st.composite
 def rigid_systems_with_siblings(draw):
     """``rigid_systems``, sometimes made cooperative, with a cooperative sibling in the chain's first
-    instance (token hand-over) and an interferer of equal priority (rank ties)."""
+    instance (token hand-over, also across cores) and an interferer of equal priority (rank ties)."""
     sysm = draw(rigid_systems())
     if not draw(st.booleans()):
         return sysm
@@ -333,8 +333,8 @@ def rigid_systems_with_siblings(draw):
     tasks = [replace(t, kind=kind) for t in sysm.tasks]
     first = tasks[0]
     tasks.append(task(f"{first.instance}.U", timer(draw(st.sampled_from([2, 4])), None if
-                      draw(st.booleans()) else 1), wcet=MS, prio=first.priority, core=first.core,
-                      kind="cooperative"))
+                      draw(st.booleans()) else 1), wcet=MS, prio=first.priority,
+                      core=draw(st.sampled_from([first.core, "c0", "c1"])), kind="cooperative"))
     return replace(sysm, tasks=tuple(tasks))
 
 
@@ -413,3 +413,47 @@ def test_every_counterexample_replays():
             trace = replay(sysm, cex.scenario)
             s = extremes(trace, sysm, cex.target).worst
             assert s.value == cex.sample.value > v.spec
+
+
+# ------------------------------------------------------------------ workers (specs/proof.md §4.6)
+
+
+def test_parallel_enumeration_gives_the_sequential_result(monkeypatch):
+    """The representatives run in forked workers once the work is large; forced here on a small
+    system (threshold 0), the proof, every exact extreme and its scenario are those of one process."""
+    from verify.prove import exact as exact_mod
+
+    sysm = rigid_pair({"reaction_time": F(15, 1000), "data_age": F(8, 1000)})
+    targets = [Target(k, "loop") for k in KINDS]
+    sequential = enumerate_exact(sysm, targets, Budget(1000), jobs=1)
+    monkeypatch.setattr(exact_mod, "PARALLEL_EVENTS", 0)
+    parallel = enumerate_exact(sysm, targets, Budget(1000), jobs=2)
+    assert count_representatives(parallel.grid) > 2 and parallel.explored == sequential.explored
+    assert parallel.worst == sequential.worst and parallel.complete == sequential.complete
+    assert prove(sysm, jobs=2) == prove(sysm, jobs=1)
+
+
+def test_parallel_enumeration_stops_with_the_budget(monkeypatch):
+    """A budget (here a deadline already past after the first take) ends the enumeration at the
+    same scenario as one process would, and the workers are stopped."""
+    from verify.prove import exact as exact_mod
+
+    monkeypatch.setattr(exact_mod, "PARALLEL_EVENTS", 0)
+    sysm = rigid_pair()
+    targets = [Target("reaction_time", "loop")]
+    budget = Budget(1000)
+    taken = []
+    real_take = budget.take
+    monkeypatch.setattr(budget, "take", lambda n=1: len(taken) < 2 and (taken.append(n) or real_take(n)))
+    ex = enumerate_exact(sysm, targets, budget, jobs=2)
+    assert not ex.complete and ex.reason == "the budget ran out" and ex.explored == 2
+
+
+def test_ordered_map_keeps_input_order_across_workers():
+    from verify.prove.parallel import ordered_map
+
+    import os
+
+    assert list(ordered_map(lambda i: i * i, range(7), 2)) == [i * i for i in range(7)]
+    assert os.getpid() not in set(ordered_map(lambda i: os.getpid(), range(4), 2))  # really forked
+    assert list(ordered_map(lambda i: -i, range(3), 1)) == [0, -1, -2]

@@ -36,6 +36,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help=f"scenarios the exact and falsifying searches may simulate (default {DEFAULT_BUDGET})")
     p.add_argument("--timeout", metavar="S", type=float, default=None,
                    help="wall-clock limit in seconds for the searches (default: none, fully deterministic)")
+    p.add_argument("--jobs", metavar="N", type=int, default=0,
+                   help="processes a large exact enumeration may use (default 0: every available CPU; "
+                        "the result is the same for any N)")
     p.add_argument("--data-age", choices=("reduced", "non-reduced"), default="reduced",
                    help="data-age variant checked by data_age and jitter specs")
     p.add_argument("-o", "--output", metavar="OUT", help="write the report to OUT instead of standard output")
@@ -80,6 +83,8 @@ def cmd_prove(args) -> int:
         return _fail("--budget must be at least 1")
     if args.timeout is not None and not args.timeout > 0:
         return _fail("--timeout must be a positive number of seconds")
+    if args.jobs < 0:
+        return _fail("--jobs must be 0 (every available CPU) or a positive number of processes")
     for path, what in ((args.output, "-o"), (args.trace_svg, "--trace-svg")):
         if path and os.path.exists(path) and not args.force:
             return _fail(f"{path} exists; refusing to overwrite it (pass --force to replace it)")
@@ -95,7 +100,8 @@ def cmd_prove(args) -> int:
     holes = api.require_configured(model, "prove")
     if holes:
         return _invalid(holes, result.sources, args)
-    proof = prove(model, budget=args.budget, rlimit=DEFAULT_RLIMIT, timeout=args.timeout, data_age=args.data_age)
+    proof = prove(model, budget=args.budget, rlimit=DEFAULT_RLIMIT, timeout=args.timeout, data_age=args.data_age,
+                  jobs=args.jobs)
     code = proof.exit_code
     if args.format == "json":
         status = _emit(json.dumps(to_json(model, proof), indent=2) + "\n", args)

@@ -29,11 +29,14 @@ DEFAULT_RLIMIT = 20_000_000  # Z3 resource units (deterministic), per query
 
 
 def prove(model: SystemModel, *, budget: int = DEFAULT_BUDGET, rlimit: int = DEFAULT_RLIMIT,
-          timeout: float | None = None, data_age: str = "reduced", use_z3: bool = True) -> ProofResult:
+          timeout: float | None = None, data_age: str = "reduced", use_z3: bool = True,
+          jobs: int | None = None) -> ProofResult:
     """Prove every chain spec and task deadline of ``model`` (which must have no synthesis holes).
 
     ``budget`` bounds the number of simulated scenarios, ``rlimit`` the resources of each Z3 query;
-    ``timeout`` (seconds, wall clock) is off unless given. Deterministic for fixed arguments."""
+    ``timeout`` (seconds, wall clock) is off unless given; ``jobs`` processes may share a large
+    exact enumeration (None: every available CPU). Deterministic for fixed arguments other than
+    ``jobs``, which never changes the result."""
     if model.holes:
         raise ValueError("prove needs a configured system: use verify.api.require_configured first")
     with paused_gc():  # (the searches below run with the collector as the caller has it)
@@ -48,7 +51,7 @@ def prove(model: SystemModel, *, budget: int = DEFAULT_BUDGET, rlimit: int = DEF
                 open_.append((i, ob))
     budget_obj = Budget(budget, None if timeout is None else time.monotonic() + timeout)
     if open_:
-        verdicts.update(_decide(model, open_, budget_obj, rlimit, use_z3))
+        verdicts.update(_decide(model, open_, budget_obj, rlimit, use_z3, jobs))
     with paused_gc():
         ordered = tuple(verdicts[i] for i in range(len(obs)))
         return ProofResult(model.name, ordered, tuple(diagnostics(model, ordered)), variant, budget_obj.used,
@@ -59,13 +62,13 @@ def prove(model: SystemModel, *, budget: int = DEFAULT_BUDGET, rlimit: int = DEF
 
 
 def _decide(model: SystemModel, open_: list[tuple[int, Obligation]], budget: Budget, rlimit: int,
-            use_z3: bool) -> dict[int, Verdict]:
+            use_z3: bool, jobs: int | None = None) -> dict[int, Verdict]:
     targets = sorted({ob.target for _, ob in open_})
     want_best = frozenset(ob.target for _, ob in open_ if ob.kind == "jitter")
     reason = exact_class(model)
     exact: ExactResult | None = None
     if reason is None:
-        exact = enumerate_exact(model, targets, budget, want_best)
+        exact = enumerate_exact(model, targets, budget, want_best, jobs=jobs)
         if exact is None and use_z3:
             from .z3bmc import EncodingMismatch, z3_exact
 

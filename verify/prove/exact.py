@@ -25,6 +25,7 @@ from typing import Callable, Iterator
 
 from ..model import DataTriggered, Periodic, SporadicSource, SystemModel
 from ..sim import SimulationError
+from .parallel import ordered_map, resolve_workers
 from .scenario import (ConcreteScenario, Measured, Target, ceil_to, floor_to, frac_gcd, hyperperiod, measure,
                        measure_periodic)
 
@@ -220,10 +221,19 @@ class ExactResult:
     grid: Grid | None = None
 
 
+PARALLEL_EVENTS = 200_000  # simulator events left to do above which the enumeration forks workers
+
+
 def enumerate_exact(model: SystemModel, targets: list[Target], budget: Budget,
-                    want_best: frozenset[Target] = frozenset(), max_periods: int = 64) -> ExactResult | None:
+                    want_best: frozenset[Target] = frozenset(), max_periods: int = 64,
+                    jobs: int | None = None) -> ExactResult | None:
     """The exact extremes of ``targets`` by evaluating every representative (None when the model is
-    outside the exact class or the representatives do not fit in the budget)."""
+    outside the exact class or the representatives do not fit in the budget).
+
+    The representatives are independent: once the first has run, if the events still to simulate
+    (its event count times the scenarios left) exceed ``PARALLEL_EVENTS``, the rest run in ``jobs``
+    processes (None: every available CPU). Results are taken in order, so the outcome does not
+    depend on ``jobs``."""
     if exact_class(model) is not None:
         return None
     grid = grid_of(model)
@@ -232,23 +242,41 @@ def enumerate_exact(model: SystemModel, targets: list[Target], budget: Budget,
         return None
     result = ExactResult("exact-enumeration", {t: Extreme() for t in targets},
                          {t: Extreme() for t in want_best}, grid=grid)
-    for phases, counters in representatives(grid):
-        if not budget.take():
-            result.complete = False
-            result.reason = "the budget ran out"
-            return result
+    scenarios = [scenario_of(phases, counters) for phases, counters in representatives(grid)]
+
+    def evaluate(i: int) -> Measured | None:
         try:
-            m = measure_periodic(model, scenario_of(phases, counters), targets, grid.hyper, max_periods)
+            return measure_periodic(model, scenarios[i], targets, grid.hyper, max_periods)
         except SimulationError:
-            result.complete = False
-            result.reason = "a scenario exceeded the simulator's event budget (a zero-time loop?)"
-            continue
-        result.explored += 1
-        if not m.complete:
-            result.complete = False
-            result.reason = (f"a scenario did not reach a periodic state within {max_periods} hyperperiods"
-                             if m.periodic_from is None else "a chain stopped delivering new values")
-        _account(result, m, grid.tick, targets, want_best)
+            return None
+
+    def measurements() -> Iterator[Measured | None]:
+        first = evaluate(0)
+        yield first
+        events = first.events if first is not None else 0
+        workers = resolve_workers(jobs) if events * (n - 1) > PARALLEL_EVENTS else 1
+        yield from ordered_map(evaluate, range(1, n), workers)
+
+    results = measurements()
+    try:
+        for _ in scenarios:
+            if not budget.take():
+                result.complete = False
+                result.reason = "the budget ran out"
+                return result
+            m = next(results)
+            if m is None:
+                result.complete = False
+                result.reason = "a scenario exceeded the simulator's event budget (a zero-time loop?)"
+                continue
+            result.explored += 1
+            if not m.complete:
+                result.complete = False
+                result.reason = (f"a scenario did not reach a periodic state within {max_periods} hyperperiods"
+                                 if m.periodic_from is None else "a chain stopped delivering new values")
+            _account(result, m, grid.tick, targets, want_best)
+    finally:
+        results.close()
     return result
 
 

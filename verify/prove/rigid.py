@@ -412,30 +412,156 @@ def repetition(run_to, timing_state, hyper, max_periods: int):
     return None, None
 
 
+_new_job = object.__new__
+
+
+class _Snapshot:
+    """What ``PeriodicShift`` needs of a run at one multiple of the hyperperiod: jobs per task, the
+    index of each task's oldest pending job, messages sent and already arrived per connection, and
+    the event count."""
+
+    __slots__ = ("released", "first_pending", "arrived", "events")
+
+    def __init__(self, sim: RigidSimulator):
+        self.released = [len(jobs) for jobs in sim.jobs]
+        self.first_pending = list(self.released)
+        for jobs in sim.ready:
+            for j in jobs:
+                if j.index < self.first_pending[j.task]:
+                    self.first_pending[j.task] = j.index
+        in_flight = [0] * len(sim.links)
+        for _time, phase, _seq, payload in sim.heap:
+            if phase == _ARRIVAL:
+                in_flight[payload[0]] += 1
+        self.arrived = [sent - flying for sent, flying in zip(sim.sent, in_flight)]
+        self.events = sim.events
+
+
+class PeriodicShift:
+    """The run past ``t₁ = t₀ + P`` as the shift of the run from ``t₀`` (specs/proof.md §4.3).
+
+    The timing state at ``t₁`` equals that at ``t₀``, so everything the run does from ``t₀`` on it
+    does again ``P`` later: job ``j`` of task ``i`` that is pending at ``t₀`` or released after it
+    has the record of job ``j − nᵢ`` moved by ``P``, with ``nᵢ`` the releases of ``i`` in
+    ``[t₀, t₁)``. A message on connection ``c`` is sent by every completion of its writer, so its
+    index is the writer's job index and moves by the writer's ``n``. A read that saw a message which
+    had arrived before ``t₀`` (or none) saw no arrival on its port since ``t₀``; ``P`` later it sees
+    the port's register at ``t₁``. Events come in the same number every period.
+
+    ``of`` returns None when a record cannot be derived (which the state equality rules out; the
+    caller then simulates)."""
+
+    def __init__(self, sim: RigidSimulator, before: _Snapshot, after: _Snapshot, period: int):
+        self.index_of, self.read_ports, self.period = sim.index_of, sim.read_ports, period
+        self.start, self.events_start = sim.now, sim.events
+        self.events_per_period = after.events - before.events
+        self.shift = [a - b for a, b in zip(after.released, before.released)]
+        self.arrived = before.arrived
+        self.registers = [tuple(sim.registers.get(port) for port in ports) for ports in sim.read_ports]
+        self.full = [list(jobs) for jobs in sim.jobs]
+        self.jobs = self.full
+        self.events = sim.events
+
+    @classmethod
+    def of(cls, sim: RigidSimulator, before: _Snapshot, after: _Snapshot, period: int) -> "PeriodicShift | None":
+        shift = cls(sim, before, after, period)
+        for i, jobs in enumerate(shift.full):
+            n = shift.shift[i]
+            for j in range(after.first_pending[i], len(jobs)):
+                done = shift._moved(i, jobs[j - n]) if j - n >= before.first_pending[i] and n > 0 else None
+                if done is None or (jobs[j].start is not None and done.start != jobs[j].start):
+                    return None
+                if jobs[j].start is not None:
+                    done.reads = jobs[j].reads
+                jobs[j] = done
+        return shift
+
+    def _moved(self, task: int, src: _Job) -> _Job | None:
+        """Job ``src.index + n`` of ``task``: the record of ``src`` moved by one period."""
+        if src.finish is None:
+            return None
+        p, shift = self.period, self.shift
+        job = _new_job(_Job)
+        job.task, job.index, job.release = task, src.index + shift[task], src.release + p
+        job.start, job.finish, job.remaining, job.key = src.start + p, src.finish + p, 0, None
+        reads = src.reads
+        if reads:
+            arrived, regs = self.arrived, self.registers[task]
+            reads = tuple([regs[k] if msg is None or msg[1] < arrived[msg[0]]
+                           else (msg[0], msg[1] + shift[msg[2]], msg[2], msg[3] + shift[msg[2]])
+                           for k, msg in enumerate(reads)])
+        job.reads = reads
+        return job
+
+    def events_at(self, horizon: int) -> int:
+        return self.events_start + (horizon - self.start) // self.period * self.events_per_period
+
+    def view(self, horizon: int) -> "PeriodicShift":
+        """The job records as a run stopped at ``horizon`` (a multiple of the period past ``t₁``) has
+        them: released before it, started and finished only if before it."""
+        moved, last_release = self._moved, horizon - self.period
+        for i, jobs in enumerate(self.full):
+            n = self.shift[i]
+            if n > 0:
+                append = jobs.append
+                while jobs[-n].release < last_release:
+                    append(moved(i, jobs[-n]))
+        self.jobs = [self._cut(jobs, horizon) for jobs in self.full]
+        self.events = self.events_at(horizon)
+        return self
+
+    @staticmethod
+    def _cut(jobs: list, horizon: int) -> list:
+        k = len(jobs)
+        while k and jobs[k - 1].release >= horizon:
+            k -= 1
+        out = jobs[:k]
+        for j in range(k - 1, -1, -1):
+            job = out[j]
+            if job.finish < horizon:
+                break
+            cut = _new_job(_Job)
+            cut.task, cut.index, cut.release, cut.remaining, cut.key = job.task, job.index, job.release, 0, None
+            started = job.start < horizon
+            cut.start, cut.reads = (job.start, job.reads) if started else (None, None)
+            cut.finish = None
+            out[j] = cut
+        return out
+
+
 def measure_rigid(model: SystemModel, scenario, targets, hyper: Fraction, max_periods: int, max_events: int):
     """``scenario.measure_periodic`` for a rigid scenario (``rigid_scenario``): the same detection
     of the periodic timing state at multiples of ``hyper``, the same coverage steps and the same
-    extremes, computed on integers."""
+    extremes, computed on integers. Past the first repetition the run is not simulated again but
+    shifted (``PeriodicShift``), which gives the same job records."""
     from .scenario import Extremes, Measured, ResponseSample
 
     targets = tuple(targets)
     sim = RigidSimulator(model, dict(scenario.phases), dict(scenario.counters), max_events, (hyper,))
     unit = sim.unit
     big_h = _ticks(hyper, unit)
-    t0, period = repetition(sim.run_to, sim.timing_state, big_h, max_periods)
+    snapshots: dict[int, _Snapshot] = {}
+
+    def timing_state(at: int) -> tuple:
+        snapshots[at] = _Snapshot(sim)
+        return sim.timing_state(at)
+
+    t0, period = repetition(sim.run_to, timing_state, big_h, max_periods)
     horizon = sim.now
     complete = False
     chains = {c.name: c for c in model.chains}
     samples: dict[str, ChainSamples] = {}
+    run = sim
+    shift = None if t0 is None else PeriodicShift.of(sim, snapshots[t0], snapshots[t0 + period], period)
 
     def chain_samples(name: str) -> ChainSamples:
         if name not in samples:
-            samples[name] = ChainSamples(sim, chains[name])
+            samples[name] = ChainSamples(run, chains[name])
         return samples[name]
 
     def covered(target, mark: int, end: int) -> bool:
         if target.kind == "response":
-            return all(j.finish is not None for j in sim.jobs[sim.index_of[target.name]] if j.release < end)
+            return all(j.finish is not None for j in run.jobs[sim.index_of[target.name]] if j.release < end)
         return any(s >= mark for s, _k, _job in chain_samples(target.name).holders)
 
     if t0 is not None:
@@ -443,7 +569,11 @@ def measure_rigid(model: SystemModel, scenario, targets, hyper: Fraction, max_pe
         horizon = max(horizon, t0 + 3 * period)
         limit = big_h * (max_periods + 1) + 2 * period
         while True:
-            sim.run_to(horizon)
+            if shift is not None and shift.events_at(horizon) <= max_events:
+                run = shift.view(horizon)
+            else:  # past the event budget: simulate, so the error is the simulator's own
+                shift, run = None, sim
+                sim.run_to(horizon)
             samples.clear()
             if all(covered(t, mark, end) for t in targets):
                 complete = True
@@ -455,7 +585,7 @@ def measure_rigid(model: SystemModel, scenario, targets, hyper: Fraction, max_pe
     for t in targets:
         if t.kind == "response":
             found = [(j.finish - j.release, j.index, j.release, j.finish)
-                     for j in sim.jobs[sim.index_of[t.name]] if j.finish is not None]
+                     for j in run.jobs[sim.index_of[t.name]] if j.finish is not None]
             if not found:
                 values[t] = Extremes(None, None)
                 continue
@@ -473,4 +603,4 @@ def measure_rigid(model: SystemModel, scenario, targets, hyper: Fraction, max_pe
             values[t] = Extremes(to_sample(worst, unit), to_sample(best, unit))
     h = horizon * unit
     return Measured(scenario.with_horizon(h), values, complete, h, None if t0 is None else t0 * unit,
-                    None if period is None else period * unit, sim.events)
+                    None if period is None else period * unit, run.events)
