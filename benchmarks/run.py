@@ -377,9 +377,7 @@ def _register_synth() -> None:
            sizes=synth_sizes, chains_per_task=ONE_PER_FIVE, params={"limit": 200}, quick_params={"limit": 20})
     def baseline_brute_force(inst: Instance, limit: int) -> dict:
         r = brute_force(inst.loaded, objective="none", limit=limit)
-        # brute_force says "unsat" both when it enumerated everything and when it stopped at the limit
-        exhausted = r.status == "unsat" and r.evaluated < limit
-        result = {"status": "found" if r.status == "sat" else "unsat (space exhausted)" if exhausted else "not found",
+        result = {"status": {"sat": "found", "unsat": "unsat (space exhausted)"}.get(r.status, "not found"),
                   "_space": inst.unpruned_space}
         gave_up(result, r.evaluated, limit)
         return result

@@ -81,6 +81,15 @@ def test_navigation_optimum_agrees_with_brute_force_over_the_pruned_space(holes)
     loaded, result = holes
     naive = brute_force(loaded, prune=True)
     assert naive.status == "sat" and naive.values == result.values
+    assert naive.complete
+
+
+def test_brute_force_stopped_at_its_limit_says_so():
+    """Stopping at the evaluation limit with nothing accepted is "limit", never "unsat"; only an
+    exhausted space is unsatisfiable."""
+    conflict = brute_force(verify.load(str(NAV / "navigation-conflict.vfy")), limit=3)
+    assert (conflict.status, conflict.complete, conflict.evaluated) == ("limit", False, 3)
+    assert conflict.choices is None
 
 
 def test_navigation_conflict_core_names_laser_constraint_and_spec(conflict):

@@ -257,16 +257,19 @@ def _unsat(model, scope, problem, goals, reason, budget: Budget, stats, explain:
 
 @dataclass
 class BruteResult:
-    status: str  # "sat" | "unsat"
+    status: str  # "sat" | "unsat" (every combination rejected) | "limit" (stopped at the limit, none accepted)
     choices: dict[str, Candidate] | None
     values: tuple[Fraction | None, ...]
     evaluated: int
+    complete: bool = True  # every combination was evaluated (else the best is only the best seen)
 
 
 def brute_force(source, system: str | None = None, *, objective: str | list[Goal] | None = "utilisation",
                 scope: SystemScope | None = None, prune: bool = False, limit: int | None = None) -> BruteResult:
     """Enumerate every combination of candidates (unpruned by default), analyse each, keep the best
-    accepted one by the objective (the first in enumeration order among equals). The naive baseline."""
+    accepted one by the objective (the first in enumeration order among equals). The naive baseline.
+    With ``limit``, at most that many combinations are evaluated: stopping there with none accepted
+    is status "limit", not "unsat", and a best found is marked ``complete=False``."""
     model, scope = _inputs(source, system, scope)
     goals = objective if isinstance(objective, list) else parse_objective(objective, model)
     problem = build_problem(model, scope, prune=prune)
@@ -274,8 +277,10 @@ def brute_force(source, system: str | None = None, *, objective: str | list[Goal
     ranges = [range(len(problem.choices[n].candidates)) for n in names]
     best: tuple | None = None
     count = 0
+    complete = True
     for combo in itertools.product(*ranges):
         if limit is not None and count >= limit:
+            complete = False
             break
         count += 1
         ev = problem.evaluate(Config(tuple(zip(names, combo))))
@@ -288,9 +293,9 @@ def brute_force(source, system: str | None = None, *, objective: str | list[Goal
             if not goals:
                 break
     if best is None:
-        return BruteResult("unsat", None, (), count)
+        return BruteResult("unsat" if complete else "limit", None, (), count, complete)
     choices = {n: problem.choices[n].candidates[i] for n, i in zip(names, best[1])}
-    return BruteResult("sat", choices, best[2], count)
+    return BruteResult("sat", choices, best[2], count, complete)
 
 
 __all__ = ["BruteResult", "DEFAULT_RLIMIT", "Goal", "ObjectiveError", "SynthResult", "brute_force",
