@@ -1,7 +1,10 @@
 """The parser: positions, recovery from several errors, messages in the language's words."""
 from __future__ import annotations
 
+import re
 from fractions import Fraction
+
+import pytest
 
 import verify
 from verify import syntax as s
@@ -73,3 +76,230 @@ def test_names_resolution_collects_every_error_with_hints():
     assert ("E101", "did you mean `scan`?") in got
     assert any(code == "E101" and "instance" in (h or "") or code == "E101" for code, h in got)
     assert len([c for c, _ in got if c == "E101"]) >= 5
+
+
+# ---------------------------------------------------------------- keywords are whole words
+
+#: every keyword of the language, each where the grammar accepts it (the text parses)
+EVERY_KEYWORD = """\
+import "lib.vfy"
+component A {
+  in a : T
+  in b : T
+  in c = a & b activation 1 Hz .. 2 Hz changeable
+  in d = a | b activation min 1 Hz max 2 Hz fixed
+  out o : T
+  task T1 preemptive {
+    reads a optional oversampling ok undersampling forbidden
+    reads b required oversampling <= 2
+    produces o
+    bcet 1 ms
+    wcet 2 ms
+    activation 5 Hz
+  }
+  task T2 cooperative { wcet 1 ms activation max 5 Hz }
+  task T3 { wcet 1 ms activation min 1 Hz }
+}
+system S {
+  core c policy fp
+  instance x : A on c {
+    task T1 priority 1 on c wcrt 5 ms deadline 10 ms timer 10 ms phase 1 ms
+    task T2 trigger c every 2
+    task T3 sporadic 1 ms .. 2 ms
+  }
+  instance y : A {
+    task T1 activation ?
+    task T2 timer ? in 10 ms .. 20 ms step 5 ms
+    task T3 trigger a every ? in 1 .. 3
+  }
+  connect x.o -> y.a delay 1 ms .. 2 ms
+  chain ch : x.o -> y.o { reaction_time <= 5 ms data_age <= 5 ms jitter <= 1 ms }
+}
+"""
+
+
+def _keywords():
+    from verify.larkparse import _keyword_terminals
+
+    return sorted(_keyword_terminals())
+
+
+def test_the_keyword_sample_parses_and_has_every_keyword():
+    module, diags = _parse(EVERY_KEYWORD)
+    assert module is not None and not diags
+    words = set(re.findall(r"[A-Za-z_]\w*", EVERY_KEYWORD))
+    assert set(_keywords()) <= words
+
+
+def _both_paths(text):
+    """(whether the fast path accepted ``text``, Lark's diagnostics)."""
+    from verify.lalr import Unparsable
+    from verify.parse import _Builder, _fast_parser, _parse_with_lark
+
+    sink = DiagnosticSink()
+    _parse_with_lark(text, "m.vfy", sink)
+    builder = _Builder("m.vfy", DiagnosticSink())
+    try:
+        _fast_parser().parse(text, builder.callbacks(), builder.tokens())
+        fast = True
+    except Unparsable:
+        fast = False
+    return fast, sink.items
+
+
+@pytest.mark.parametrize("keyword", _keywords())
+def test_every_keyword_glued_to_a_name_is_an_located_error_naming_the_word(keyword):
+    match = re.search(rf"(?<![\w\"])({keyword})(?=\s)", EVERY_KEYWORD)
+    assert match, keyword
+    text = EVERY_KEYWORD[:match.end()] + "x" + EVERY_KEYWORD[match.end():]
+    line = EVERY_KEYWORD.count("\n", 0, match.start()) + 1
+    column = match.start() - (EVERY_KEYWORD.rfind("\n", 0, match.start()) + 1) + 1
+    fast, diags = _both_paths(text)
+    assert not fast  # the fast path and Lark agree: both reject it
+    assert diags and diags[0].code == "E001", diags
+    d = diags[0]
+    assert f"found '{keyword}x'" in d.message
+    assert (d.span.line, d.span.column, d.span.end_column) == (line, column, column + len(keyword) + 1)
+    assert d.help
+
+
+@pytest.mark.parametrize("text, word, fix", [
+    ("component A { outx : T }", "outx", "out x"),
+    ("component A { taskT1 { wcet 1 ms } }", "taskT1", "task T1"),
+    ("component A { out x : T task T { producesx wcet 1 ms } }", "producesx", "produces x"),
+    ("system S { corec }", "corec", "core c"),
+    ("system S { instancea : A on c }", "instancea", "instance a"),
+    ("system S { instance a : A onc }", "onc", "on c"),
+    ("system S { instance a : A { task T triggernavvel } }", "triggernavvel", "trigger navvel"),
+    ("system S { connectbase.odom -> a.b }", "connectbase", "connect base"),
+    ("system S { chainreactive: a.b }", "chainreactive", "chain reactive"),
+    ("system S { instance a : A { task T priority1 } }", "priority1", "priority 1"),
+])
+def test_glued_keywords_are_reported_once_with_the_split_as_help(text, word, fix):
+    fast, diags = _both_paths(text)
+    assert not fast
+    assert [d.code for d in diags] == ["E001"], [(d.message, d.span) for d in diags]
+    assert f"found '{word}'" in diags[0].message
+    assert diags[0].help.startswith(f"did you mean `{fix}`?")
+
+
+def test_a_wrong_keyword_is_flagged_itself():
+    _, diags = _parse("component A { output x : T }")
+    assert [d.code for d in diags] == ["E001"]
+    d = diags[0]
+    assert d.message == "expected one of 'in', 'out', 'task', '}', found 'output'"
+    assert (d.span.column, d.span.end_column) == (15, 21)
+    assert "not a keyword" in d.help
+
+
+def test_fmt_no_longer_splits_glued_keywords():
+    from verify.fmt import format_text
+
+    out, diags = format_text("component A { outx : T }")
+    assert out is None and [d.code for d in diags] == ["E001"]
+
+
+# ---------------------------------------------------------------- syntax error messages
+
+def test_expected_tokens_are_those_the_parser_accepts_here():
+    # after a quantity the table's row merges what may follow one anywhere ('..', 'chain', ...)
+    _, diags = _parse("component A { task T { wcet 5 ms activaton 5 Hz } }")
+    assert [d.code for d in diags] == ["E001"]
+    assert diags[0].message == (
+        "expected one of 'activation', 'bcet', 'produces', 'reads', 'wcet', '}', found 'activaton'")
+    assert diags[0].help == "did you mean `activation`?"
+
+
+@pytest.mark.parametrize("text, word, keyword", [
+    ("compnent A {}", "compnent", "component"),
+    ("component A { task T { activaton 5 Hz } }", "activaton", "activation"),
+    ("component A { ot x : T }", "ot", "out"),
+    ("system S { instance a : A { task T priorty 1 } }", "priorty", "priority"),
+    ("system S { instance a : A { task T timer 1 ms } } sytem T { }", "sytem", "system"),
+    ("component A { task T { reads a optinal } }", "optinal", "optional"),
+    ("system S { cahin c : a.b }", "cahin", "chain"),
+])
+def test_a_misspelt_keyword_gets_did_you_mean(text, word, keyword):
+    _, diags = _parse(text)
+    assert diags and diags[0].code == "E001"
+    assert f"found '{word}'" in diags[0].message
+    assert diags[0].help == f"did you mean `{keyword}`?"
+
+
+@pytest.mark.parametrize("text", [
+    "component A { in x : }",
+    "component A {\n  in y T\n}",
+    "system S { task T }",
+    "component A { task T { wcet 5 } }",
+    "component A { task T { wcet 2 ms }",
+    "component A { task T { wcet 2 ms } } }",
+    "import component",
+    "system S { connect a.b -> c }",
+    "system S { instance a : A { task T timer ? in 5 .. } }",
+    "component { }",
+    "system S { chain c : a.b { jitter 5 ms } }",
+])
+def test_every_syntax_error_has_a_help(text):
+    _, diags = _parse(text)
+    assert diags and all(d.help for d in diags if d.code == "E001"), [(d.message, d.help) for d in diags]
+
+
+def test_a_missing_symbol_recovery_supplies_is_named_in_the_help():
+    _, diags = _parse("component A {\n  in y T\n}")
+    assert [d.code for d in diags] == ["E001"]
+    assert diags[0].message == "expected one of ':', '=', found 'T'"
+    assert diags[0].help == "insert ':' before 'T'"
+
+
+def test_unterminated_block_comment_points_at_its_opening():
+    _, diags = _parse("component A {\n  /* the laser\n  task T { }\n}\n")
+    assert [d.code for d in diags] == ["E002"]
+    d = diags[0]
+    assert d.message == "unterminated block comment"
+    assert (d.span.line, d.span.column, d.span.end_column) == (2, 3, 5)
+    assert "*/" in d.help and "//" not in d.help
+
+
+def test_unterminated_string():
+    _, diags = _parse('import "lib.vfy\ncomponent A { }\n')
+    assert [d.code for d in diags] == ["E002"]
+    assert diags[0].message == "unterminated string" and (diags[0].span.line, diags[0].span.column) == (1, 8)
+    assert '"' in diags[0].help and "comment" not in diags[0].help
+
+
+def test_negative_numbers_say_times_are_non_negative():
+    _, diags = _parse("component A { task T { wcet -1 ms } }")
+    assert [d.code for d in diags] == ["E002"]
+    assert "negative" in diags[0].message and "non-negative" in diags[0].help
+    assert "comment" not in diags[0].help
+
+
+def test_exponent_notation_is_not_supported():
+    _, diags = _parse("component A { task T { wcet 1e999999 } }")
+    assert [d.code for d in diags] == ["E001"]
+    d = diags[0]
+    assert "exponent notation is not supported" in d.message and "`1e999999`" in d.message
+    assert (d.span.column, d.span.end_column) == (29, 37)
+    assert "unit" in d.help
+    _, diags = _parse("component A { task T { wcet 2.5e-3 s } }")
+    assert "exponent" in diags[0].message
+
+
+def test_a_leading_byte_order_mark_is_skipped():
+    module, diags = _parse("\ufeffcomponent A {\n  in scan : LaserScan\n}")
+    assert not diags
+    assert (module.components[0].name.span.line, module.components[0].name.span.column) == (1, 11)
+    result = verify.load_text("\ufeffcomponent A { in x : T }")
+    assert result.ok, [(d.code, d.message) for d in result.diagnostics]
+    _, diags = _parse("component A {}\n\ufeff")  # elsewhere it is a stray character
+    assert [d.code for d in diags] == ["E002"]
+
+
+def test_a_byte_order_mark_does_not_shift_the_snippet():
+    from verify.render import render_all_text
+    from verify.source import SourceFile
+
+    text = "\ufeffcomponent A { outx : T }"
+    _, diags = _parse(text)
+    rendered = render_all_text(diags, {"m.vfy": SourceFile("m.vfy", text)})
+    assert "1 | component A { outx : T }\n  |               ^^^^" in rendered

@@ -1,183 +1,25 @@
 """Parse one source text into the typed tree of ``verify.syntax``.
 
-Lark LALR with positions; the grammar is data in ``grammar/verify.lark``. Syntax errors are recovered
-from (the offending token is dropped and parsing resumes) so that one run reports several of them, each
-in the language's own words: never ``__ANON_0`` or ``$END``. The transformer only builds nodes.
+Lark LALR with positions; the grammar is data in ``grammar/verify.lark``. Valid input goes through the
+fast path (``verify.lalr``); input it rejects goes through Lark, whose error path (``verify.larkparse``)
+recovers from syntax errors so that one run reports several of them, each in the language's own words.
+The transformer only builds nodes.
 """
 from __future__ import annotations
 
 import functools
-import re
 from fractions import Fraction
-from importlib import resources
 
-from lark import Lark, Token, Tree
+from lark import Token, Tree
 from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken
 
 from . import syntax as s
 from .construct import direct_constructor
 from .diagnostics import DiagnosticSink
 from .lalr import FastParser, Unparsable, position
+from .larkparse import (MAX_NUMBER_LENGTH, MAX_SYNTAX_ERRORS, _accepted, _glued_keyword, _keyword_terminals,
+                        _parser, _repair, _report_unexpected, _skip_unterminated_string, token_span)
 from .source import Span
-
-MAX_SYNTAX_ERRORS = 20
-MAX_NUMBER_LENGTH = 40
-MAX_EXPECTED_SHOWN = 6
-
-#: how terminals are named in messages
-_TOKEN_WORDS = {
-    "NAME": "a name",
-    "NUMBER": "a number",
-    "UNIT": "a unit (s, ms, us, ns, Hz, kHz)",
-    "STRING": 'a quoted file name ("...")',
-    "$END": "the end of the file",
-}
-
-
-@functools.lru_cache(maxsize=1)
-def grammar_text() -> str:
-    return resources.files("verify.grammar").joinpath("verify.lark").read_text(encoding="utf-8")
-
-
-@functools.lru_cache(maxsize=1)
-def _parser() -> Lark:
-    return Lark(grammar_text(), parser="lalr", lexer="contextual", propagate_positions=True)
-
-
-@functools.lru_cache(maxsize=1)
-def _literal_words() -> dict[str, str]:
-    words = {}
-    for term in _parser().terminals:
-        if term.pattern.type == "str":
-            words[term.name] = f"'{term.pattern.value}'"
-    return words
-
-
-def describe_token_type(name: str) -> str:
-    return _TOKEN_WORDS.get(name) or _literal_words().get(name) or name.lower()
-
-
-def _describe_expected(names) -> str:
-    words = sorted({describe_token_type(n) for n in names if not n.startswith("__IGNORE")})
-    if not words:
-        return "nothing more here"
-    if len(words) > 12:
-        words = words[:12] + ["…"]
-    if len(words) == 1:
-        return words[0]
-    return "one of " + ", ".join(words)
-
-
-def _describe_found(token: Token) -> str:
-    if token.type == "$END":
-        return "the end of the file"
-    text = str(token)
-    return f"'{text}'" if len(text) <= 40 else f"'{text[:37]}...'"
-
-
-def token_span(path: str, tok: Token) -> Span:
-    line = tok.line or 1
-    col = tok.column or 1
-    end_line = tok.end_line or line
-    end_col = tok.end_column or col + 1
-    return Span(path, line, col, end_line, end_col)
-
-
-def _number_before(text: str, token: Token):
-    """The number just before ``token`` (white space between), as (text, (line, col, end_line, end_col))."""
-    pos = token.start_pos if token.type != "$END" and token.start_pos is not None else len(text)
-    before = text[:pos].rstrip()
-    match = re.search(r"(?<![\w.])[0-9]+(\.[0-9]+)?(/[0-9]+)?$", before)
-    if match is None or "//" in before[before.rfind("\n", 0, match.start()) + 1:match.start()]:
-        return None
-    line = before.count("\n", 0, match.start()) + 1
-    col = match.start() - (before.rfind("\n", 0, match.start()) + 1) + 1
-    return match.group(0), (line, col, line, col + len(match.group(0)))
-
-
-def _syntax_help(expected: set[str], token: Token) -> str | None:
-    if "UNIT" in expected:
-        return "write a unit after the number, e.g. `10 ms` or `40 Hz`"
-    if "NAME" in expected and token.type != "NAME" and re.fullmatch(r"[A-Za-z_]\w*", str(token)):
-        return f"`{token}` is a keyword of the language; choose another name"
-    if "RBRACE" in expected and token.type == "$END":
-        return "a `}` is missing: every `{` needs its `}`"
-    if token.type == "RBRACE" and "COMPONENT" in expected:
-        return "this `}` closes nothing: remove it, or add the `{` it belongs to"
-    return None
-
-
-def _report_unexpected(sink: DiagnosticSink, path: str, err: UnexpectedInput, text: str) -> None:
-    if isinstance(err, UnexpectedToken):
-        expected = set(err.expected or ())
-        span = token_span(path, err.token)
-        if err.token.type == "$END":
-            span = _end_span(path, text)
-        number = _number_before(text, err.token) if "UNIT" in expected else None
-        if number is not None:  # a missing unit: point at the number that lacks it
-            sink.emit("E001", f"expected a unit after the number `{number[0]}`, found {_describe_found(err.token)}",
-                      Span(path, *number[1]), "this number needs a unit", help=_syntax_help(expected, err.token))
-            return
-        sink.emit(
-            "E001",
-            f"expected {_describe_expected(expected)}, found {_describe_found(err.token)}",
-            span,
-            "unexpected here",
-            help=_syntax_help(expected, err.token),
-        )
-    elif isinstance(err, UnexpectedCharacters):
-        ch = text[err.pos_in_stream] if err.pos_in_stream < len(text) else ""
-        shown = repr(ch)[1:-1] if ch.isprintable() else f"U+{ord(ch):04X}" if ch else "end of file"
-        span = Span(path, err.line, err.column, err.line, err.column + 1)
-        allowed = {n for n in err.allowed or () if not n.startswith("__IGNORE")}
-        msg = f"unexpected character '{shown}'"
-        # the lexer's set is every token that may follow the previous one in *any* context: only a short
-        # list says something about this place
-        if allowed and len(allowed) <= MAX_EXPECTED_SHOWN:
-            msg += f"; expected {_describe_expected(allowed)}"
-        near = sorted(w for n in allowed if (w := _literal_words().get(n, "")[1:-1]) and ch and w.startswith(ch))
-        help = (f"did you mean `{near[0]}`?" if near
-                else "remove it; comments start with `//` or are enclosed in `/* */`")
-        sink.emit("E002", msg, span, "not part of the language", help=help)
-    else:  # pragma: no cover - lark raises only the two above from LALR
-        sink.emit("E001", str(err).splitlines()[0], Span(path, 1, 1, 1, 2))
-
-
-_INSERTION_ORDER = ("UNIT", "COLON", "NAME", "NUMBER", "RBRACE")
-
-
-def _repair_by_insertion(err: UnexpectedToken) -> None:
-    """Error recovery: insert the one expected token after which the offending token fits.
-
-    Lark then resumes after the offending token; if no single insertion helps, that token is simply
-    dropped. This keeps one slip (a missing unit, colon or brace) from cascading into many reports.
-    """
-    parser = err.interactive_parser
-    expected = sorted(err.expected or (), key=lambda n: (n not in _INSERTION_ORDER,
-                                                         _INSERTION_ORDER.index(n) if n in _INSERTION_ORDER else 0, n))
-    for name in expected:
-        filler = Token(name, _placeholder(name), line=err.token.line, column=err.token.column)
-        trial = parser.copy(deepcopy_values=False)  # trial feeds only build new nodes
-        try:
-            trial.feed_token(filler)
-            trial.feed_token(err.token)
-        except UnexpectedInput:
-            continue
-        parser.feed_token(filler)
-        parser.feed_token(err.token)
-        return
-
-
-def _placeholder(name: str) -> str:
-    return {"UNIT": "ms", "NAME": "_", "NUMBER": "0", "STRING": '""'}.get(name) or _literal_words().get(
-        name, "'_'")[1:-1]
-
-
-def _end_span(path: str, text: str) -> Span:
-    lines = text.split("\n")
-    line = len(lines)
-    col = len(lines[-1]) + 1
-    return Span(path, line, col, line, col + 1)
 
 
 def parse_text(text: str, path: str, sink: DiagnosticSink) -> s.Module | None:
@@ -185,7 +27,11 @@ def parse_text(text: str, path: str, sink: DiagnosticSink) -> s.Module | None:
 
     The fast path (``verify.lalr``) decides valid input; anything it does not accept — every syntax
     error, a number error (E005), or a lexical corner it leaves to Lark — is parsed again by Lark with
-    error recovery, which gives the reports. Both build the tree with the same ``_Builder``."""
+    error recovery, which gives the reports. Both build the tree with the same ``_Builder``.
+
+    A byte order mark at the start of the text is skipped (columns on line 1 count from after it)."""
+    if text.startswith("\ufeff"):
+        text = text[1:]
     fast = _fast_parser()
     if fast is not None:
         try:
@@ -204,13 +50,26 @@ def _parse_with_lark(text: str, path: str, sink: DiagnosticSink) -> s.Module | N
         line = getattr(err, "line", -1)
         at_end = isinstance(err, UnexpectedToken) and err.token.type == "$END"
         # one report per line: a repair often trips the very next token too
+        if isinstance(err, UnexpectedToken):
+            tok = err.token
+            if tok.type == "NAME" and str(tok) in _keyword_terminals():
+                # a state that does not accept it lexes a keyword as a NAME (``_WholeWords``): recovery
+                # and messages treat it as the keyword it is, as Lark's root lexer would
+                err.token = Token.new_borrow_pos(_keyword_terminals()[str(tok)], str(tok), tok)
+            err.verify_glued = _glued_keyword(err, text)  # (before the repair changes the parser)
         if line != last_line[0] or at_end:
+            err.verify_accepted = _accepted(err)
             errors.append(err)
             last_line[0] = line
         if isinstance(err, UnexpectedToken):
             if err.token.type == "$END":
                 return False
-            _repair_by_insertion(err)
+            _repair(err, text)
+        elif isinstance(err, UnexpectedCharacters):
+            if text.startswith("/*", err.pos_in_stream):
+                return False  # an unterminated comment: the rest of the file is its text
+            if text.startswith('"', err.pos_in_stream):
+                _skip_unterminated_string(err, text)
         return len(errors) < MAX_SYNTAX_ERRORS
 
     try:

@@ -33,7 +33,8 @@ class SourceFile:
     text: str
 
     def line(self, number: int) -> str:
-        lines = self.text.splitlines()
+        text = self.text[1:] if self.text.startswith("\ufeff") else self.text  # (parse skips a BOM)
+        lines = text.splitlines()
         if 1 <= number <= len(lines):
             return lines[number - 1]
         return ""

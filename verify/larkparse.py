@@ -1,0 +1,449 @@
+"""The Lark parser of ``grammar/verify.lark`` and its error path: what the parser expected, in the
+language's words (never ``__ANON_0`` or ``$END``), help for the usual slips (a misspelt or glued keyword,
+an exponent, an unterminated comment or string), and recovery by inserting or dropping a token, so that
+one run reports several errors. ``verify.parse`` runs it when the fast path rejects the input.
+"""
+from __future__ import annotations
+
+import functools
+import re
+from importlib import resources
+
+from lark import Lark, Token
+from lark.lark import PostLex
+from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken
+
+from .diagnostics import DiagnosticSink
+from .source import Span
+
+MAX_SYNTAX_ERRORS = 20
+MAX_NUMBER_LENGTH = 40
+MAX_EXPECTED_SHOWN = 4  # (E002: a longer list says little about a stray character)
+
+#: how terminals are named in messages
+_TOKEN_WORDS = {
+    "NAME": "a name",
+    "NUMBER": "a number",
+    "UNIT": "a unit (s, ms, us, ns, Hz, kHz)",
+    "STRING": 'a quoted file name ("...")',
+    "$END": "the end of the file",
+}
+
+
+@functools.lru_cache(maxsize=1)
+def grammar_text() -> str:
+    return resources.files("verify.grammar").joinpath("verify.lark").read_text(encoding="utf-8")
+
+
+class _WholeWords(PostLex):
+    """Gives the contextual lexer NAME in every state, so that keywords are whole words.
+
+    Lark's contextual lexer lexes each parser state with the terminals that state accepts; in a state
+    that accepts keywords but no name, a keyword would match the start of a longer word (``outx`` as
+    ``out`` + ``x``). With NAME always in, a word is matched whole and is a keyword only if it is exactly
+    one that the state accepts (Lark's embedding of keywords into NAME); otherwise it is a NAME, which
+    such a state rejects with an error naming the word. The fast path (``verify.lalr``) lexes words the
+    same way. The tokens themselves pass through unchanged."""
+
+    always_accept = ("NAME",)
+
+    def process(self, stream):
+        return stream
+
+
+@functools.lru_cache(maxsize=1)
+def _parser() -> Lark:
+    return Lark(grammar_text(), parser="lalr", lexer="contextual", propagate_positions=True,
+                postlex=_WholeWords())
+
+
+@functools.lru_cache(maxsize=1)
+def _literal_words() -> dict[str, str]:
+    words = {}
+    for term in _parser().terminals:
+        if term.pattern.type == "str":
+            words[term.name] = f"'{term.pattern.value}'"
+    return words
+
+
+def describe_token_type(name: str) -> str:
+    return _TOKEN_WORDS.get(name) or _literal_words().get(name) or name.lower()
+
+
+def _describe_expected(names) -> str:
+    words = sorted({describe_token_type(n) for n in names if not n.startswith("__IGNORE")})
+    if not words:
+        return "nothing more here"
+    if len(words) > 12:
+        words = words[:12] + ["…"]
+    if len(words) == 1:
+        return words[0]
+    return "one of " + ", ".join(words)
+
+
+def _describe_found(token: Token) -> str:
+    if token.type == "$END":
+        return "the end of the file"
+    text = str(token)
+    return f"'{text}'" if len(text) <= 40 else f"'{text[:37]}...'"
+
+
+def token_span(path: str, tok: Token) -> Span:
+    line = tok.line or 1
+    col = tok.column or 1
+    end_line = tok.end_line or line
+    end_col = tok.end_column or col + 1
+    return Span(path, line, col, end_line, end_col)
+
+
+def _number_before(text: str, token: Token):
+    """The number just before ``token`` (white space between), as (text, (line, col, end_line, end_col))."""
+    pos = token.start_pos if token.type != "$END" and token.start_pos is not None else len(text)
+    before = text[:pos].rstrip()
+    match = re.search(r"(?<![\w.])[0-9]+(\.[0-9]+)?(/[0-9]+)?$", before)
+    if match is None or "//" in before[before.rfind("\n", 0, match.start()) + 1:match.start()]:
+        return None
+    line = before.count("\n", 0, match.start()) + 1
+    col = match.start() - (before.rfind("\n", 0, match.start()) + 1) + 1
+    return match.group(0), (line, col, line, col + len(match.group(0)))
+
+
+@functools.lru_cache(maxsize=1)
+def _keyword_terminals() -> dict[str, str]:
+    """keyword -> its terminal (the literals that are words)."""
+    return {w[1:-1]: n for n, w in _literal_words().items() if re.fullmatch(r"'[A-Za-z_]\w*'", w)}
+
+
+@functools.lru_cache(maxsize=1)
+def _punct_terminals() -> list[tuple[str, str]]:
+    """(literal, terminal) for the punctuation literals, longest first (as Lark's lexer tries them)."""
+    kws = set(_keyword_terminals().values())
+    return sorted(((w[1:-1], n) for n, w in _literal_words().items() if n not in kws),
+                  key=lambda p: (-len(p[0]), p[0]))
+
+
+_SKIP = re.compile(r"(?:\s+|//[^\n]*|/\*[\s\S]*?\*/)*")
+_WORD_RE = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+_NUMBER_RE = re.compile(r"[0-9]+(\.[0-9]+)?(/[0-9]+)?")
+_EXPONENT_RE = re.compile(r"[eE][+-]?[0-9]+")
+_UNITS = ("kHz", "Hz", "ms", "us", "ns", "s")
+
+
+def _next_types(text: str, pos: int) -> list[str]:
+    """The terminals the lexeme at ``pos`` (after white space and comments) may be, for trial feeds."""
+    pos = _SKIP.match(text, pos).end()
+    if pos >= len(text):
+        return ["$END"]
+    if m := _WORD_RE.match(text, pos):
+        word = m.group(0)
+        kinds = [_keyword_terminals()[word]] if word in _keyword_terminals() else []
+        return kinds + (["UNIT"] if word in _UNITS else []) + ["NAME"]
+    if _NUMBER_RE.match(text, pos):
+        return ["NUMBER"]
+    if text.startswith('"', pos):
+        return ["STRING"]
+    for literal, name in _punct_terminals():
+        if text.startswith(literal, pos):
+            return [name]
+    return []
+
+
+def _lookahead(text: str, pos: int, count: int = 2) -> list[list[Token]]:
+    """The next ``count`` lexemes from ``pos``, each as the tokens it may be (for trial feeds): every
+    combination of alternatives, or fewer lexemes where the text ends or a lexeme is not recognised."""
+    combos: list[list[Token]] = [[]]
+    for _ in range(count):
+        pos = _SKIP.match(text, pos).end()
+        kinds = _next_types(text, pos)
+        if not kinds:
+            break
+        m = _WORD_RE.match(text, pos) or _NUMBER_RE.match(text, pos)
+        length = len(m.group(0)) if m else 1
+        combos = [c + [Token(k, "")] for c in combos for k in kinds]
+        if kinds == ["$END"]:
+            break
+        pos += length
+        if kinds == ["STRING"]:
+            end = text.find('"', pos)
+            pos = end + 1 if end >= 0 else len(text)
+        elif m is None:
+            pos += next((len(lit) for lit, name in _punct_terminals() if name == kinds[0]), 1) - 1
+    return combos
+
+
+def _fits(parser, tokens: list[Token], text: str, pos: int) -> bool:
+    """Whether ``parser`` accepts ``tokens`` followed by the next lexemes of the text from ``pos``."""
+    return any(_feeds(parser, tokens + more) for more in _lookahead(text, pos))
+
+
+def _feeds(parser, tokens: list[Token]) -> bool:
+    """Whether a copy of ``parser`` accepts ``tokens``."""
+    trial = parser.copy(deepcopy_values=False)
+    try:
+        for tok in tokens:
+            trial.feed_token(tok)
+    except UnexpectedInput:
+        return False
+    return True
+
+
+def _glued_keyword(err: UnexpectedToken, text: str) -> tuple[str, Token, Token] | None:
+    """A keyword glued to the word after it (``outx`` for ``out x``, ``priority1`` for ``priority 1``):
+    (the keyword, its token, the token of the rest) if the parser accepts them and what follows them."""
+    tok = err.token
+    parser = getattr(err, "interactive_parser", None)
+    if parser is None or tok.type != "NAME" or tok.start_pos is None:
+        return None
+    word = str(tok)
+    keywords = _keyword_terminals()
+    candidates = sorted((kw for kw, name in keywords.items()
+                         if name in (err.expected or ()) and len(word) > len(kw) and word.startswith(kw)),
+                        key=len, reverse=True)
+    for kw in candidates:
+        rest = word[len(kw):]
+        kind = "NAME" if _WORD_RE.fullmatch(rest) else "NUMBER" if rest.isdigit() else None
+        if kind is None:
+            continue
+        head = Token(keywords[kw], kw, start_pos=tok.start_pos, line=tok.line, column=tok.column,
+                     end_line=tok.line, end_column=tok.column + len(kw), end_pos=tok.start_pos + len(kw))
+        tail = Token(kind, rest, start_pos=tok.start_pos + len(kw), line=tok.line, column=tok.column + len(kw),
+                     end_line=tok.end_line, end_column=tok.end_column, end_pos=tok.end_pos)
+        if _fits(parser, [head, tail], text, tok.end_pos):
+            return kw, head, tail
+    return None
+
+
+def _edit_distance(a: str, b: str) -> int:
+    """Optimal string alignment distance (insertions, deletions, substitutions, transpositions)."""
+    prev2: list[int] = []
+    prev = list(range(len(b) + 1))
+    for i in range(1, len(a) + 1):
+        cur = [i] + [0] * len(b)
+        for j in range(1, len(b) + 1):
+            cur[j] = min(prev[j] + 1, cur[j - 1] + 1, prev[j - 1] + (a[i - 1] != b[j - 1]))
+            if i > 1 and j > 1 and a[i - 1] == b[j - 2] and a[i - 2] == b[j - 1]:
+                cur[j] = min(cur[j], prev2[j - 2] + 1)
+        prev2, prev = prev, cur
+    return prev[-1]
+
+
+def _misspelt_keyword(word: str, accepted: set[str]) -> str | None:
+    """The accepted keyword ``word`` is a likely misspelling of (``compnent``, ``priorty``), or None."""
+    if not _WORD_RE.fullmatch(word):
+        return None
+    best = None
+    for kw, name in _keyword_terminals().items():
+        if name not in accepted or kw == word:
+            continue
+        dist = _edit_distance(word.lower(), kw)
+        if dist <= (1 if len(kw) <= 4 else 2) and dist < len(kw) and (best is None or (dist, kw) < best):
+            best = (dist, kw)
+    return best[1] if best else None
+
+
+def _syntax_help(expected: set[str], token: Token, glued: tuple | None = None, repair: str | None = None) -> str:
+    """The help of an E001: specific where the slip is recognised, else what to do in general."""
+    word = str(token) if token.type != "$END" else ""
+    if glued is not None:
+        kw, _, tail = glued
+        return f"did you mean `{kw} {tail}`? a keyword is separated from the word after it by a space"
+    if "UNIT" in expected:
+        return "write a unit after the number, e.g. `10 ms` or `40 Hz`"
+    if token.type == "RBRACE" and "COMPONENT" in expected:
+        return "this `}` closes nothing: remove it, or add the `{` it belongs to"
+    near = _misspelt_keyword(word, expected)
+    if near is not None:
+        return f"did you mean `{near}`?"
+    if "NAME" in expected and token.type != "NAME" and _WORD_RE.fullmatch(word):
+        return f"`{token}` is a keyword of the language; choose another name"
+    if "RBRACE" in expected and token.type == "$END":
+        return "a `}` is missing: every `{` needs its `}`"
+    if token.type == "$END":
+        return f"the file ends too early: complete the declaration with {_describe_expected(expected)}"
+    keywords = _keyword_terminals()
+    if repair is not None and repair not in keywords.values():  # a missing symbol that recovery supplied
+        return f"insert {describe_token_type(repair)} before {_describe_found(token)}"
+    if _WORD_RE.fullmatch(word) and any(n in keywords.values() for n in expected):
+        if word in keywords:
+            return (f"`{word}` cannot stand here: it belongs to another kind of declaration; "
+                    f"specs/language.md gives the syntax of each")
+        return f"`{word}` is not a keyword of the language; specs/language.md gives the syntax of each declaration"
+    if len(expected) == 1:
+        return f"insert {_describe_expected(expected)} before {_describe_found(token)}, or remove {_describe_found(token)}"
+    return (f"remove {_describe_found(token)}, or write what the declaration needs before it; "
+            f"specs/language.md gives the syntax of each declaration")
+
+
+def _accepted(err: UnexpectedInput) -> set[str]:
+    """The terminals the parser really accepts where ``err`` happened.
+
+    The table's row for the state (``err.expected``) merges LALR lookaheads across contexts: after a
+    quantity it lists every token that may follow one anywhere. ``accepts()`` tries each of them on a
+    copy of the parser and keeps those that are shifted after the reductions they cause. Error path only."""
+    parser = getattr(err, "interactive_parser", None)
+    fallback = set(getattr(err, "expected", None) or getattr(err, "allowed", None) or ())
+    if parser is None:
+        return fallback
+    try:
+        return set(parser.accepts()) or fallback
+    except Exception:  # pragma: no cover - a Lark internal: the table's row is a safe approximation
+        return fallback
+
+
+def _exponent_after(text: str, number: tuple) -> str | None:
+    """``e5`` in ``1e5`` (exponent notation right after the number), or None."""
+    (digits, (line, col, _, end_col)) = number
+    offset = sum(len(l) + 1 for l in text.split("\n")[:line - 1]) + end_col - 1
+    m = _EXPONENT_RE.match(text, offset)
+    return m.group(0) if m else None
+
+
+def _report_unexpected(sink: DiagnosticSink, path: str, err: UnexpectedInput, text: str) -> None:
+    if isinstance(err, UnexpectedToken):
+        expected = getattr(err, "verify_accepted", None)
+        if expected is None:
+            expected = _accepted(err)
+        glued = getattr(err, "verify_glued", None)
+        span = token_span(path, err.token)
+        if err.token.type == "$END":
+            span = _end_span(path, text)
+        number = _number_before(text, err.token) if "UNIT" in expected else None
+        if number is not None and (exponent := _exponent_after(text, number)):
+            line, col, _, end_col = number[1]
+            sink.emit("E001", f"exponent notation is not supported: `{number[0]}{exponent}`",
+                      Span(path, line, col, line, end_col + len(exponent)), "a number with an exponent",
+                      help="write the number out in full with a unit, or choose a larger or smaller unit "
+                           "to keep it short, e.g. `2 s` instead of `2000 ms`")
+            return
+        if number is not None:  # a missing unit: point at the number that lacks it
+            sink.emit("E001", f"expected a unit after the number `{number[0]}`, found {_describe_found(err.token)}",
+                      Span(path, *number[1]), "this number needs a unit", help=_syntax_help(expected, err.token))
+            return
+        sink.emit(
+            "E001",
+            f"expected {_describe_expected(expected)}, found {_describe_found(err.token)}",
+            span,
+            "unexpected here",
+            help=_syntax_help(expected, err.token, glued, getattr(err, "verify_inserted", None)),
+        )
+    elif isinstance(err, UnexpectedCharacters):
+        pos = err.pos_in_stream
+        ch = text[pos] if pos < len(text) else ""
+        span = Span(path, err.line, err.column, err.line, err.column + 1)
+        if text.startswith("/*", pos):
+            sink.emit("E002", "unterminated block comment", Span(path, err.line, err.column, err.line, err.column + 2),
+                      "this comment is never closed", help="close the comment with `*/`")
+            return
+        if ch == '"':
+            sink.emit("E002", "unterminated string", span, "this string is never closed",
+                      help='close the file name with `"` on the same line')
+            return
+        if ch == "-" and re.match(r"-[ \t]*[0-9]", text[pos:pos + 40]):
+            sink.emit("E002", "unexpected character '-': numbers are never negative", span, "a minus sign",
+                      help="times, frequencies and priorities are non-negative: remove the `-`")
+            return
+        shown = repr(ch)[1:-1] if ch.isprintable() else f"U+{ord(ch):04X}" if ch else "end of file"
+        allowed = getattr(err, "verify_accepted", None)
+        if allowed is None:
+            allowed = _accepted(err)
+        msg = f"unexpected character '{shown}'"
+        # (a long list says little about this place: a character is rarely a misspelt word)
+        if allowed and len(allowed) <= MAX_EXPECTED_SHOWN:
+            msg += f"; expected {_describe_expected(allowed)}"
+        near = sorted(w for n in allowed if (w := _literal_words().get(n, "")[1:-1]) and ch and w.startswith(ch))
+        help = (f"did you mean `{near[0]}`?" if near
+                else "remove it; comments start with `//` or are enclosed in `/* */`")
+        sink.emit("E002", msg, span, "not part of the language", help=help)
+    else:  # pragma: no cover - lark raises only the two above from LALR
+        sink.emit("E001", str(err).splitlines()[0], Span(path, 1, 1, 1, 2),
+                  help="specs/language.md gives the syntax of each declaration")
+
+
+_INSERTION_ORDER = ("UNIT", "COLON", "NAME", "NUMBER", "RBRACE")
+
+
+def _repair(err: UnexpectedToken, text: str) -> None:
+    """Error recovery: the smallest edit after which the parser goes on.
+
+    In order: a keyword glued to the next word is split (``outx`` read as ``out x``); the one expected
+    symbol after which the offending token fits is inserted (a missing unit, colon or brace); a
+    misspelt keyword is replaced by the keyword if what follows fits (``activaton`` read as
+    ``activation``); for a word where only keywords may stand, a keyword is inserted before it, or
+    else replaces it (``output x`` read as ``out x``), closest in spelling first, if what follows
+    fits; a keyword after which the offending token fits is inserted. Lark then
+    resumes after the offending token; if nothing helps, that token is simply dropped. This keeps one
+    slip from cascading into many reports.
+    """
+    parser = err.interactive_parser
+    glued = getattr(err, "verify_glued", None)
+    if glued is not None:  # `outx : T`: go on as if it read `out x : T`
+        parser.feed_token(glued[1])
+        parser.feed_token(glued[2])
+        return
+    keywords = _keyword_terminals()
+    keyword_names = set(keywords.values())
+    expected = sorted(err.expected or (), key=lambda n: (n not in _INSERTION_ORDER,
+                                                         _INSERTION_ORDER.index(n) if n in _INSERTION_ORDER else 0, n))
+    inserted = _insert_one(parser, err.token, [n for n in expected if n not in keyword_names])
+    if inserted is not None:
+        err.verify_inserted = inserted
+        return
+    tok = err.token
+    if tok.type == "NAME" and tok.end_pos is not None:
+        near = _misspelt_keyword(str(tok), set(expected))
+        keyword = Token(keywords[near], near, line=tok.line, column=tok.column) if near else None
+        if keyword is not None and _fits(parser, [keyword], text, tok.end_pos):  # replace the misspelt word
+            parser.feed_token(keyword)
+            return
+        candidates = sorted((k for k, n in keywords.items() if n in expected),
+                            key=lambda k: (_edit_distance(str(tok).lower(), k), k))
+        for kw in candidates:  # a keyword before it, after which the rest fits
+            keyword = Token(keywords[kw], kw, line=tok.line, column=tok.column)
+            if _fits(parser, [keyword, tok], text, tok.end_pos):
+                parser.feed_token(keyword)
+                parser.feed_token(tok)
+                return
+        for kw in candidates:  # the closest keyword instead of it (`output x : T` read as `out x : T`)
+            keyword = Token(keywords[kw], kw, line=tok.line, column=tok.column)
+            if _fits(parser, [keyword], text, tok.end_pos):
+                parser.feed_token(keyword)
+                return
+    _insert_one(parser, err.token, [n for n in expected if n in keyword_names])
+
+
+def _insert_one(parser, token: Token, names: list[str]) -> str | None:
+    """Insert the first of ``names`` after which ``token`` fits, then ``token``; the one inserted."""
+    for name in names:
+        filler = Token(name, _placeholder(name), line=token.line, column=token.column)
+        if _feeds(parser, [filler, token]):  # trial feeds only build new nodes
+            parser.feed_token(filler)
+            parser.feed_token(token)
+            return name
+    return None
+
+
+def _skip_unterminated_string(err: UnexpectedCharacters, text: str) -> None:
+    """Recovery from an unterminated string: the rest of its line is taken as the string."""
+    parser = getattr(err, "interactive_parser", None)
+    if parser is None:  # pragma: no cover - Lark's LALR errors carry their parser
+        return
+    start = err.pos_in_stream
+    end = text.find("\n", start)
+    if end < 0:
+        end = len(text)
+    string = Token("STRING", text[start:end] + '"', line=err.line, column=err.column)
+    if _feeds(parser, [string]):
+        parser.feed_token(string)
+    parser.lexer_thread.state.line_ctr.feed(text[start:end])
+
+
+def _placeholder(name: str) -> str:
+    return {"UNIT": "ms", "NAME": "_", "NUMBER": "0", "STRING": '""'}.get(name) or _literal_words().get(
+        name, "'_'")[1:-1]
+
+
+def _end_span(path: str, text: str) -> Span:
+    lines = text.split("\n")
+    line = len(lines)
+    col = len(lines[-1]) + 1
+    return Span(path, line, col, line, col + 1)
