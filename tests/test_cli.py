@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import json
+import re
 import subprocess
 import sys
 
@@ -23,7 +24,7 @@ def test_check_json_schema(write, capsys):
     assert doc["schema"] == "verify.diagnostics/1"
     (d,) = doc["diagnostics"]
     assert d["code"] == "E101" and d["severity"] == "error" and d["line"] == 2 and d["column"] == 25
-    assert d["help"] == "did you mean `Laser`?" and d["spec"] == "specs/diagnostics.md#e101"
+    assert d["help"] == "did you mean `Laser`?" and d["spec"] == "specs/diagnostics.md#e101-unknown-name"
     assert doc["summary"] == {"errors": 1, "warnings": 0}
 
 
@@ -65,3 +66,164 @@ def test_internal_errors_exit_70_without_traceback(monkeypatch, capsys):
 def test_console_scripts_exist(script):
     proc = subprocess.run([sys.executable, "-c", f"import shutil,sys; sys.exit(0 if shutil.which('{script}') else 1)"])
     assert proc.returncode == 0, f"console script {script} is not installed"
+
+
+def _github_anchors(markdown: str) -> set[str]:
+    """The anchors GitHub generates for the headings of ``markdown``, written out independently of
+    ``verify.codes``: lower case, every character but letters, digits, ``-``, ``_`` and spaces dropped,
+    spaces turned into hyphens."""
+    anchors = set()
+    for line in markdown.splitlines():
+        m = re.match(r"^#{1,6}\s+(.*?)\s*#*\s*$", line)
+        if m:
+            anchors.add(re.sub(r"[^\w\- ]", "", m.group(1).lower()).replace(" ", "-"))
+    return anchors
+
+
+def test_every_spec_link_points_at_a_heading():
+    from verify.codes import CODES, spec_anchor
+
+    from .conftest import ROOT
+
+    text = (ROOT / "specs" / "diagnostics.md").read_text(encoding="utf-8")
+    anchors = _github_anchors(re.sub(r"^```.*?^```", "", text, flags=re.MULTILINE | re.DOTALL))
+    for code in CODES:
+        link = spec_anchor(code)
+        path, _, anchor = link.partition("#")
+        assert path == "specs/diagnostics.md" and anchor in anchors, f"{code}: {link} names no heading"
+    assert spec_anchor("E306") == "specs/diagnostics.md#e306-activation-contradicts-a-fixed-non-changeable-rate"
+    assert spec_anchor("E308") == "specs/diagnostics.md#e308-phase-outside-0-period"
+
+
+# ------------------------------------------------------------------ fmt --in-place: atomic, never lost
+
+UNFORMATTED = "component A {  task T { wcet 1 ms } }\n"
+
+
+def test_fmt_in_place_keeps_the_mode_and_leaves_no_temporary_file(write, tmp_path):
+    import os
+    import stat
+
+    path = write({"a.vfy": UNFORMATTED})
+    os.chmod(path, 0o640)
+    assert main(["fmt", path, "--in-place"]) == 0
+    assert open(path).read() != UNFORMATTED and main(["fmt", path, "--check"]) == 0
+    assert stat.S_IMODE(os.stat(path).st_mode) == 0o640
+    assert sorted(os.listdir(tmp_path)) == ["a.vfy"]
+
+
+def test_fmt_in_place_through_a_symbolic_link_rewrites_the_target(write, tmp_path):
+    import os
+
+    path = write({"a.vfy": UNFORMATTED})
+    link = tmp_path / "link.vfy"
+    os.symlink("a.vfy", link)
+    assert main(["fmt", str(link), "--in-place"]) == 0
+    assert os.path.islink(link) and main(["fmt", path, "--check"]) == 0
+
+
+def test_fmt_in_place_failure_is_e004_and_loses_nothing(write, tmp_path, monkeypatch, capsys):
+    import os
+
+    path = write({"a.vfy": UNFORMATTED})
+
+    def refuse(*_args, **_kwargs):
+        raise PermissionError(13, "Permission denied")
+
+    monkeypatch.setattr(os, "replace", refuse)  # fails after the temporary file is written
+    assert main(["fmt", path, "--in-place"]) == 2
+    err = capsys.readouterr().err
+    assert "error[E004]" in err and "cannot write" in err and "Permission denied" in err
+    assert "Traceback" not in err and "internal error" not in err
+    assert open(path).read() == UNFORMATTED
+    assert sorted(os.listdir(tmp_path)) == ["a.vfy"]  # the temporary file is removed
+
+
+def test_fmt_in_place_where_no_temporary_file_can_be_made(write, tmp_path, monkeypatch, capsys):
+    """A directory that refuses new files (as a read-only one does for non-root users): E004, exit 2,
+    the original untouched."""
+    import os
+    import tempfile
+
+    def refuse(*_args, **_kwargs):
+        raise PermissionError(13, "Permission denied")
+
+    path = write({"a.vfy": UNFORMATTED})
+    monkeypatch.setattr(tempfile, "mkstemp", refuse)
+    assert main(["fmt", path, "--in-place"]) == 2
+    err = capsys.readouterr().err
+    assert "error[E004]" in err and "Permission denied" in err and "Traceback" not in err
+    assert open(path).read() == UNFORMATTED
+    assert sorted(os.listdir(tmp_path)) == ["a.vfy"]
+
+
+def test_fmt_output_failure_is_e004(tmp_path, write, capsys):
+    path = write({"a.vfy": UNFORMATTED})
+    assert main(["fmt", path, "-o", str(tmp_path / "no" / "such" / "dir.vfy")]) == 2
+    err = capsys.readouterr().err
+    assert "error[E004]" in err and "Traceback" not in err
+
+
+# ------------------------------------------------------------------ check sees propagated rates (E305/E306)
+
+
+def _navigation_with(tmp_path, old: str, new: str) -> str:
+    from .conftest import EXAMPLES
+
+    for name in ("components.vfy", "navigation.vfy"):
+        text = (EXAMPLES / "navigation" / name).read_text(encoding="utf-8")
+        (tmp_path / name).write_text(text.replace(old, new) if name == "navigation.vfy" else text, encoding="utf-8")
+    return str(tmp_path / "navigation.vfy")
+
+
+def test_check_reports_a_triggered_task_outside_its_constraint(tmp_path, capsys):
+    path = _navigation_with(tmp_path, "trigger scan every 10", "trigger scan every 2")
+    assert main(["check", path, "--format", "json"]) == 2
+    doc = json.loads(capsys.readouterr().out)
+    found = [d for d in doc["diagnostics"] if d["code"] == "E305"]
+    mapper = next(d for d in found if "mapper.CurMapTask" in d["message"])
+    assert "20 Hz (40 Hz / 2)" in mapper["message"] and "10 Hz" in mapper["message"]
+
+
+@pytest.mark.parametrize("command", ["analyze", "prove", "synth"])
+def test_later_commands_report_it_once(tmp_path, capsys, command):
+    path = _navigation_with(tmp_path, "trigger scan every 10", "trigger scan every 2")
+    assert main([command, path]) == 2
+    err = capsys.readouterr().err
+    assert err.count("`mapper.CurMapTask` is activated at 20 Hz") == 1
+
+
+_HOLE_UPSTREAM = """component W {{
+  out o : T
+  task Write {{
+    produces o
+    wcet 1 ms
+  }}
+}}
+component R {{
+  in i : T
+  task Read {{
+    reads i
+    wcet 1 ms
+    activation max 1 Hz
+  }}
+}}
+system S {{
+  core c
+  instance w : W on c {{
+    task Write priority 2 timer {writer}
+  }}
+  instance r : R on c {{
+    task Read priority 1 trigger i every 2
+  }}
+  connect w.o -> r.i
+}}
+"""
+
+
+def test_check_leaves_rates_behind_a_hole_to_synth(write):
+    import verify
+
+    assert verify.load_text(_HOLE_UPSTREAM.format(writer="?"), "m.vfy").ok
+    (d,) = verify.load_text(_HOLE_UPSTREAM.format(writer="100 ms"), "m.vfy").diagnostics
+    assert d.code == "E305" and "5 Hz (10 Hz / 2)" in d.message

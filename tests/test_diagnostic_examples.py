@@ -211,3 +211,197 @@ system S {{
 def test_a_period_hole_needs_a_candidate(constraint, hole, reported):
     result = verify.load_text(_HOLE.format(constraint=constraint, hole=hole), "m.vfy")
     assert [d.code for d in result.diagnostics] == (["E313"] if reported else [])
+
+
+# ------------------------------------------------------------------ E210 beyond its example
+
+_RING = """component Filter {{
+  in input : Pose
+  out output : Pose
+  task FilterTask {{
+    reads input
+    produces output
+    wcet 1 ms
+  }}
+}}
+system Robot {{
+  core cpu
+{instances}
+{connections}
+}}
+"""
+
+
+def _ring(declared: list[str], edges: list[tuple[str, str]]) -> str:
+    instances = "\n".join(f"  instance {n} : Filter on cpu {{\n    task FilterTask priority 1 trigger input\n  }}"
+                          for n in declared)
+    connections = "\n".join(f"  connect {a}.output -> {b}.input" for a, b in edges)
+    return _RING.format(instances=instances, connections=connections)
+
+
+def test_a_trigger_cycle_is_printed_in_the_direction_of_its_triggers():
+    """A ring f0 → f1 → f2 → f3 → f0 whose instances are declared in another order: the message shows
+    the ring as it is, from the first task in source order (not the tasks sorted by declaration)."""
+    ring = [("f0", "f1"), ("f1", "f2"), ("f2", "f3"), ("f3", "f0")]
+    result = verify.load_text(_ring(["f0", "f3", "f1", "f2"], ring), "m.vfy")
+    (d,) = result.diagnostics
+    assert d.code == "E210"
+    assert d.message.endswith("`f0.FilterTask` -> `f1.FilterTask` -> `f2.FilterTask` -> `f3.FilterTask` "
+                              "-> `f0.FilterTask`")
+    assert d.span.line == 13  # the trigger of f0, the first declared
+    assert sorted(lb.message for lb in d.secondary) == ["`f1.FilterTask`", "`f2.FilterTask`", "`f3.FilterTask`"]
+    # started elsewhere in source order, the same ring is printed from that task
+    result = verify.load_text(_ring(["f2", "f0", "f3", "f1"], ring), "m.vfy")
+    (d,) = result.diagnostics
+    assert d.message.endswith("`f2.FilterTask` -> `f3.FilterTask` -> `f0.FilterTask` -> `f1.FilterTask` "
+                              "-> `f2.FilterTask`")
+
+
+_TWO_RINGS = """component Node {
+  in a : Pose
+  in b : Pose
+  in both = a & b
+  out x : Pose
+  out y : Pose
+  task T {
+    reads a optional
+    reads b optional
+    produces x, y
+    wcet 1 ms
+  }
+}
+system Robot {
+  core cpu
+  instance f0 : Node on cpu { task T priority 1 trigger a }
+  instance f1 : Node on cpu { task T priority 1 trigger both }
+  instance f2 : Node on cpu { task T priority 1 trigger a }
+  instance f3 : Node on cpu { task T priority 1 trigger a }
+  connect f0.x -> f1.a
+  connect f1.x -> f2.a
+  connect f2.x -> f0.a
+  connect f1.y -> f3.a
+  connect f3.x -> f1.b
+}
+"""
+
+
+def test_a_trigger_cycle_with_a_chord_names_every_member():
+    """Two rings f0 → f1 → f2 → f0 and f1 → f3 → f1 form one strongly connected component: a real,
+    shortest cycle through f0 is printed, the task outside it named in a note, every member labelled."""
+    (d,) = verify.load_text(_TWO_RINGS, "m.vfy").diagnostics
+    assert d.code == "E210"
+    assert d.message.endswith("`f0.T` -> `f1.T` -> `f2.T` -> `f0.T`")
+    assert d.notes == ("in the same cycle of triggers: `f3.T`",)
+    assert sorted(lb.message for lb in d.secondary) == ["`f1.T`", "`f2.T`", "`f3.T`"]
+    self_loop = verify.load_text(_ring(["f0"], [("f0", "f0")]), "m.vfy")
+    (d,) = self_loop.diagnostics
+    assert d.code == "E210" and d.message.endswith("`f0.FilterTask` -> `f0.FilterTask`")
+
+
+# ------------------------------------------------------------------ E212 on chain specs
+
+_CHAIN_SPECS = """component A {{
+  out o : T
+  task W {{
+    produces o
+    wcet 1 ms
+  }}
+}}
+system S {{
+  core c
+  instance a : A on c {{
+    task W priority 1 timer 10 ms
+  }}
+  chain k: a.o {{
+{specs}
+  }}
+}}
+"""
+
+
+@pytest.mark.parametrize("kind", ["reaction_time", "data_age", "jitter"])
+def test_a_repeated_chain_spec_is_e212_not_last_wins(kind):
+    specs = f"    {kind} <= 1 ms\n    data_age <= 9 ms\n    {kind} <= 2 ms" if kind != "data_age" else \
+        "    data_age <= 1 ms\n    jitter <= 9 ms\n    data_age <= 2 ms"
+    result = verify.load_text(_CHAIN_SPECS.format(specs=specs), "m.vfy")
+    (d,) = result.diagnostics
+    assert d.code == "E212" and f"`{kind}`" in d.message and "chain `k`" in d.message
+    assert (d.span.line, d.span.column) == (16, 5)  # the second one
+    (first,) = d.secondary
+    assert (first.span.line, first.message) == (14, "first given here")
+    assert not result.ok and result.models == {}
+    once = verify.load_text(_CHAIN_SPECS.format(specs="    jitter <= 1 ms\n    data_age <= 2 ms"), "m.vfy")
+    assert once.ok
+
+
+# ------------------------------------------------------------------ rule variants beyond the section examples
+
+_PIPELINE = """component Laser {{
+  out scan : LaserScan
+  task LaserTask {{
+    produces scan
+    wcet 2 ms
+  }}
+}}
+
+component Fusion {{
+  in scan : LaserScan
+  in odom : LaserScan
+  task FuseTask {{
+    reads scan
+    reads odom optional
+    wcet 5 ms{constraint}
+  }}
+}}
+
+system Robot {{
+  core cpu
+  instance laser : Laser on cpu {{
+    task LaserTask priority 2 timer 25 ms
+  }}
+  instance fusion : Fusion on cpu {{
+    task FuseTask priority 1 {binding}
+  }}
+  connect laser.scan -> fusion.scan
+  connect laser.scan -> fusion.odom
+}}
+"""
+
+#: (name, code, source, words the message must contain): the variants of issue 2 item 5 that the
+#: one example per section does not show; each has a golden file tests/golden/diagnostics/variants/NAME.txt
+VARIANTS = [
+    ("E304-every-0", "E304", _PIPELINE.format(constraint="", binding="trigger scan every 0"),
+     ("at least 1", "found 0")),
+    ("E304-fraction", "E304", _PIPELINE.format(constraint="", binding="trigger scan every 1/2"),
+     ("found 0.5",)),
+    ("E204-two-data-triggers", "E204", _PIPELINE.format(constraint="", binding="trigger scan trigger odom"),
+     ("more than one data trigger",)),
+    ("E302-time-for-a-frequency", "E302",
+     _PIPELINE.format(constraint="\n    activation max 100 ms", binding="trigger scan"),
+     ("must be a frequency", "the time 100 ms")),
+    ("E305-propagated-rate", "E305",
+     _PIPELINE.format(constraint="\n    activation 1 Hz .. 10 Hz", binding="trigger scan every 2"),
+     ("20 Hz (40 Hz / 2)", "above its maximum activation rate 10 Hz")),
+    ("E306-propagated-rate", "E306",
+     _PIPELINE.format(constraint="\n    activation 10 Hz fixed", binding="trigger scan every 2"),
+     ("20 Hz (40 Hz / 2)",)),
+]
+
+
+@pytest.mark.parametrize("name, code, source, words", VARIANTS, ids=[v[0] for v in VARIANTS])
+def test_rule_variant(name, code, source, words, tmp_path):
+    path = tmp_path / "main.vfy"
+    path.write_text(source, encoding="utf-8")
+    result = verify.load(str(path))
+    assert [d.code for d in result.diagnostics] == [code], [d.message for d in result.diagnostics]
+    (d,) = result.diagnostics
+    for word in words:
+        assert word in d.message, d.message
+    text = render_all_text(list(result.diagnostics), result.sources).replace(str(tmp_path) + os.sep, "") + "\n"
+    golden = GOLDEN / "variants" / f"{name}.txt"
+    if UPDATE:
+        golden.parent.mkdir(parents=True, exist_ok=True)
+        golden.write_text(text, encoding="utf-8")
+    else:
+        assert golden.exists(), f"no golden file {golden}: run with UPDATE_GOLDEN=1 and read it"
+        assert text == golden.read_text(encoding="utf-8")

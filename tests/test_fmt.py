@@ -8,7 +8,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from .strategies import MODULE_PATH, modules
+from .strategies import MODULE_PATH, modules, valid_modules
 from verify import syntax as s
 from verify.diagnostics import DiagnosticSink
 from verify.fmt import collect_comments, format_module, format_number, format_text
@@ -330,3 +330,36 @@ def test_blank_lines_between_members_are_kept_once():
     formatted, _ = format_text(text)
     assert formatted == "system S {\n  core a\n\n  core b\n  core c\n}\n"
     assert format_text(formatted)[0] == formatted
+
+
+# ------------------------------------------------------------------ random valid models (issue 2, item 10)
+
+
+def _models_of_tree(module: s.Module):
+    """The semantic models of a syntax tree itself, built without any text (resolve, validate, build)."""
+    from verify.api import _finish
+    from verify.loader import Project
+    from verify.source import SourceFile
+
+    sink = DiagnosticSink()
+    return _finish(Project(MODULE_PATH, (module,), {MODULE_PATH: SourceFile(MODULE_PATH, "")}), sink)
+
+
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+@given(valid_modules())
+def test_random_valid_models_check_format_and_parse_back(module):
+    import verify
+
+    text = format_module(module)
+    loaded = verify.load_text(text, MODULE_PATH)
+    assert loaded.ok, "\n".join(f"{d.code} {d.message}" for d in loaded.diagnostics) + "\n\n" + text
+    assert not loaded.diagnostics
+    assert sorted(loaded.models) == sorted(sy.name.text for sy in module.systems)
+    assert fmt(text) == text  # canonical already: formatting is idempotent
+    assert parse(text) == module
+    original = _models_of_tree(module)
+    assert original.ok and original.models == loaded.models  # parse(format(m)) means what m means
+    for name, model in loaded.models.items():
+        system = next(sy for sy in module.systems if sy.name.text == name)
+        assert len(model.tasks) == sum(len(i.bindings) for i in system.instances)
+        assert len(model.links) == len(system.connections) and len(model.chains) == len(system.chains)

@@ -1,8 +1,11 @@
 """Bad input never crashes: every malformed input yields located diagnostics, never an exception."""
 from __future__ import annotations
 
+import os
 import random
+import re
 
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -76,6 +79,38 @@ def test_deep_nesting_and_huge_numbers():
     assert [d.code for d in result.diagnostics] == ["E005"]
 
 
+def test_every_syntax_error_has_a_help_and_an_accepted_expected_set():
+    from verify.larkparse import describe_token_type
+
+    rng = random.Random(2026)
+    source = COMPONENTS + "\n" + NAVIGATION.replace('import "components.vfy"', "")
+    seen = 0
+    for _ in range(120):
+        result = verify.load_text(_mutations(source, rng))
+        _assert_located(result)
+        for d in result.diagnostics:
+            if d.code in ("E001", "E002"):
+                seen += 1
+                assert d.help, (d.code, d.message)
+                # merged LALR lookaheads never leak into a list: after a quantity in a task, no system word
+                if "'bcet'" in d.message:
+                    assert "'chain'" not in d.message and "'connect'" not in d.message, d.message
+    assert seen > 50
+    assert describe_token_type("NAME") == "a name"
+
+
+def test_keywords_glued_to_names_in_mutants_are_never_accepted():
+    # removing the blank after a keyword must never leave a valid model (`outx` is no `out x`)
+    for text in (COMPONENTS, NAVIGATION):
+        source = re.sub(r"//[^\n]*|/\*[\s\S]*?\*/", "", text)  # (a keyword in a comment is no keyword)
+        matches = re.finditer(r"\b(out|in|task|reads|produces|core|instance|trigger|connect|chain|timer|on) "
+                              r"(?=[A-Za-z_])", source)
+        for match in random.Random(3).sample(list(matches), 12):
+            glued = source[:match.end() - 1] + source[match.end():]
+            result = verify.load_text(glued)
+            assert any(d.code == "E001" for d in result.diagnostics), glued[match.start():match.end() + 10]
+
+
 def test_non_utf8_missing_directory_and_cycles(write, tmp_path):
     bad = write({"bad.vfy": b"component A {\n  \xff\xfe }"})
     assert [d.code for d in verify.load(bad).diagnostics] == ["E003"]
@@ -92,3 +127,42 @@ def test_cli_never_tracebacks(write, capsys):
     assert main(["check", bad]) == 2
     err = capsys.readouterr().err
     assert "Traceback" not in err and "error[" in err
+
+
+def test_a_nul_character_in_an_import_is_a_located_error(write, capsys):
+    main_file = write({"m.vfy": 'import "a\0b.vfy"\n'})
+    result = verify.load(main_file)
+    assert [d.code for d in result.diagnostics] == ["E004"]
+    (d,) = result.diagnostics
+    assert d.span.line == 1 and "NUL" in d.message and "\0" not in d.message
+    assert main(["check", main_file]) == 2
+    assert "Traceback" not in capsys.readouterr().err
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="needs named pipes")
+def test_a_fifo_is_refused_without_blocking(write, tmp_path, capsys):
+    main_file = write({"m.vfy": 'import "pipe.vfy"\n'})
+    os.mkfifo(tmp_path / "pipe.vfy")  # nobody ever writes to it: reading it would block forever
+    import signal
+
+    def hung(*_):
+        raise TimeoutError("reading a FIFO blocked")
+
+    previous = signal.signal(signal.SIGALRM, hung)
+    signal.alarm(20)  # (fail, rather than hang the test run, if the FIFO were opened)
+    try:
+        _fifo_checks(main_file, str(tmp_path / "pipe.vfy"), capsys)
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, previous)
+
+
+def _fifo_checks(main_file, fifo, capsys):
+    result = verify.load(main_file)
+    assert [d.code for d in result.diagnostics] == ["E004"]
+    assert result.diagnostics[0].span.line == 1 and "not a regular file" in result.diagnostics[0].message
+    assert [d.code for d in verify.load(fifo).diagnostics] == ["E004"]  # the main file argument too
+    assert main(["check", fifo]) == 2
+    assert main(["fmt", fifo]) == 2
+    err = capsys.readouterr().err
+    assert "error[E004]" in err and "Traceback" not in err

@@ -17,7 +17,7 @@ import random
 from dataclasses import dataclass, field
 from fractions import Fraction as F
 
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 import verify
@@ -154,6 +154,10 @@ def render(sys_: System, scale: int = 1, order: random.Random | None = None) -> 
 
 def load(text: str):
     result = verify.load_text(text, "random.vfy")
+    codes = {d.code for d in result.diagnostics if d.severity.value == "error"}
+    # a triggered task whose writers are all configured and whose propagated rate leaves its constraint
+    # is invalid input (E305/E306 from `check`), not a synthesis problem: no answer to compare
+    assume(not codes or not codes <= {"E305", "E306"})
     assert result.ok, [(d.code, d.message) for d in result.diagnostics] + [text]
     return result
 

@@ -104,10 +104,30 @@ def _finish(project: Project, sink: DiagnosticSink) -> LoadResult:
         model = build_system(scope)
         before = len(sink.items)
         validate_chains(scope, model, sink)
+        check_propagated_rates(model, sink)
         if len(sink.items) == before:
             models[name] = model
     diagnostics = tuple(sorted(sink.items, key=Diagnostic.sort_key))
     return LoadResult(project, resolution, models, diagnostics)
+
+
+#: what ``check_propagated_rates`` reports (the rates stage reports more, e.g. compound constraints, E314,
+#: which stay with ``analyze``)
+RATE_CODES = frozenset({"E305", "E306"})
+
+
+def check_propagated_rates(model: SystemModel, sink: DiagnosticSink) -> None:
+    """E305/E306 for a data-triggered task whose propagated rate leaves its activation constraint
+    (specs/language.md §4), computed by the rates stage of the timing analysis. A task whose rate is
+    not bounded (a synthesis hole or a trigger cycle upstream) is not checked here: ``synth`` and
+    ``analyze`` deal with it."""
+    from .timing.rates import activation_rates, check_trigger_constraints
+
+    found = DiagnosticSink()
+    check_trigger_constraints(model, activation_rates(model), found)
+    for d in found.items:
+        if d.code in RATE_CODES:
+            sink.add(d)
 
 
 def _clean(scope, sink: DiagnosticSink) -> bool:

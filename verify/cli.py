@@ -102,12 +102,53 @@ def cmd_fmt(args) -> int:
         return EXIT_OK
     if args.in_place:
         if formatted != text:
-            with open(args.file, "w", encoding="utf-8") as fh:
-                fh.write(formatted)
+            return _replace_file(args.file, formatted)
         return EXIT_OK
     if args.output:
         return _write_new_file(args.output, formatted, args.force)
     sys.stdout.write(formatted)
+    return EXIT_OK
+
+
+def _cannot_write(path: str, err: OSError) -> int:
+    """E004 for a file that cannot be written (exit 2); the file itself is left as it was."""
+    from .diagnostics import DiagnosticSink
+    from .source import Span
+
+    sink = DiagnosticSink()
+    sink.emit("E004", f"cannot write {path}: {err.strerror or err}", Span(path, 1, 1, 1, 1), "cannot be written",
+              help="check that the file and its directory are writable; nothing was changed")
+    print(render_all_text(sink.items, {}), file=sys.stderr)
+    return EXIT_INVALID
+
+
+def _replace_file(path: str, text: str) -> int:
+    """Rewrite ``path`` atomically: write a temporary file in the same directory, give it the file's
+    mode, and rename it over the file (through a symbolic link, the file it points to). On any failure
+    the original file is untouched and the temporary file removed."""
+    import stat
+    import tempfile
+
+    target = os.path.realpath(path)
+    tmp = None
+    try:
+        mode = stat.S_IMODE(os.stat(target).st_mode)
+        fd, tmp = tempfile.mkstemp(prefix=".", suffix=".vfy.tmp", dir=os.path.dirname(target))
+        with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
+            fh.write(text)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.chmod(tmp, mode)
+        os.replace(tmp, target)
+        tmp = None
+    except OSError as err:
+        return _cannot_write(path, err)
+    finally:
+        if tmp is not None:
+            try:
+                os.unlink(tmp)
+            except OSError:
+                pass
     return EXIT_OK
 
 
@@ -119,8 +160,7 @@ def _write_new_file(path: str, text: str, force: bool) -> int:
         with open(path, "w", encoding="utf-8") as fh:
             fh.write(text)
     except OSError as err:
-        print(f"error: cannot write {path}: {err.strerror or err}", file=sys.stderr)
-        return EXIT_INVALID
+        return _cannot_write(path, err)
     return EXIT_OK
 
 

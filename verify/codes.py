@@ -66,6 +66,8 @@ _ALL = [
     Code("E311", "core utilisation above 1"),
     Code("E312", "no response-time bound within the deadline"),
     Code("E313", "synthesis hole has no candidate values"),
+    Code("E314", "compound in-port activated outside its activation constraint"),
+    Code("E315", "response-time bound below the worst-case execution time"),
     # E4xx: synthesis
     Code("E401", "synthesis is unsatisfiable"),
     Code("E402", "synthesis is undecided"),
@@ -79,6 +81,15 @@ _ALL = [
 CODES: dict[str, Code] = {c.code: c for c in _ALL}
 
 
+def heading_anchor(heading: str) -> str:
+    """The anchor GitHub (and most Markdown renderers) give a heading: lower case, punctuation other
+    than hyphens and underscores dropped, each space a hyphen (``E306 a fixed (non-changeable) rate``
+    → ``e306-a-fixed-non-changeable-rate``)."""
+    kept = "".join(ch for ch in heading.strip().lower() if ch.isalnum() or ch in "-_ ")
+    return kept.replace(" ", "-")
+
+
 def spec_anchor(code: str) -> str:
-    """The section of specs/diagnostics.md that explains ``code``."""
-    return f"specs/diagnostics.md#{code.lower()}"
+    """The section of specs/diagnostics.md that explains ``code`` (its heading is ``## CODE title``)."""
+    known = CODES.get(code)
+    return "specs/diagnostics.md#" + heading_anchor(f"{code} {known.title}" if known else code)

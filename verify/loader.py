@@ -6,6 +6,7 @@ located diagnostics (E003, E004), never exceptions. Imports are resolved relativ
 from __future__ import annotations
 
 import os
+import stat
 from dataclasses import dataclass, field
 
 from . import syntax as s
@@ -42,19 +43,34 @@ def _read(path: str, sink: DiagnosticSink, at: Span | None,
     """The text of ``path``, or None after reporting why not. A file that is not UTF-8 is still put in
     ``sources`` (undecodable bytes replaced) so that the report can show the offending line."""
     where = at or Span(path, 1, 1, 1, 1)
+    shown = _shown(path)
     try:
-        with open(path, "rb") as fh:
+        # a FIFO, a device or a socket would block or never end: only regular files are read, checked
+        # before opening and again on the open descriptor (opened non-blocking, so a FIFO swapped in
+        # between cannot hang the read either)
+        if not stat.S_ISREG(os.stat(path).st_mode):
+            _not_regular(shown, path, where, sink)
+            return None
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0))
+        with os.fdopen(fd, "rb") as fh:
+            if not stat.S_ISREG(os.fstat(fd).st_mode):
+                _not_regular(shown, path, where, sink)
+                return None
             data = fh.read(MAX_FILE_BYTES + 1)
+    except ValueError:  # e.g. a NUL character in the path: no file can have that name
+        sink.emit("E004", f"invalid file name {shown}: it contains a NUL character", where, "cannot be read",
+                  help="correct the file name")
+        return None
     except FileNotFoundError:
-        sink.emit("E004", f"file not found: {path}", where, "cannot be read",
+        sink.emit("E004", f"file not found: {shown}", where, "cannot be read",
                   help="check the path; imports are relative to the importing file")
         return None
     except IsADirectoryError:
-        sink.emit("E004", f"{path} is a directory, not a file", where, "cannot be read",
+        sink.emit("E004", f"{shown} is a directory, not a file", where, "cannot be read",
                   help="name a .vfy file")
         return None
     except OSError as err:
-        sink.emit("E004", f"cannot read {path}: {err.strerror or err}", where, "cannot be read",
+        sink.emit("E004", f"cannot read {shown}: {err.strerror or err}", where, "cannot be read",
                   help="check that the file exists and is readable")
         return None
     if len(data) > MAX_FILE_BYTES:
@@ -75,6 +91,19 @@ def _read(path: str, sink: DiagnosticSink, at: Span | None,
         return None
 
 
+def _shown(path: str) -> str:
+    """``path`` for a message: characters that cannot be shown (NUL, control characters) escaped."""
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in path)
+
+
+def _not_regular(shown: str, path: str, where: Span, sink: DiagnosticSink) -> None:
+    if os.path.isdir(path):
+        sink.emit("E004", f"{shown} is a directory, not a file", where, "cannot be read", help="name a .vfy file")
+        return
+    sink.emit("E004", f"{shown} is not a regular file (a pipe, device or socket)", where, "cannot be read",
+              help="name a regular .vfy file; to check generated text, write it to a file first")
+
+
 def load_project(root: str, sink: DiagnosticSink) -> Project:
     """Parse ``root`` and its imports. Diagnostics go to ``sink``; the project holds what parsed."""
     root = os.path.normpath(root)
@@ -84,7 +113,11 @@ def load_project(root: str, sink: DiagnosticSink) -> Project:
     stack: list[str] = []  # realpaths on the current import path
 
     def visit(path: str, at: Span | None) -> None:
-        real = os.path.realpath(path)
+        try:
+            real = os.path.realpath(path)
+        except ValueError:  # a NUL character in the path: ``_read`` reports it
+            _read(path, sink, at, sources)
+            return
         if real in stack:
             cycle = [seen[r] for r in stack[stack.index(real):]] + [seen[real]]
             sink.emit("E103", "import cycle: " + " -> ".join(cycle), at or Span(path, 1, 1, 1, 1),
