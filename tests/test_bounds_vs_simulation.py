@@ -1,7 +1,9 @@
 """Every analytic bound against the independent job-level simulator (specs/timing.md §1–§8).
 
-Hypothesis draws random *DSL text* — timers, sporadic sources, data triggers with prescalers, AND/OR
-compounds, cooperative siblings, several cores, connection delays and chains — so the whole pipeline
+Hypothesis draws random *DSL text* — timers (some with a fixed phase), sporadic sources, data triggers
+with prescalers, AND/OR compounds, cooperative siblings, several cores, connection delays, explicit
+deadlines, user response-time bounds (promises kept: at least the computed WCRT) and chains — so the
+whole pipeline
 (parse → resolve → validate → model → analysis) is exercised. For each system the simulator runs
 random scenarios (phases, execution times in [bcet, wcet], delays, counter phases) plus one where every
 job takes its wcet and every message its largest delay. No simulated response time, activation
@@ -13,14 +15,14 @@ from __future__ import annotations
 import random
 from fractions import Fraction
 
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, find, given, settings
 from hypothesis import strategies as st
 
 import verify
 from verify.sim import Scenario, chain_latencies, random_scenario, simulate
 from verify.timing import analyze
 
-from .test_timing import KINDS, bound_violations
+from .test_timing import KINDS, MS, bound_violations, promised_user_bounds
 
 PERIODS_MS = [10, 20, 25, 40, 50, 100]
 TIGHTNESS: dict[str, list[Fraction]] = {kind: [] for kind in KINDS}
@@ -28,10 +30,13 @@ TIGHTNESS: dict[str, list[Fraction]] = {kind: [] for kind in KINDS}
 
 @st.composite
 def systems(draw) -> str:
-    """A random, valid system as DSL text: one component per task (plus cooperative siblings)."""
+    """A random, valid system as DSL text: one component per task (plus cooperative siblings), with
+    fixed timer phases, explicit deadlines and user response-time bounds drawn sometimes. A user
+    bound is a promise, so it is drawn as the computed WCRT plus a slack (``promised_user_bounds``)."""
     n = draw(st.integers(2, 6))
     cores = draw(st.integers(1, 2))
     components, bindings, connections, chains = [], [], [], []
+    slack: dict[str, Fraction | None] = {}  # user-bound slack over the computed WCRT (ms), per task
     producers: list[int] = []  # tasks whose out-port `o` exists
     edges: dict[int, list[int]] = {}
     for i in range(n):
@@ -41,7 +46,7 @@ def systems(draw) -> str:
             if draw(st.integers(0, 3)) == 0:
                 act = f"sporadic {period} ms .. {period * draw(st.integers(4, 8)) / 4} ms"
             else:
-                act = f"timer {period} ms"
+                act = f"timer {period} ms" + _phase(draw, period)
         else:
             mode = draw(st.sampled_from(["single", "single", "and", "or"]))
             k = draw(st.sampled_from([1, 1, 2, 3]))
@@ -74,11 +79,17 @@ def systems(draw) -> str:
         lines.append("}")
         components.append("\n".join(lines))
         core = draw(st.integers(0, cores - 1))
-        body = [f"    task T priority {draw(st.integers(1, 8))} {act}"]
+        deadline = draw(st.sampled_from([None] * 8 + [10, 25, 50, 100, 200, 400]))
+        body = [f"    task T priority {draw(st.integers(1, 8))} {act}"
+                + (f" deadline {deadline} ms" if deadline else "") + f"@wcrt:i{i}.T@"]
+        slack_choices = st.sampled_from([None, None, None, Fraction(0), Fraction(0), Fraction(1, 2), Fraction(5)])
+        slack[f"i{i}.T"] = draw(slack_choices)
         if sibling:
             sib_core = draw(st.integers(0, cores - 1))
+            sib_period = draw(st.sampled_from(PERIODS_MS))
             body.append(f"    task S priority {draw(st.integers(1, 8))} on c{sib_core} "
-                        f"timer {draw(st.sampled_from(PERIODS_MS))} ms")
+                        f"timer {sib_period} ms{_phase(draw, sib_period)}@wcrt:i{i}.S@")
+            slack[f"i{i}.S"] = draw(slack_choices)
         bindings.append(f"  instance i{i} : C{i} on c{core} {{\n" + "\n".join(body) + "\n  }")
         producers.append(i)
     conn_lines = []
@@ -96,7 +107,28 @@ def systems(draw) -> str:
             path.append(nxt)
         chains.append(f"  chain ch{c}: " + " -> ".join(f"i{t}.o" for t in path))
     system = ["system S {"] + [f"  core c{c}" for c in range(cores)] + bindings + conn_lines + chains + ["}"]
-    return "\n\n".join(components) + "\n\n" + "\n".join(system) + "\n"
+    template = "\n\n".join(components) + "\n\n" + "\n".join(system) + "\n"
+
+    def render(bounds: dict[str, Fraction]) -> str:
+        text = template
+        for tid in slack:
+            text = text.replace(f"@wcrt:{tid}@", f" wcrt {_ms(bounds[tid] / MS)}" if tid in bounds else "")
+        return text
+
+    def build(bounds: dict[str, Fraction]):
+        result = verify.load_text(render(bounds), "random.vfy")
+        assert result.ok, [(d.code, d.message) for d in result.diagnostics] + [render(bounds)]
+        return result.system()
+
+    chosen = {tid: extra * MS for tid, extra in slack.items() if extra is not None}
+    return render(promised_user_bounds(build, chosen)[1])
+
+
+def _phase(draw, period: int) -> str:
+    """Sometimes a fixed phase in [0, period), in half milliseconds (else the phase is unknown)."""
+    if not draw(st.booleans()):
+        return ""
+    return f" phase {_ms(Fraction(draw(st.integers(0, 2 * period - 1)), 2))}"
 
 
 def _ms(value: Fraction) -> str:
@@ -124,6 +156,28 @@ def test_no_simulated_latency_beyond_the_analytic_bounds(text, seed):
         trace = simulate(model, scenario)
         assert bound_violations(model, trace) == [], text
         _record_tightness(model, analysis, trace)
+
+
+def test_the_generator_draws_phases_deadlines_and_user_bounds():
+    """The rules for fixed phases (§3, §5.2 `F = φ`), explicit deadlines (§6.2) and user bounds (rule
+    "user bound") are drawn, together, by the generator above."""
+    text = find(systems(), lambda t: " phase " in t and " deadline " in t and " wcrt " in t,
+                settings=settings(max_examples=500, deadline=None, database=None,
+                                  suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large]))
+    assert verify.load_text(text, "random.vfy").ok
+
+
+@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+@given(systems())
+def test_generated_user_bounds_are_kept_promises(text):
+    """Every drawn user bound is at least the WCRT computed with all bounds in place (and so at
+    least the wcet: no E315)."""
+    model = verify.load_text(text, "random.vfy").system()
+    analysis = analyze(model)
+    for t in model.tasks:
+        if t.wcrt_bound is not None:
+            computed = analysis.task(t.id).response.wcrt_computed
+            assert computed is not None and t.wcet <= computed <= t.wcrt_bound == analysis.task(t.id).wcrt, text
 
 
 def _record_tightness(model, analysis, trace) -> None:

@@ -153,6 +153,31 @@ class ChainModel:
 
 
 @dataclass(frozen=True)
+class CompoundModel:
+    """A compound in-port of one instance (``in any = a | b``) and its own activation constraint.
+
+    Its events (specs/timing.md §3) are the arrivals on its members (``mode`` "or") or the arrivals
+    completing a fresh set ("and"), before the prescaler of any task it triggers. ``min_rate`` /
+    ``max_rate`` (Hz, None: no bound) are a requirement on their rate, checked by the analysis
+    (E314, §5.1); they never change the rate it propagates."""
+
+    id: str  # "instance.port"
+    instance: str
+    name: str
+    mode: Literal["and", "or"]
+    members: tuple[str, ...]  # local in-port names
+    min_rate: Fraction | None = None
+    max_rate: Fraction | None = None
+    changeable: bool = True
+    span: Span = _span()  # the instance in the system
+    constraint_span: Span = _span()  # the constraint in its component
+
+    @property
+    def constrained(self) -> bool:
+        return self.min_rate is not None or self.max_rate is not None
+
+
+@dataclass(frozen=True)
 class CoreModel:
     name: str
     policy: str = "fixed_priority"
@@ -167,6 +192,7 @@ class SystemModel:
     links: tuple[LinkModel, ...]
     chains: tuple[ChainModel, ...]
     span: Span = _span()
+    compounds: tuple[CompoundModel, ...] = ()  # every compound in-port of every instance
 
     def task(self, task_id: str) -> TaskModel:
         return self._index()["tasks"][task_id]
@@ -187,7 +213,7 @@ class SystemModel:
 
     def _with_chains(self, chains: tuple[ChainModel, ...]) -> SystemModel:
         """This system with ``chains``; it shares the lookup tables, which do not depend on the chains."""
-        other = SystemModel(self.name, self.cores, self.tasks, self.links, chains, self.span)
+        other = SystemModel(self.name, self.cores, self.tasks, self.links, chains, self.span, self.compounds)
         if "_lookup" in self.__dict__:
             object.__setattr__(other, "_lookup", self.__dict__["_lookup"])
         return other
@@ -305,7 +331,9 @@ def build_system(scope: SystemScope) -> SystemModel:
     links = tuple(_link_model(conn, producers, readers) for conn in system.connections)
     cores = tuple(CoreModel(c.name.text, c.policy.text if c.policy else "fixed_priority", c.span)
                   for c in system.cores)
-    model = SystemModel(system.name.text, cores, tuple(tasks), links, (), system.span)
+    compounds = tuple(cm for inst in system.instances
+                      for cm in _compound_models(inst, scope.component_of[inst.name.text].component))
+    model = SystemModel(system.name.text, cores, tuple(tasks), links, (), system.span, compounds)
     chains = tuple(_chain_model(ch, model, scope) for ch in system.chains)
     return model._with_chains(chains)
 
@@ -334,6 +362,25 @@ def _task_model(inst: s.Instance, task: s.Task, binding: s.TaskBinding, componen
         span=binding.span,
         definition_span=task.span,
     )
+
+
+def _compound_models(inst: s.Instance, component: s.Component) -> list[CompoundModel]:
+    """The compound in-ports of ``inst`` with their constraints (the last declaration of a name counts,
+    as in ``_trigger_members``)."""
+    last = {c.name.text: c for c in component.compounds}
+    out = []
+    for c in component.compounds:
+        if last[c.name.text] is not c:
+            continue
+        k = c.constraint
+        out.append(CompoundModel(
+            id=f"{inst.name.text}.{c.name.text}", instance=inst.name.text, name=c.name.text, mode=c.mode,
+            members=tuple(m.text for m in c.members),
+            min_rate=quantity_hertz(k.min) if k and k.min else None,
+            max_rate=quantity_hertz(k.max) if k and k.max else None,
+            changeable=k.changeable if k else True,
+            span=inst.name.span, constraint_span=k.span if k else c.span))
+    return out
 
 
 def _link_model(conn: s.Connection, producers: dict[str, str], readers: dict[str, list[str]]) -> LinkModel:

@@ -162,9 +162,16 @@ def validate_system(scope: SystemScope, sink: DiagnosticSink) -> None:
     _check_connections(scope, sink)
     _check_trigger_sources(scope, sink)
     for chain in scope.system.chains:
+        first: dict[str, s.Spec] = {}
         for spec in chain.specs:
             _dimension(spec.bound, "time", f"the {spec.kind.replace('_', ' ')} bound", sink) and _positive(
                 spec.bound, f"{spec.kind.replace('_', ' ')} bound", sink)
+            if spec.kind in first:
+                sink.emit("E212", f"the `{spec.kind}` spec is given more than once for chain `{chain.name.text}`",
+                          spec.span, "given again here", secondary=(Label(first[spec.kind].span, "first given here"),),
+                          help="keep one of them (a chain has at most one bound of each kind)")
+            else:
+                first[spec.kind] = spec
 
 
 def _check_binding(inst: s.Instance, task: s.Task, b: s.TaskBinding, comp: ComponentScope,
@@ -180,7 +187,8 @@ def _check_binding(inst: s.Instance, task: s.Task, b: s.TaskBinding, comp: Compo
     if b.core is None and inst.core is None:
         sink.emit("E214", f"task {who} has no core", b.task.span, "no core",
                   help=f"add `on CORE` to instance `{inst.name.text}` or to this task")
-    _dimension(b.wcrt, "time", "wcrt", sink) and _positive(b.wcrt, "wcrt", sink)
+    if _dimension(b.wcrt, "time", "wcrt", sink) and _positive(b.wcrt, "wcrt", sink):
+        _check_user_bound(b, task, who, sink)
     _dimension(b.deadline, "time", "deadline", sink) and _positive(b.deadline, "deadline", sink)
     if not b.activations:
         sink.emit("E207", f"task {who} has no activation binding", b.task.span, "not activated",
@@ -198,6 +206,23 @@ def _check_binding(inst: s.Instance, task: s.Task, b: s.TaskBinding, comp: Compo
         _check_against_constraint(act, task, who, sink)
     if isinstance(act, s.Trigger):
         _check_trigger_reads(act, task, comp, who, sink)
+
+
+def _check_user_bound(b: s.TaskBinding, task: s.Task, who: str, sink: DiagnosticSink) -> None:
+    """E315: a user response-time bound below the wcet cannot hold (specs/timing.md §6.2): a job may
+    run for its wcet, and it starts no earlier than its release."""
+    w = task.wcet
+    if b.wcrt is None or w is None or w.dimension != "time" or w.value <= 0:
+        return  # (a missing or malformed wcet is E217, E302 or E307)
+    bound, wcet = quantity_seconds(b.wcrt), quantity_seconds(w)
+    if bound >= wcet:
+        return
+    sink.emit("E315", f"task {who}: the response-time bound {fmt_quantity(b.wcrt)} is below its worst-case "
+              f"execution time {fmt_quantity(w)}, so it cannot hold", b.wcrt.span, "below the wcet",
+              secondary=(Label(w.span, "worst-case execution time"),),
+              notes=("a job may run for its full wcet and starts no earlier than its release, so a response "
+                     f"time of {fmt_time(wcet)} is possible",),
+              help=f"give a bound of at least {fmt_time(wcet)}, or remove `wcrt` to use the computed one")
 
 
 def _check_activation_values(act: s.Activation, sink: DiagnosticSink) -> bool:
@@ -222,8 +247,9 @@ def _check_timer(t: s.Timer, sink: DiagnosticSink) -> bool:
             ok &= _dimension(h.high, h.low.dimension, "the upper bound of the range", sink)
             ok = ok and _ordered(h.low, h.high, "period range", sink, h.span)
         if h.step is not None:
-            ok &= _dimension(h.step, "time", "grid step", sink)
-            if h.low is not None and h.low.dimension != "time":
+            step_ok = _dimension(h.step, "time", "grid step", sink)
+            ok &= step_ok
+            if step_ok and h.low is not None and h.low.dimension != "time":  # (one E302 per span)
                 sink.emit("E302", "a grid step needs a range of periods (times)", h.step.span, "step",
                           help="write the range as periods, e.g. `? in 10 ms .. 100 ms step 5 ms`")
                 ok = False
@@ -504,18 +530,34 @@ def _check_trigger_sources(scope: SystemScope, sink: DiagnosticSink) -> None:
     graph.add_nodes_from(nodes)
     graph.add_edges_from(edges)
     dead = graph.subgraph(n for n in graph.nodes if n not in live)
+    order = {n: i for i, n in enumerate(graph.nodes)}
     for component in sorted(nx.strongly_connected_components(dead), key=sorted):
-        members = sorted(component, key=list(graph.nodes).index)
+        members = sorted(component, key=order.__getitem__)
         if len(members) == 1 and not dead.has_edge(members[0], members[0]):
             continue
+        cycle = _cycle_through(dead.subgraph(members), members[0], order)
+        others = [m for m in members if m not in cycle]
         inst, task = members[0].split(".", 1)
         binding = scope.bindings[(inst, task)]
         sink.emit("E210", "these tasks only trigger each other and are never activated: "
-                  + " -> ".join(f"`{m}`" for m in members + [members[0]]), binding.activation.span,
+                  + " -> ".join(f"`{m}`" for m in cycle + [cycle[0]]), binding.activation.span,
                   "part of the cycle",
                   secondary=tuple(Label(scope.bindings[tuple(m.split(".", 1))].activation.span, f"`{m}`")
                                   for m in members[1:]),
+                  notes=(("in the same cycle of triggers: " + ", ".join(f"`{m}`" for m in others),)
+                         if others else ()),
                   help="activate one task of the cycle by a timer or a sporadic source")
+
+
+def _cycle_through(component: nx.DiGraph, first: str, order: dict[str, int]) -> list[str]:
+    """A shortest cycle of the strongly connected ``component`` through ``first``, in the direction of the
+    triggers, as its nodes from ``first`` on (ties broken by source order, so the text is stable)."""
+    best: list[str] | None = None
+    for succ in sorted(component.successors(first), key=order.__getitem__):
+        back = nx.shortest_path(component, succ, first)  # succ … first (``[first]`` for a self-loop)
+        if best is None or len(back) < len(best):
+            best = back
+    return [first] + best[:-1]
 
 
 # ------------------------------------------------------------------ chains

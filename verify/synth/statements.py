@@ -14,7 +14,6 @@ its own. ``configured_model`` builds the semantic model of a configuration with 
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from fractions import Fraction
 from typing import Mapping
 
 from .. import syntax as s
@@ -240,7 +239,7 @@ def configured_model(model: SystemModel, activations: Mapping[str, object],
             cores.append(CoreModel(t.core))
             known.add(t.core)
     chains = tuple(_configured_chain(c, off) for c in model.chains) if off else model.chains
-    return SystemModel(model.name, tuple(cores), tasks, model.links, chains, model.span)
+    return SystemModel(model.name, tuple(cores), tasks, model.links, chains, model.span, model.compounds)
 
 
 def _configured_task(task: TaskModel, choice, slots: dict[str, str], off: frozenset[str]) -> TaskModel:

@@ -27,7 +27,7 @@ from typing import Mapping
 
 from ..construct import direct_constructor
 from ..diagnostics import DiagnosticSink, Label
-from ..model import DataTriggered, LinkModel, Periodic, SporadicSource, SystemModel, TaskModel
+from ..model import CompoundModel, DataTriggered, LinkModel, Periodic, SporadicSource, SystemModel, TaskModel
 from ..units import fmt_number, fmt_rate, fmt_time
 
 ZERO = Fraction(0)
@@ -260,6 +260,18 @@ def _trigger_rate(act: DataTriggered, sources: tuple[Source, ...], known: Mappin
     """Writer rate / k (single), min of members (AND), sum of members (OR), then / prescaler."""
     if in_cycle:
         return None, "not bounded: the trigger depends on its own output (trigger cycle)"
+    combined, text = _event_rate(act.mode, sources, known)
+    if combined is None:
+        return None, text
+    if act.prescaler != 1:
+        text = f"({text}) / {act.prescaler}" if act.mode == "or" else f"{text} / {act.prescaler}"
+    return combined.divided(act.prescaler), text
+
+
+def _event_rate(mode: str, sources: tuple[Source, ...], known: Mapping[str, ActivationInfo]
+                ) -> tuple[RateInterval | None, str]:
+    """The rate of a trigger's activation events before any prescaler (§5.1): the writer's (single),
+    the minimum of the members (AND), their sum (OR)."""
     rates: list[RateInterval | None] = []
     for src in sources:
         if src.writer is None:
@@ -270,17 +282,15 @@ def _trigger_rate(act: DataTriggered, sources: tuple[Source, ...], known: Mappin
              for s, r in zip(sources, rates)]
     if any(r is None for r in rates):
         return None, "not bounded: a writer's rate is not bounded"
-    if act.mode == "and":
+    if mode == "and":
         combined = _new_rate_interval(min(r.low for r in rates), min(r.high for r in rates))
         text = f"min({', '.join(parts)})"
-    elif act.mode == "or":
+    elif mode == "or":
         combined = _new_rate_interval(sum((r.low for r in rates), ZERO), sum((r.high for r in rates), ZERO))
         text = " + ".join(parts)
     else:
         combined, text = rates[0], parts[0]
-    if act.prescaler != 1:
-        text = f"({text}) / {act.prescaler}" if act.mode == "or" else f"{text} / {act.prescaler}"
-    return combined.divided(act.prescaler), text
+    return combined, text
 
 
 # ================================================================== event models (§5.2)
@@ -633,8 +643,10 @@ def check_sampling(system: SystemModel, samplings: tuple[LinkSampling, ...], sin
 
 def check_trigger_constraints(system: SystemModel, infos: Mapping[str, ActivationInfo],
                               sink: DiagnosticSink) -> None:
-    """E305/E306: a data-triggered task whose propagated rate leaves its activation constraint.
-    (Timer and sporadic bindings are checked by validation.)"""
+    """E305/E306: a data-triggered task whose propagated rate leaves its activation constraint
+    (timer and sporadic bindings are checked by validation); E314: a compound in-port whose event rate
+    leaves its own constraint (``check_compound_constraints``)."""
+    check_compound_constraints(system, infos, sink)
     for task in system.tasks:
         info = infos[task.id]
         if info.kind != "trigger" or info.rate is None:
@@ -655,7 +667,56 @@ def check_trigger_constraints(system: SystemModel, infos: Mapping[str, Activatio
                   + ("" if task.changeable else "; the component fixes this rate"))
 
 
-def _constraint_text(task: TaskModel) -> str:
+def compound_rate(system: SystemModel, compound: CompoundModel, infos: Mapping[str, ActivationInfo]
+                  ) -> tuple[RateInterval | None, str]:
+    """The rate of a compound in-port's events (§5.1, before any prescaler), with its derivation;
+    None when a member's writer has no bounded rate (a trigger cycle, a synthesis hole)."""
+    sources = []
+    for member in compound.members:
+        port = f"{compound.instance}.{member}"
+        link = system.link_into(port)
+        sources.append(_new_source(member, port, link.writer if link else None, link))
+    return _event_rate(compound.mode, tuple(sources), infos)
+
+
+def check_compound_constraints(system: SystemModel, infos: Mapping[str, ActivationInfo],
+                               sink: DiagnosticSink) -> None:
+    """E314: a compound in-port whose event rate leaves its own activation constraint (§5.1). The
+    constraint is a requirement, like a task's: nothing enforces it, so the rate is never clamped."""
+    for compound in system.compounds:
+        if not compound.constrained:
+            continue
+        rate, derivation = compound_rate(system, compound, infos)
+        if rate is None:
+            continue  # unbounded: reported where it matters (E312)
+        low_ok = compound.min_rate is None or rate.low >= compound.min_rate
+        high_ok = compound.max_rate is None or rate.high <= compound.max_rate
+        if low_ok and high_ok:
+            continue
+        where = (f"below its minimum activation rate {fmt_rate(compound.min_rate)}" if not low_ok
+                 else f"above its maximum activation rate {fmt_rate(compound.max_rate)}")
+        kind = "AND" if compound.mode == "and" else "OR"
+        secondary = [Label(compound.constraint_span, "fixed by the component" if not compound.changeable
+                           else "constraint declared here")]
+        for member in compound.members:
+            link = system.link_into(f"{compound.instance}.{member}")
+            if link is not None:
+                secondary.append(Label(link.span, f"`{link.writer}` writes `{member}` at {infos[link.writer].rate}"))
+        triggered = [t.id for t in system.tasks if t.instance == compound.instance
+                     and isinstance(t.activation, DataTriggered) and t.activation.port == compound.name]
+        text = _constraint_text(compound)
+        notes = [f"the constraint is {text}" + ("" if compound.changeable or text.endswith("fixed") else " fixed"),
+                 "the analysis uses the propagated rate: nothing in the system enforces the constraint"]
+        if triggered:
+            notes.append("it triggers " + ", ".join(f"`{t}`" for t in triggered))
+        sink.emit("E314", f"{kind} compound in-port `{compound.id}` is activated at {rate} ({derivation}), {where}",
+                  compound.span, f"`{compound.name}` activated at {rate}", secondary=tuple(secondary),
+                  notes=tuple(notes),
+                  help="change the rates of the tasks writing its members"
+                  + (", or the compound's constraint" if compound.changeable else "; the component fixes this rate"))
+
+
+def _constraint_text(task: TaskModel | CompoundModel) -> str:
     low = fmt_rate(task.min_rate) if task.min_rate is not None else None
     high = fmt_rate(task.max_rate) if task.max_rate is not None else None
     if task.min_rate is not None and task.min_rate == task.max_rate:
