@@ -21,7 +21,7 @@ from . import bound as bound_mod
 from .bound import Obligation
 from .exact import (Budget, ExactResult, Goal, approach, enumerate_exact, exact_class, grid_of, search,
                     search_horizon)
-from .scenario import Measured, Target
+from .scenario import Measured
 from .verdict import Counterexample, ProofResult, Verdict
 
 DEFAULT_BUDGET = 1000  # simulated scenarios

@@ -14,7 +14,7 @@ complete, so that its maxima are those of the infinite run.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from fractions import Fraction
 from functools import reduce
 from typing import Iterable

@@ -15,7 +15,7 @@ from ..sim import JobRecord, Message, Trace
 from ..timing.report import exact
 from ..units import fmt_time
 from .scenario import replay
-from .verdict import Counterexample, Verdict
+from .verdict import Verdict
 
 
 @dataclass(frozen=True)

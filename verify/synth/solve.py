@@ -19,8 +19,7 @@ Period optimization in this style follows Davare et al., DAC 2007.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
-from fractions import Fraction
+from dataclasses import dataclass
 from typing import Callable
 
 import z3
