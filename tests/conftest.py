@@ -33,13 +33,36 @@ def in_ci() -> bool:
     return os.environ.get("CI", "").lower() in ("1", "true", "yes")
 
 
+#: where the tightness log is written (git-ignored); the terminal summary shows it too
+TIGHTNESS_LOG = ROOT / "tests" / "out" / "tightness.txt"
+#: the property tests that collect tightness ratios (``tightness_summary()``), with a heading each
+TIGHTNESS_SOURCES = (("tests.test_bounds_vs_simulation", "random systems (tests/test_bounds_vs_simulation.py)"),
+                     ("tests.test_priority_refinement",
+                      "systems around a same-core hop, §7.6 (tests/test_priority_refinement.py)"))
+
+
 def pytest_terminal_summary(terminalreporter):
-    """Report the tightness of the analytic bounds against the simulator (tests/test_bounds_vs_simulation)."""
+    """Report the tightness of the analytic bounds against the simulator — simulated worst / bound
+    per latency kind, from the property tests that ran — in the summary and in ``TIGHTNESS_LOG``."""
     import sys
 
-    module = sys.modules.get("tests.test_bounds_vs_simulation")
-    lines = module.tightness_summary() if module else []
-    if lines:
-        terminalreporter.section("tightness of the analytic bounds (simulated worst / bound)")
+    sections = []
+    for name, heading in TIGHTNESS_SOURCES:
+        module = sys.modules.get(name)
+        lines = module.tightness_summary() if module else []
+        if lines:
+            sections.append((heading, lines))
+    if not sections:
+        return
+    title = "tightness of the analytic bounds (simulated worst / bound)"
+    terminalreporter.section(title)
+    text = [title]
+    for heading, lines in sections:
+        terminalreporter.write_line(heading)
+        text.append(heading)
         for line in lines:
-            terminalreporter.write_line(line)
+            terminalreporter.write_line("  " + line)
+            text.append("  " + line)
+    TIGHTNESS_LOG.parent.mkdir(parents=True, exist_ok=True)
+    TIGHTNESS_LOG.write_text("\n".join(text) + "\n", encoding="utf-8")
+    terminalreporter.write_line(f"(also written to {TIGHTNESS_LOG.relative_to(ROOT)})")

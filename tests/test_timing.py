@@ -4,14 +4,15 @@ from __future__ import annotations
 
 import json
 import random
+from dataclasses import replace
 from fractions import Fraction as F
 
 import jsonschema
 import pytest
 
 from verify import syntax as s
-from verify.model import (ChainModel, CoreModel, DataTriggered, Hole, HopModel, LinkModel, Periodic, ReadModel,
-                          SporadicSource, SystemModel, TaskModel)
+from verify.model import (ChainModel, CompoundModel, CoreModel, DataTriggered, Hole, HopModel, LinkModel, Periodic,
+                          ReadModel, SporadicSource, SystemModel, TaskModel)
 from verify.sim import KINDS, Scenario, chain_latencies, random_scenario, simulate
 from verify.timing import analyze, diagnostics_of
 from verify.timing.report import JSON_SCHEMA, SCHEMA, to_json, to_text
@@ -189,6 +190,128 @@ def test_and_rate_is_the_slowest_member_and_or_rate_the_sum():
     assert prescaled.rate.low == F(10) and prescaled.activation.derivation == "(10 Hz + 20 Hz) / 3"
 
 
+_COMPOUNDS = """component P {{
+  out o : T
+  task W {{
+    produces o
+    wcet 1 ms
+  }}
+}}
+component Q {{
+  in a : T
+  in b : T
+  in any = a | b{any}
+  in all = a & b{all}
+  task R {{
+    reads a
+    reads b
+    wcet 1 ms
+  }}
+}}
+system S {{
+  core c0
+  instance p1 : P on c0 {{
+    task W priority 3 timer 100 ms
+  }}
+  instance p2 : P on c0 {{
+    task W priority 4 timer 50 ms
+  }}
+  instance q : Q on c0 {{
+    task R priority 1 trigger {port}
+  }}
+  connect p1.o -> q.a
+  connect p2.o -> q.b
+}}
+"""
+
+
+def compound_text(any="", all="", port="any"):
+    import verify
+
+    result = verify.load_text(_COMPOUNDS.format(any=any, all=all, port=port), "q.vfy")
+    assert result.ok, [d.message for d in result.diagnostics]
+    return result.system()
+
+
+def test_compound_constraint_is_in_the_model():
+    sysm = compound_text(any=" activation max 5 Hz fixed", all=" activation min 50 Hz")
+    any_, all_ = sysm.compounds
+    assert (any_.id, any_.mode, any_.members, any_.min_rate, any_.max_rate, any_.changeable) == (
+        "q.any", "or", ("a", "b"), None, F(5), False)
+    assert (all_.id, all_.mode, all_.min_rate, all_.max_rate, all_.changeable) == ("q.all", "and", F(50), None, True)
+    assert any_.constraint_span.line == 11 and any_.span.line == 27  # the constraint, the instance
+    assert not compound_text().compounds[0].constrained
+
+
+def test_compound_constraint_is_checked_not_clamped():
+    """The audit's system: members at 10 Hz and 20 Hz. The OR compound fires at 30 Hz whatever its
+    `max 5 Hz` says, and the AND compound at 10 Hz below its `min 50 Hz`: E314 twice (§5.1), and
+    the rates used downstream stay the propagated ones."""
+    result = analyze(compound_text(any=" activation max 5 Hz fixed", all=" activation min 50 Hz fixed"))
+    found = diagnostics_of(result)
+    assert [d.code for d in found] == ["E314", "E314"]
+    by_port = {("q.any" if "`q.any`" in d.message else "q.all"): d for d in found}
+    assert "30 Hz (10 Hz + 20 Hz), above its maximum activation rate 5 Hz" in by_port["q.any"].message
+    assert "10 Hz (min(10 Hz, 20 Hz)), below its minimum activation rate 50 Hz" in by_port["q.all"].message
+    assert any("fixed" in n for n in by_port["q.any"].notes)
+    r = result.task("q.R")
+    assert (r.rate.low, r.rate.high) == (F(30), F(30))  # not clamped to 5 Hz
+    assert result.core("c0").utilisation == F(10) * MS + F(20) * MS + F(30) * MS
+    assert r.a_min == 0  # two in-phase members can arrive together: nothing clamps the stream either
+
+
+def test_compound_constraint_within_bounds_and_before_the_prescaler():
+    assert codes(analyze(compound_text(any=" activation 20 Hz .. 30 Hz", all=" activation max 10 Hz"))) == []
+    # the compound's events are counted before the prescaler: 30 Hz > 20 Hz although the task runs at 15 Hz
+    prescaled = analyze(compound_text(any=" activation max 20 Hz", port="any every 2"))
+    assert codes(prescaled) == ["E314"] and prescaled.task("q.R").rate.high == 15
+    # the task's own constraint is checked as well, with the prescaled rate (E305), independently
+    sysm = compound_text(any=" activation max 20 Hz", port="any every 2")
+    tasks = tuple(replace(t, max_rate=F(10)) if t.id == "q.R" else t for t in sysm.tasks)
+    both = SystemModel(sysm.name, sysm.cores, tasks, sysm.links, sysm.chains, sysm.span, sysm.compounds)
+    assert sorted(codes(analyze(both))) == ["E305", "E314"]
+
+
+def test_compound_constraint_unbounded_or_unconnected():
+    """A compound fed from a trigger cycle has no bounded rate and is not checked; an unconnected
+    AND member makes the compound's rate 0 Hz, below any minimum."""
+    tasks = [task("a.A", timer(10), prio=3, produces=["o"]),
+             task("b.B", trigger("j", members=("x", "y"), mode="or"), prio=2, reads=["x", "y"], produces=["o"])]
+    links = [link("a.o", "b.x", tasks), link("b.o", "b.y", tasks)]
+    cyclic = CompoundModel("b.j", "b", "j", "or", ("x", "y"), max_rate=F(1))
+    sysm = SystemModel("s", (CoreModel("c0"),), tuple(tasks), tuple(links), (), compounds=(cyclic,))
+    assert "E314" not in codes(analyze(sysm))
+    lonely = CompoundModel("b.k", "b", "k", "and", ("x", "z"), min_rate=F(1))
+    sysm = SystemModel("s", (CoreModel("c0"),), tuple(tasks), tuple(links), (), compounds=(lonely,))
+    e314 = [d for d in diagnostics_of(analyze(sysm)) if d.code == "E314"]
+    assert len(e314) == 1 and "0 Hz (unconnected)" in e314[0].message
+
+
+def test_user_bound_below_wcet_is_e315():
+    import verify
+
+    text = """component A {{
+  task Y {{
+    wcet 6 ms
+  }}
+}}
+system S {{
+  core c0
+  instance b : A on c0 {{
+    task Y priority 1 timer 20 ms wcrt {bound}
+  }}
+}}
+"""
+    bad = verify.load_text(text.format(bound="1 ms"), "u.vfy")
+    (d,) = bad.diagnostics
+    assert d.code == "E315" and "1 ms" in d.message and "6 ms" in d.message and d.span.line == 9
+    assert verify.load_text(text.format(bound="6 ms"), "u.vfy").ok  # a job alone on its core: R = C
+    assert verify.load_text(text.format(bound="5999/1000 ms"), "u.vfy").diagnostics[0].code == "E315"
+    assert [x.code for x in verify.load_text(text.format(bound="1 Hz"), "u.vfy").diagnostics] == ["E302"]
+    no_wcet = verify.load_text(text.format(bound="1 ms").replace("wcet 6 ms", "bcet 1 ms"), "u.vfy")
+    assert [x.code for x in no_wcet.diagnostics] == ["E217"]
+
+
 def test_and_event_model_allows_close_events():
     """Two AND events can be arbitrarily close (a fresh value waits for the other member): A⁻ = 0."""
     c = analyze(compound("and")).task("c.C")
@@ -280,11 +403,13 @@ def test_analyze_never_raises_on_odd_systems():
 # ------------------------------------------------------------------ §7 chains
 
 
-def davare():
-    """Three timers on one core, no delays: reaction = Σ (Tᵢ + Rᵢ) (Davare et al. 2007)."""
-    tasks = [task("a.A", timer(10), wcet=MS, prio=3, produces=["o"]),
-             task("b.B", timer(20), wcet=2 * MS, prio=2, reads=["i"], produces=["o"]),
-             task("c.C", timer(50), wcet=3 * MS, prio=1, reads=["i"])]
+def davare(same_core: bool = False):
+    """Three timers, no delays: reaction = Σ (Tᵢ + Rᵢ) (Davare et al. 2007) — on three cores; on one
+    core with falling priorities the same-core priority rule (§7.6) applies to both hops."""
+    cores = ("c0", "c0", "c0") if same_core else ("c0", "c1", "c2")
+    tasks = [task("a.A", timer(10), wcet=MS, prio=3, produces=["o"], core=cores[0]),
+             task("b.B", timer(20), wcet=2 * MS, prio=2, reads=["i"], produces=["o"], core=cores[1]),
+             task("c.C", timer(50), wcet=3 * MS, prio=1, reads=["i"], core=cores[2])]
     links = [link("a.o", "b.i", tasks), link("b.o", "c.i", tasks)]
     specs = dict(reaction_time=100 * MS, data_age=60 * MS, jitter=50 * MS)
     return system(tasks, links, [chain("abc", ["a.A", "b.B", "c.C"], links, **specs)])
@@ -293,16 +418,16 @@ def davare():
 def test_davare_all_timer_chain():
     result = analyze(davare())
     r = {t: result.task(t).wcrt for t in ("a.A", "b.B", "c.C")}
-    assert r == {"a.A": MS, "b.B": 3 * MS, "c.C": 6 * MS}  # c: 3 + ⌈6/10⌉·1 + ⌈6/20⌉·2 = 6
+    assert r == {"a.A": MS, "b.B": 2 * MS, "c.C": 3 * MS}  # one task per core
     c = result.chain("abc")
-    assert c.reaction_time.worst == (10 + 1) * MS + (20 + 3) * MS + (50 + 6) * MS == 90 * MS
-    assert c.reaction_time_reduced.worst == 90 * MS - 10 * MS
-    assert c.data_age.worst == (10 + 1) * MS + (20 + 3) * MS + 6 * MS == 40 * MS
-    assert c.data_age_non_reduced.worst == 50 * MS
+    assert c.reaction_time.worst == (10 + 1) * MS + (20 + 2) * MS + (50 + 3) * MS == 86 * MS
+    assert c.reaction_time_reduced.worst == 86 * MS - 10 * MS
+    assert c.data_age.worst == (10 + 1) * MS + (20 + 2) * MS + 3 * MS == 36 * MS
+    assert c.data_age_non_reduced.worst == 46 * MS
     assert c.reaction_time.best == c.data_age.best == 6 * MS
-    assert c.jitter == 34 * MS and c.reaction_jitter == 84 * MS
+    assert c.jitter == 30 * MS and c.reaction_jitter == 80 * MS
     margins = {sc.kind: sc.margin for sc in c.specs}
-    assert margins == {"reaction_time": 10 * MS, "data_age": 20 * MS, "jitter": 16 * MS}
+    assert margins == {"reaction_time": 14 * MS, "data_age": 24 * MS, "jitter": 20 * MS}
     rules = [(st.reaction.rule if st.reaction else None, st.data_age.rule if st.data_age else None)
              for st in c.steps]
     assert rules == [("first-task sampling", None),
@@ -311,7 +436,20 @@ def test_davare_all_timer_chain():
                      (None, "last-task response")]
     assert c.steps[c.dominating_reaction].label == "b.B → c.C"
     non_reduced = analyze(davare(), data_age="non-reduced").chain("abc")
-    assert non_reduced.data_age.worst == 50 * MS and non_reduced.specs[1].margin == 10 * MS
+    assert non_reduced.data_age.worst == 46 * MS and non_reduced.specs[1].margin == 14 * MS
+
+
+def test_same_core_priority_rule_on_one_core():
+    """The three timers on one core (R = 1, 3, 6; c: 3 + ⌈6/10⌉·1 + ⌈6/20⌉·2 = 6): Davare's Σ(T+R)
+    gives 90 ms reaction and 40 ms data age; both hops qualify for §7.6: reaction
+    (10 + 1) + (20 + 3 − 1) + (50 + 6 − 3) = 86 ms, data age A⁺(a) 10 + A⁺(b) 20 + R(c) 6 = 36 ms."""
+    result = analyze(davare(same_core=True))
+    assert [result.task(t).wcrt for t in ("a.A", "b.B", "c.C")] == [MS, 3 * MS, 6 * MS]
+    c = result.chain("abc")
+    same = "same-core priority (Dürr et al. CASES 2019)"
+    assert [(st.reaction.rule, st.data_age.rule) for st in c.steps[1:3]] == [(same, same)] * 2
+    assert c.reaction_time.worst == 86 * MS and c.data_age.worst == 36 * MS
+    assert c.data_age_non_reduced.worst == 46 * MS
 
 
 def test_trigger_hops_with_prescaler_and_delay():
@@ -329,18 +467,20 @@ def test_trigger_hops_with_prescaler_and_delay():
 
 
 def test_and_join_and_or_member_rules():
-    def chained(mode):
+    def chained(mode, core="c1"):  # the reader on its own core (on c0, §7.6 would apply to the data age)
         sysm = compound(mode)
-        return analyze(system(sysm.tasks, sysm.links, [chain("ac", ["a.A", "c.C"], sysm.links)])).chain("ac")
+        tasks = [replace(t, core=core) if t.id == "c.C" else t for t in sysm.tasks]
+        return analyze(system(tasks, sysm.links, [chain("ac", ["a.A", "c.C"], sysm.links)])).chain("ac")
     and_hop, or_hop = chained("and").steps[1], chained("or").steps[1]
     assert and_hop.reaction.rule in ("AND join", "register sampling (Davare)")
     assert or_hop.reaction.rule == "data trigger k=1 (OR member)"
     assert or_hop.data_age.rule == "register sampling (Davare)" and "another member" in or_hop.data_age.note
+    assert chained("or", "c0").steps[1].data_age.rule == "same-core priority (Dürr et al. CASES 2019)"
 
 
 def test_register_rule_when_triggered_by_another_port():
     tasks = [task("a.A", timer(10), prio=3, produces=["o"]), task("b.B", timer(20), prio=2, produces=["o"]),
-             task("c.C", trigger("x"), prio=1, reads=["x", "y"])]
+             task("c.C", trigger("x"), prio=1, reads=["x", "y"], core="c1")]  # (on c0: §7.6)
     links = [link("a.o", "c.x", tasks), link("b.o", "c.y", tasks)]
     c = analyze(system(tasks, links, [chain("bc", ["b.B", "c.C"], links)])).chain("bc")
     assert c.steps[1].reaction.rule == "register sampling (Davare)" and "`x`" in c.steps[1].reaction.note
@@ -361,8 +501,8 @@ def test_json_report_shape_and_exact_numbers():
     assert a["wcrt"] == {"exact": "1/1000", "decimal": "0.001"} and a["core"] == "c0" and a["priority"] == 3
     ch = doc["chains"][0]
     assert [h["kind"] for h in ch["hops"]] == ["first", "hop", "hop", "last"]
-    assert ch["bounds"]["reaction_time"]["worst"] == {"exact": "9/100", "decimal": "0.09"}
-    assert ch["specs"][0]["margin"]["decimal"] == "0.01"
+    assert ch["bounds"]["reaction_time"]["worst"] == {"exact": "43/500", "decimal": "0.086"}
+    assert ch["specs"][0]["margin"]["decimal"] == "0.014"
     third = analyze(system([task("t.T", timer(30), wcet=MS)]))
     assert to_json(third)["tasks"][0]["activation"]["rate"]["min"] == {"exact": "100/3", "decimal": None}
     trig = to_json(analyze(pipeline(10)))["tasks"][1]["activation"]
@@ -376,7 +516,7 @@ def test_text_report_outline():
     text = to_text(analyze(davare()))
     assert "a.A" in text and "timer 10 ms: 100 Hz" in text
     assert "undersampled ×2" in text and "oversampled" not in text.split("connections")[0]
-    assert "reaction time" in text and "90 ms" in text and "margin" in text
+    assert "reaction time" in text and "86 ms" in text and "margin" in text
     assert "register sampling (Davare)" in text and "dominates reaction time" in text
     assert "undersampled ×10 (trigger prescaler)" in to_text(analyze(pipeline(10)))
 
@@ -384,9 +524,38 @@ def test_text_report_outline():
 # ------------------------------------------------------------------ cross-check with the simulator
 
 
+def promised_user_bounds(build, slack: dict[str, F], rounds: int = 10):
+    """User bounds (``wcrt``) that the system keeps: ``build(bounds)`` is the system with the given
+    bound per task id; each task in ``slack`` gets its computed WCRT plus its slack. A user bound is a
+    promise, and bounds raise other tasks' WCRTs (jitter, suspension), so this repeats until every
+    bound is at least its task's WCRT computed *with* all bounds in place (bounds only grow; the
+    analysis is monotone, so the estimates then lie above its least fixed point, which is sound).
+    Returns (system, bounds); the system without bounds if that does not settle."""
+    bounds: dict[str, F] = {}
+    for _ in range(rounds):
+        sysm = build(bounds)
+        result = analyze(sysm)
+        new = {}
+        for tid, extra in slack.items():
+            computed = result.task(tid).response.wcrt_computed
+            if computed is not None:
+                new[tid] = max(bounds.get(tid, computed + extra), computed + extra)
+        if new == bounds:
+            return sysm, bounds
+        bounds = new
+    return build({}), {}
+
+
+def with_bounds(sysm: SystemModel, bounds: dict[str, F]) -> SystemModel:
+    tasks = tuple(replace(t, wcrt_bound=bounds.get(t.id)) for t in sysm.tasks)
+    return SystemModel(sysm.name, sysm.cores, tasks, sysm.links, sysm.chains, sysm.span, sysm.compounds)
+
+
 def random_system(rng: random.Random) -> SystemModel:
-    """A small random configured system: timers, sporadic sources, data triggers (single, AND, OR,
-    prescaled), cooperative siblings, two cores, delays, and chains along the connections."""
+    """A small random configured system: timers (some with a fixed phase), sporadic sources, data
+    triggers (single, AND, OR, prescaled), cooperative siblings, two cores, delays, explicit
+    deadlines, user response-time bounds (kept promises: at least the computed WCRT), and chains
+    along the connections."""
     cores = ["c0", "c1"][: rng.choice([1, 2])]
     n = rng.randint(2, 6)
     instance = [f"i{rng.randrange(n) if rng.random() < 0.3 else i}" for i in range(n)]
@@ -395,7 +564,8 @@ def random_system(rng: random.Random) -> SystemModel:
         reads, sources = [], []
         if i == 0 or rng.random() < 0.45:
             period = F(rng.choice([10, 20, 25, 40, 50, 100])) * MS
-            act = (Periodic(period) if rng.random() < 0.75
+            phase = F(rng.randrange(2 * int(period / MS)), 2) * MS if rng.random() < 0.4 else None
+            act = (Periodic(period, phase) if rng.random() < 0.75
                    else SporadicSource(period, period * F(rng.randint(4, 8), 4)))
         else:
             mode, k = rng.choice(["single", "single", "and", "or"]), rng.choice([1, 1, 1, 2, 3])
@@ -410,7 +580,9 @@ def random_system(rng: random.Random) -> SystemModel:
         tasks.append(TaskModel(f"{instance[i]}.T{i}", instance[i], f"T{i}", "C",
                                "cooperative" if rng.random() < 0.3 else "preemptive", rng.choice(cores),
                                rng.randint(1, 8), wcet * F(rng.randint(0, 4), 4), wcet,
-                               tuple(read(p) for p in reads), (f"out_{i}",), act))
+                               tuple(read(p) for p in reads), (f"out_{i}",), act,
+                               deadline=F(rng.choice([10, 25, 50, 100, 200, 400])) * MS if rng.random() < 0.3
+                               else None))
         wiring.append(sources)
     links = []
     for t, sources in zip(tasks, wiring):
@@ -429,7 +601,9 @@ def random_system(rng: random.Random) -> SystemModel:
             hops.append(HopModel(path[-1], lk.readers[0], lk))
             path.append(lk.readers[0])
         chains.append(ChainModel(f"ch{c}", tuple(path), tuple(hops)))
-    return SystemModel("random", tuple(CoreModel(c) for c in cores), tuple(tasks), tuple(links), tuple(chains))
+    sysm = SystemModel("random", tuple(CoreModel(c) for c in cores), tuple(tasks), tuple(links), tuple(chains))
+    slack = {t.id: rng.choice([F(0), F(0), MS / 2, 5 * MS]) for t in tasks if rng.random() < 0.3}
+    return promised_user_bounds(lambda bounds: with_bounds(sysm, bounds), slack)[0]
 
 
 def bound_violations(sysm: SystemModel, trace) -> list:
@@ -466,6 +640,23 @@ def test_bounds_hold_in_simulation(seed):
                 return next(lk.delay_max for lk in links if (lk.source, lk.target) == (src, dst))
             scenario = Scenario(scenario.horizon, scenario.phases, None, slowest, None, scenario.counter_phase)
         assert bound_violations(sysm, simulate(sysm, scenario)) == []
+
+
+def test_random_systems_draw_phases_deadlines_and_user_bounds():
+    """The cross-check above covers fixed phases, explicit deadlines and user bounds, and every user
+    bound is a kept promise: at least the WCRT computed with all bounds in place."""
+    seen = {"phase": 0, "deadline": 0, "user bound": 0}
+    for seed in range(40):
+        sysm = random_system(random.Random(seed))
+        result = analyze(sysm)
+        for t in sysm.tasks:
+            seen["phase"] += isinstance(t.activation, Periodic) and t.activation.phase is not None
+            seen["deadline"] += t.deadline is not None
+            if t.wcrt_bound is not None:
+                seen["user bound"] += 1
+                r = result.task(t.id).response
+                assert r.rule == "user bound" and r.wcrt == t.wcrt_bound >= r.wcrt_computed >= t.wcet
+    assert all(n >= 5 for n in seen.values()), seen
 
 
 def test_non_convergence_is_reported_not_raised(monkeypatch):

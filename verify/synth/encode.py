@@ -27,6 +27,7 @@ from typing import Mapping
 import z3
 
 from ..model import DataTriggered, LinkModel, Periodic, SporadicSource, SystemModel, TaskModel
+from ..timing.chains import same_core_reason
 from .candidates import Choice
 from .statements import Statement, statement_index
 from .structure import Structure, activation_options, member_links
@@ -553,14 +554,23 @@ class Encoding:
         register_a = t.add(d, self.a_max(p), self.R[p])
         member = hop.link.target.split(".", 1)[1]
         if not (isinstance(act, DataTriggered) and member in act.members):
-            return register_r, register_a
+            return self._same_core(hop, register_r, register_a)
         k = act.prescaler
         if act.mode == "and":
             trig = t.add(d, self._and_wait(hop, act), self._and_join(hop, act, k), self.R[i])
         else:
             trig = t.add(d, self._delta_plus(p, k), self.R[i])
         reaction = t.min(trig, register_r)
-        return reaction, (t.add(d, self.R[p]) if act.mode == "single" else register_a)
+        return self._same_core(hop, reaction, t.add(d, self.R[p]) if act.mode == "single" else register_a)
+
+    def _same_core(self, hop, reaction, age):
+        """The same-core priority rule (specs/timing.md §7.6) where it applies, as the analysis
+        chooses it: the smaller of the term and ``W⁺ᵢ + Rᵢ − Rₚ`` (reaction) or ``A⁺ₚ`` (data age)."""
+        if same_core_reason(self.model, hop) is not None:
+            return reaction, age
+        t, p, i = self.t, hop.writer, hop.reader
+        return (t.min(reaction, t.add(self.wait(i), self.R[i], t.mul(-1, self.R[p]))),
+                t.min(age, self.a_max(p)))
 
     def _delta_plus(self, writer: str, k: int):
         """δ⁺ₚ(k) = 0 for k = 1, else (k−1)·P⁺ₚ + J⁺ₚ + Rₚ − Bₚ."""

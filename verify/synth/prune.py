@@ -23,6 +23,7 @@ from fractions import Fraction
 from typing import Mapping
 
 from ..model import ChainModel, DataTriggered, Periodic, SporadicSource, SystemModel, TaskModel
+from ..timing.chains import same_core_reason
 from .candidates import Choice, make_choice
 from .structure import activation_options, member_links
 
@@ -304,11 +305,13 @@ class ChainLowerBound:
     configuration (``total``), and with one choice pinned to a candidate (``pinned``). Every term of
     §7 is at least the WCET (or user bound) of the task it ends in, plus the delay, plus a sampling
     wait: a register read waits up to ``A⁺ ≥ P⁺`` (reaction: of the reader; data age: of the
-    writer), a prescaler-k trigger ``(k−1)·P⁺`` of the writer. The bound is a sum of terms, each
-    depending on at most two tasks, so pinning one task recomputes only its own terms."""
+    writer), a prescaler-k trigger ``(k−1)·P⁺`` of the writer — except the same-core priority terms
+    (§7.6), bounded by ``_same_core_term``. The bound is a sum of terms, each depending on at most two
+    tasks, so pinning one task recomputes only its own terms."""
 
     def __init__(self, p: Pruner, chain: ChainModel, kind: str, tasks, per):
         self.p, self.chain, self.kind, self.tasks, self.per = p, chain, kind, tasks, per
+        self.same_core = [same_core_reason(p.model, hop) is None for hop in chain.hops]
         self._options = {tid: self.options(tid, None) for tid in dict.fromkeys(chain.tasks)}
         self._p_min = {tid: min(pm for _, pm in opts) for tid, opts in self._options.items()}
         self.terms = [self.term(n, None) for n in range(len(chain.hops) + 1)]
@@ -352,7 +355,7 @@ class ChainLowerBound:
             return _r_min(model.task(last))
         hop = self.chain.hops[n - 1]
         member = hop.link.target.split(".", 1)[1]
-        waits = []
+        waits, same_core_waits = [], []
         for act, pm in options(hop.reader):
             triggered = isinstance(act, DataTriggered) and member in act.members
             if self.kind == "reaction":
@@ -360,10 +363,27 @@ class ChainLowerBound:
                     waits.append(min(pm, (act.prescaler - 1) * p_min(hop.writer)))
                 else:
                     waits.append(ZERO if triggered else pm)
+                same_core_waits.append(ZERO if isinstance(act, DataTriggered) else pm)
             else:
                 waits.append(ZERO if triggered and act.mode == "single" else p_min(hop.writer))
         end = hop.reader if self.kind == "reaction" else hop.writer
-        return hop.link.delay_max + _r_min(model.task(end)) + min(waits)
+        lower = hop.link.delay_max + _r_min(model.task(end)) + min(waits)
+        if self.same_core[n - 1]:
+            lower = min(lower, self._same_core_term(hop, min(same_core_waits) if same_core_waits else ZERO,
+                                                    p_min(hop.writer)))
+        return lower
+
+    def _same_core_term(self, hop, reader_wait: Fraction, writer_p_min: Fraction) -> Fraction:
+        """The least value of the same-core priority terms (specs/timing.md §7.6). Data age: ``A⁺ₚ ≥
+        P⁺ₚ``. Reaction: ``W⁺ᵢ + Rᵢ − Rₚ``, which alone has no positive lower bound; but the term
+        before it always ends in ``+ Rₚ`` (every reaction term ends with the R of the task it
+        reaches) and is bounded below with ``_r_min(p)`` in it, so ``W⁺ᵢ + _r_min(i) − _r_min(p)``
+        keeps the *sum* of the two bounds below the sum of the two terms — the total is what pruning
+        compares."""
+        model = self.p.model
+        if self.kind == "reaction":
+            return reader_wait + _r_min(model.task(hop.reader)) - _r_min(model.task(hop.writer))
+        return writer_p_min
 
     def pinned(self, tid: str, index: int) -> Fraction:
         """The bound with the choice of ``tid`` pinned to candidate ``index``."""

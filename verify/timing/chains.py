@@ -10,17 +10,23 @@ Every bound is a sum of per-step terms, each produced by one named rule:
     ``δ⁺ₚ(k)`` the span of k consecutive outputs of p (0 for k = 1), data age ``d⁺ + Rₚ``;
   - "AND join": reaction ``d⁺ + (wait for the other members) + δ⁺_AND(k) + Rᵢ``, data age as
     a register; an OR member is triggered for the reaction and a register for the data age;
-* "last-task response" (data age): ``Rₙ``.
+  - "same-core priority (Dürr et al. CASES 2019)": when p and i share a core, p's priority is
+    strictly higher, the delay is exactly 0 and p cannot wait for a cooperative token while i
+    starts (§7.6, equations (7.6a) and (7.6b)): data age ``A⁺ₚ``, reaction ``W⁺ᵢ + Rᵢ − Rₚ``,
+    used whenever smaller than the rule above;
+* "last-task response" (data age): ``Rₙ``;
+* "non-reduced origin" (non-reduced data age only, on τ₁'s step): ``A⁺₁``.
 
 Reaction time is non-reduced (from the stimulus), data age reduced by default (from τ₁'s read,
 Günzel et al. 2024); the other variants follow by adding or removing τ₁'s sampling term. Best cases
-are ``Σ bcetᵢ + Σ d⁻``. ``None`` means unbounded. Dürr et al. 2019 and Becker et al. 2017 give the
-job-chain view these terms are derived from.
+are ``Σ bcetᵢ + Σ d⁻`` (rule "best case", one term per step). ``None`` means unbounded. Dürr et
+al. 2019 and Becker et al. 2017 give the job-chain view these terms are derived from.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
 from fractions import Fraction
+from functools import cached_property
 from typing import Mapping
 
 from ..construct import direct_constructor
@@ -35,6 +41,10 @@ REGISTER = "register sampling (Davare)"
 FIRST = "first-task sampling"
 LAST = "last-task response"
 AND_JOIN = "AND join"
+SAME_CORE = "same-core priority (Dürr et al. CASES 2019)"
+ORIGIN = "non-reduced origin"
+BEST = "best case"
+ORIGIN_BEST = "least read gap of τ₁"
 
 
 def trigger_rule(k: int) -> str:
@@ -59,7 +69,10 @@ class Step:
     """One line of a chain's breakdown: τ₁'s sampling, a hop, or τₙ's response.
 
     ``reaction``/``data_age`` are the step's worst-case contributions (None: the step adds nothing
-    to that bound); ``best`` its best-case contribution (``bcet`` of the task reached, plus ``d⁻``).
+    to that bound); ``best`` its best-case contribution (``bcet`` of the task reached, plus ``d⁻``)
+    and ``best_term`` the same with its rule and parts. ``data_age_non_reduced`` and
+    ``best_non_reduced`` are what the non-reduced data age adds on this step beyond ``data_age`` and
+    ``best`` (only τ₁'s step has them: ``A⁺₁`` and the least read gap of τ₁, §7.5).
     """
 
     kind: str  # "first" | "hop" | "last"
@@ -71,6 +84,9 @@ class Step:
     reaction: Term | None
     data_age: Term | None
     best: Fraction
+    best_term: Term
+    data_age_non_reduced: Term | None
+    best_non_reduced: Term | None
 
 
 @dataclass(frozen=True)
@@ -106,7 +122,10 @@ class SpecCheck:
 
 @dataclass(frozen=True)
 class ChainBounds:
-    """All bounds of one chain. ``data_age`` and ``jitter`` follow ``data_age_variant``."""
+    """All bounds of one chain. ``data_age`` and ``jitter`` follow ``data_age_variant``.
+
+    ``dominating_*`` are step indices: the step with the largest term of that bound (§7.5); for the
+    non-reduced data age, τ₁'s step counts with its ``data_age_non_reduced`` term."""
 
     name: str
     tasks: tuple[str, ...]
@@ -119,6 +138,7 @@ class ChainBounds:
     specs: tuple[SpecCheck, ...]
     dominating_reaction: int | None
     dominating_data_age: int | None
+    dominating_data_age_non_reduced: int | None
     problem: str | None = None
 
     def bound(self, kind: str) -> Bound:
@@ -132,6 +152,11 @@ class ChainBounds:
     @property
     def data_age(self) -> Bound:
         return self.data_age_reduced if self.data_age_variant == "reduced" else self.data_age_non_reduced
+
+    @property
+    def dominating_age(self) -> int | None:
+        """The step dominating the data age of ``data_age_variant``."""
+        return self.dominating_data_age if self.data_age_variant == "reduced" else self.dominating_data_age_non_reduced
 
     @property
     def jitter(self) -> Fraction | None:
@@ -171,6 +196,11 @@ class Timing:
     def bcet(self, task: str) -> Fraction:
         return self.system.task(task).bcet
 
+    @cached_property
+    def cooperative_count(self) -> Mapping[str, int]:
+        """The number of cooperative tasks per instance (``cooperative_counts``), computed once."""
+        return cooperative_counts(self.system)
+
 
 def _total(parts) -> Fraction | None:
     values = [v for _, v in parts]
@@ -201,14 +231,24 @@ def delta_plus(t: Timing, writer: str, k: int) -> Fraction | None:
 
 
 def first_step(t: Timing, task: str) -> Step:
-    """τ₁ samples the stimulus: reaction ``W⁺₁ + R₁`` (§7.2)."""
+    """τ₁ samples the stimulus: reaction ``W⁺₁ + R₁`` (§7.2). For the non-reduced data age, τ₁'s
+    step adds ``A⁺₁`` (the previous read of τ₁ is at or after the previous release) and, to the best
+    case, the least read gap of τ₁ (§7.5)."""
     parts = ((f"W⁺({task})", t.events[task].sampling_wait), (f"R({task})", t.R(task)))
-    return _new_step("first", task, None, task, None, None, _term(FIRST, parts), None, t.bcet(task))
+    best = _term(BEST, ((f"C⁻({task})", t.bcet(task)),))
+    origin = _term(ORIGIN, ((f"A⁺({task})", t.events[task].a_max),),
+                   f"from the previous read of `{task}`, at most A⁺ before the current job's release")
+    gap = _term(ORIGIN_BEST, ((f"max(C⁻, A⁻ − (R − C⁻))({task})", read_gap_min(t, task)),),
+                "jobs of one task run one after another, and a start lies in [r, r + R − C⁻]")
+    return _new_step("first", task, None, task, None, None, _term(FIRST, parts), None, best.value, best,
+                     origin, gap)
 
 
 def last_step(t: Timing, task: str) -> Step:
     """τₙ's job completes within Rₙ of the read it starts with: data age ``Rₙ`` (§7.4)."""
-    return _new_step("last", task, None, task, None, None, None, _term(LAST, ((f"R({task})", t.R(task)),)), ZERO)
+    best = _term(BEST, (), "counted on the hop that reaches the last task")
+    return _new_step("last", task, None, task, None, None, None, _term(LAST, ((f"R({task})", t.R(task)),)),
+                     ZERO, best, None, None)
 
 
 def register_reaction(t: Timing, hop: HopModel) -> Term:
@@ -262,6 +302,76 @@ def and_reaction(t: Timing, hop: HopModel, k: int) -> Term:
                             (f"δ⁺_AND({k})", join), (f"R({i})", t.R(i))))
 
 
+def cooperative_counts(system: SystemModel) -> dict[str, int]:
+    """The number of cooperative tasks per instance (a token is shared where there are two)."""
+    count: dict[str, int] = {}
+    for task in system.tasks:
+        if task.kind == "cooperative":
+            count[task.instance] = count.get(task.instance, 0) + 1
+    return count
+
+
+def same_core_reason(system: SystemModel, hop: HopModel, cooperative: Mapping[str, int] | None = None) -> str | None:
+    """Why the same-core priority rule (specs/timing.md §7.6, conditions (C1)–(C4)) does not apply to
+    ``hop``, or None when it does. It depends on the model only (cores, priorities, task kinds,
+    delays), not on rates or response times.
+
+    It needs: writer p and reader i on one core, p's priority strictly higher (equal priorities are
+    FIFO, §1, so i may start first), the connection's delay exactly 0 (d⁻ = d⁺ = 0), and p never
+    ineligible while i starts: p preemptive, or p the only cooperative task of its instance, or i a
+    cooperative task of p's instance (then no sibling holds the token when i starts, §1)."""
+    p, i = system.task(hop.writer), system.task(hop.reader)
+    if p.core != i.core:
+        return "the writer and the reader run on different cores"
+    if p.priority <= i.priority:
+        return "the writer's priority is not strictly higher than the reader's"
+    if hop.link.delay_max != 0:
+        return "the connection has a delay"
+    if p.kind == "cooperative" and not (i.kind == "cooperative" and i.instance == p.instance):
+        count = (cooperative if cooperative is not None else cooperative_counts(system)).get(p.instance, 0)
+        if count > 1:
+            return "the writer may wait for its instance's cooperative token while the reader starts"
+    return None
+
+
+def same_core_priority(t: Timing, hop: HopModel) -> str | None:
+    """``same_core_reason`` with the counts cached in ``t``."""
+    return same_core_reason(t.system, hop, t.cooperative_count)
+
+
+def priority_age(t: Timing, hop: HopModel) -> Term:
+    """Data age ``A⁺ₚ`` (Dürr et al., CASES 2019, priority-aware single-core job chains; derived in
+    specs/timing.md §7.6, equation (7.6a)). When a job of i released at rᵢ starts (reads) at s ≥ rᵢ,
+    every job of p released before that dispatch has completed — the oldest pending one would run
+    first — and its output arrived at once (d⁺ = 0), so i reads the output of the last job m of p
+    released before it; job m + 1 is released at or after s, within A⁺ₚ of m, so
+    ``rᵢ − rₘ ≤ s − rₘ ≤ A⁺ₚ``: the release age grows by at most A⁺ₚ over this hop (§7.1)."""
+    p = hop.writer
+    return _term(SAME_CORE, ((f"A⁺({p})", t.events[p].a_max),),
+                 f"d⁺ = 0 and `{p}` has the higher priority on the core: every job of it released "
+                 "before the reader's start has completed")
+
+
+def priority_reaction(t: Timing, hop: HopModel) -> Term:
+    """Reaction ``W⁺ᵢ + Rᵢ − Rₚ`` (Dürr et al., CASES 2019; derived in specs/timing.md §7.6,
+    equation (7.6b)). The previous steps sum to a bound on ``ρₚ + Rₚ``, ρₚ the release of p's first
+    job holding the stamp (every reaction term ends with the R of the task it reaches). The first
+    job of i released strictly after ρₚ comes within W⁺ᵢ, starts only once that job of p has
+    completed (it would run first), reads its output or a newer one (d⁺ = 0) and completes within
+    Rᵢ: this step adds ``W⁺ᵢ + Rᵢ`` to ρₚ, i.e. ``W⁺ᵢ + Rᵢ − Rₚ`` to the previous steps' sum."""
+    p, i = hop.writer, hop.reader
+    r = t.R(p)
+    return _term(SAME_CORE, ((f"W⁺({i})", t.events[i].sampling_wait), (f"R({i})", t.R(i)),
+                             (f"R({p})", None if r is None else -r)),
+                 f"counted from the release of `{p}`'s job, not its completion: `{i}`'s next job "
+                 "released after it starts only once that job has completed (d⁺ = 0)")
+
+
+def _tighter(a: Term, b: Term) -> bool:
+    """a is strictly tighter than b."""
+    return a.value is not None and (b.value is None or a.value < b.value)
+
+
 def hop_step(t: Timing, hop: HopModel) -> Step:
     """The rule that applies to a hop, chosen by how its reader is activated (§7.3)."""
     act = t.system.task(hop.reader).activation
@@ -288,9 +398,16 @@ def hop_step(t: Timing, hop: HopModel) -> Step:
     elif isinstance(act, DataTriggered):
         reaction = _new_term(register_r.rule, register_r.value, register_r.parts,
                              f"`{hop.reader}` is triggered by `{act.port}`, not by this port")
+    if same_core_priority(t, hop) is None:
+        refined_r, refined_a = priority_reaction(t, hop), priority_age(t, hop)
+        if _tighter(refined_r, reaction):
+            reaction = refined_r
+        if _tighter(refined_a, age):
+            age = refined_a
     label = f"{hop.writer} → {hop.reader}"
-    best = hop.link.delay_min + t.bcet(hop.reader)
-    return _new_step("hop", label, hop.writer, hop.reader, hop.link.source, hop.link.target, reaction, age, best)
+    best = _term(BEST, (("d⁻", hop.link.delay_min), (f"C⁻({hop.reader})", t.bcet(hop.reader))))
+    return _new_step("hop", label, hop.writer, hop.reader, hop.link.source, hop.link.target, reaction, age,
+                     best.value, best, None, None)
 
 
 # ================================================================== chain totals
@@ -315,21 +432,24 @@ def _minus(a: Fraction | None, b: Fraction | None) -> Fraction | None:
     return None if a is None or b is None else a - b
 
 
-def _plus(a: Fraction | None, b: Fraction | None) -> Fraction | None:
-    return None if a is None or b is None else a + b
-
-
-def _dominating(steps: tuple[Step, ...], attr: str) -> int | None:
+def _dominating(steps: tuple[Step, ...], *attrs: str) -> int | None:
+    """The step whose term (the sum of its ``attrs`` terms) is largest; an unbounded one dominates."""
     best, index = None, None
     for n, step in enumerate(steps):
-        term = getattr(step, attr)
-        if term is None:
+        terms = [getattr(step, attr) for attr in attrs if getattr(step, attr) is not None]
+        if not terms:
             continue
-        if term.value is None:
+        if any(term.value is None for term in terms):
             return n
-        if best is None or term.value > best:
-            best, index = term.value, n
+        value = exact_sum(term.value for term in terms)
+        if best is None or value > best:
+            best, index = value, n
     return index
+
+
+def data_age_non_reduced(steps: tuple[Step, ...]) -> Fraction | None:
+    """Non-reduced data age: the reduced one plus τ₁'s ``A⁺₁`` (§7.5)."""
+    return _sum_terms([x for s in steps for x in (s.data_age, s.data_age_non_reduced) if x is not None])
 
 
 def read_gap_min(t: Timing, task: str) -> Fraction:
@@ -351,20 +471,21 @@ def chain_bounds(t: Timing, chain: ChainModel, variant: str = "reduced") -> Chai
     first, last = chain.tasks[0], chain.tasks[-1]
     steps = (first_step(t, first),) + tuple(hop_step(t, h) for h in chain.hops) + (last_step(t, last),)
     best = exact_sum(s.best for s in steps)
-    wait, a_max = t.events[first].sampling_wait, t.events[first].a_max
+    wait = t.events[first].sampling_wait
     reaction = reaction_time(steps)
-    age = data_age(steps)
     bounds = dict(
         reaction_time=_new_bound(reaction, best, "§7.5 W⁺₁ + R₁ + Σ hop reaction terms"),
         reaction_time_reduced=_new_bound(_minus(reaction, wait), best, "§7.5 R₁ + Σ hop reaction terms"),
-        data_age_reduced=_new_bound(age, best, "§7.5 Σ hop data-age terms + Rₙ"),
-        data_age_non_reduced=_new_bound(_plus(age, a_max), best + read_gap_min(t, first),
-                                        "§7.5 reduced data age + A⁺₁"),
+        data_age_reduced=_new_bound(data_age(steps), best, "§7.5 Σ hop data-age terms + Rₙ"),
+        data_age_non_reduced=_new_bound(data_age_non_reduced(steps), best + steps[0].best_non_reduced.value,
+                                        "§7.5 A⁺₁ + Σ hop data-age terms + Rₙ"),
     )
     specs = _spec_checks(chain, bounds, variant)
     return _new_chain_bounds(chain.name, chain.tasks, steps, data_age_variant=variant, specs=specs,
                              dominating_reaction=_dominating(steps, "reaction"),
-                             dominating_data_age=_dominating(steps, "data_age"), **bounds)
+                             dominating_data_age=_dominating(steps, "data_age"),
+                             dominating_data_age_non_reduced=_dominating(steps, "data_age",
+                                                                         "data_age_non_reduced"), **bounds)
 
 
 def _spec_checks(chain: ChainModel, bounds: dict[str, Bound], variant: str) -> tuple[SpecCheck, ...]:
@@ -386,4 +507,5 @@ def _broken(chain: ChainModel, variant: str, problem: str) -> ChainBounds:
                   data_age_non_reduced=unknown)
     return _new_chain_bounds(chain.name, chain.tasks, (), data_age_variant=variant,
                              specs=_spec_checks(chain, bounds, variant), dominating_reaction=None,
-                             dominating_data_age=None, problem=problem, **bounds)
+                             dominating_data_age=None, dominating_data_age_non_reduced=None, problem=problem,
+                             **bounds)

@@ -115,7 +115,9 @@ def _term(term: Term | None) -> dict | None:
 def _step(n: int, s: Step) -> dict:
     return {"index": n, "kind": s.kind, "label": s.label, "writer": s.writer, "reader": s.reader,
             "source": s.source, "target": s.target, "reaction_time": _term(s.reaction),
-            "data_age": _term(s.data_age), "best": exact(s.best)}
+            "data_age": _term(s.data_age), "data_age_non_reduced": _term(s.data_age_non_reduced),
+            "best": exact(s.best), "best_term": _term(s.best_term),
+            "best_non_reduced": _term(s.best_non_reduced)}
 
 
 def _bound(b: Bound) -> dict:
@@ -133,7 +135,9 @@ def _chain(c: ChainBounds) -> dict:
         "data_age_variant": c.data_age_variant,
         "specs": [{"kind": s.kind, "variant": s.variant, "spec": exact(s.spec), "bound": exact(s.bound),
                    "margin": exact(s.margin), "ok": s.ok} for s in c.specs],
-        "dominating": {"reaction_time": c.dominating_reaction, "data_age": c.dominating_data_age},
+        "dominating": {"reaction_time": c.dominating_reaction, "data_age": c.dominating_age,
+                       "data_age_reduced": c.dominating_data_age,
+                       "data_age_non_reduced": c.dominating_data_age_non_reduced},
     }
 
 
@@ -213,15 +217,17 @@ JSON_SCHEMA: dict = _obj({
         "hops": {"type": "array", "items": _obj({
             "index": {"type": "integer"}, "kind": {"enum": ["first", "hop", "last"]},
             "label": {"type": "string"}, "writer": _STR, "reader": {"type": "string"}, "source": _STR,
-            "target": _STR, "reaction_time": _TERM, "data_age": _TERM, "best": _NUM})},
+            "target": _STR, "reaction_time": _TERM, "data_age": _TERM, "data_age_non_reduced": _TERM,
+            "best": _NUM, "best_term": _TERM, "best_non_reduced": _TERM})},
         "bounds": _obj({k: _BOUND for k in ("reaction_time", "reaction_time_reduced", "data_age_reduced",
                                             "data_age_non_reduced")}),
         "data_age_variant": {"enum": ["reduced", "non-reduced"]},
         "specs": {"type": "array", "items": _obj({
             "kind": {"enum": ["reaction_time", "data_age", "jitter"]}, "variant": {"type": "string"},
             "spec": _NUM, "bound": _NUM, "margin": _NUM, "ok": {"type": "boolean"}})},
-        "dominating": _obj({"reaction_time": {"type": ["integer", "null"]},
-                            "data_age": {"type": ["integer", "null"]}})})},
+        "dominating": _obj({k: {"type": ["integer", "null"]} for k in ("reaction_time", "data_age",
+                                                                         "data_age_reduced",
+                                                                         "data_age_non_reduced")})})},
     "diagnostics": {"type": "array", "items": _obj({"code": {"type": "string"}, "severity": {"type": "string"},
                                                     "message": {"type": "string"}},)},
 }, **{"$schema": "https://json-schema.org/draft/2020-12/schema", "title": SCHEMA})
@@ -253,15 +259,26 @@ def _rate_text(t: TaskTiming) -> str:
     return f"{how}: {rate}{derived}{source}"
 
 
+def _a_max_text(e: EventModel) -> str:
+    """``A⁺`` with its derivation ``δ⁺(2) = P⁺ + J⁺`` (§5.2), and ``W⁺ = max(A⁺, F)`` when larger."""
+    if e.silent:
+        return "A⁺ unbounded (never activated)"
+    text = f"A⁺ {_t(e.a_max)} = P⁺ {_t(e.period_max)} + J⁺ {_t(e.jitter_max)} (§5.2 δ⁺(2))"
+    if e.sampling_wait is not None and e.a_max is not None and e.sampling_wait > e.a_max:
+        text += f"   W⁺ {_t(e.sampling_wait)} = F, the latest first activation (§5.2 max(A⁺, F))"
+    return text
+
+
 def _task_line(t: TaskTiming) -> str:
     r = t.response
-    wcrt = _t(r.wcrt) + (f" ({r.rule})" if r.wcrt is not None else f" ({r.failure or 'unbounded'})")
+    wcrt = _t(r.wcrt) + (f" ({r.rule}, §6.2)" if r.wcrt is not None else f" ({r.failure or 'unbounded'})")
     line = (f"  {t.id}  [{t.core}, priority {t.priority}{', cooperative' if t.kind == 'cooperative' else ''}]"
             f"  {_rate_text(t)}\n"
-            f"      C {_t(t.bcet)} .. {_t(t.wcet)}   R {_t(r.bcrt)} .. {wcrt}   A⁺ {_t(t.a_max)}"
-            f"   deadline {_t(r.deadline)}")
+            f"      C {_t(t.bcet)} .. {_t(t.wcet)}   R {_t(r.bcrt)} (§6.4 bcet) .. {wcrt}"
+            f"   deadline {_t(r.deadline)} ({r.deadline_rule}, §6.2)"
+            f"\n      {_a_max_text(t.events)}")
     if r.blocking:
-        line += f"   blocking {_t(r.blocking)}"
+        line += f"   blocking {_t(r.blocking)} (§6.3)"
     return line
 
 
@@ -306,7 +323,7 @@ def _chain_rows(c: ChainBounds) -> list[list[str]]:
     age = c.data_age
     rows = []
     for name, bound, kind, dom in (("reaction time", c.reaction_time, "reaction_time", c.dominating_reaction),
-                                   (f"data age ({c.data_age_variant})", age, "data_age", c.dominating_data_age)):
+                                   (f"data age ({c.data_age_variant})", age, "data_age", c.dominating_age)):
         spec, margin = _spec_cell(c, kind)
         rows.append([c.name, name, _t(bound.worst), _t(bound.best), _t(bound.jitter), spec, margin,
                      _dominating(c, dom), bound.rule])
@@ -322,10 +339,21 @@ def _table(rows: list[list[str]]) -> list[str]:
     return ["  " + "  ".join(cell.ljust(w) for cell, w in zip(row, widths)).rstrip() for row in rows]
 
 
+def _parts_text(parts) -> str:
+    """``a 1 ms + b 2 ms − c 3 ms``: a part with a negative value is subtracted."""
+    out = ""
+    for n, (name, value) in enumerate(parts):
+        if value is not None and value < 0:
+            out += f"{' ' if n else ''}− {name} {_t(-value)}"
+        else:
+            out += f"{' + ' if n else ''}{name} {_t(value)}"
+    return out
+
+
 def _term_text(term: Term) -> str:
-    parts = " + ".join(f"{name} {_t(value)}" for name, value in term.parts)
+    parts = _parts_text(term.parts)
     note = f"; {term.note}" if term.note else ""
-    return f"{_t(term.value)} by {term.rule}: {parts}{note}"
+    return f"{_t(term.value)} by {term.rule}: {parts or 'nothing'}{note}"
 
 
 def _breakdown(c: ChainBounds) -> list[str]:
@@ -337,17 +365,25 @@ def _breakdown(c: ChainBounds) -> list[str]:
         if n == c.dominating_reaction:
             marks.append("dominates reaction time")
         if n == c.dominating_data_age:
-            marks.append("dominates data age")
+            marks.append("dominates data age (reduced)")
+        if n == c.dominating_data_age_non_reduced:
+            marks.append("dominates data age (non-reduced)")
         head = f"    [{n}] {step.label}" + (f"  ({', '.join(marks)})" if marks else "")
         lines.append(head)
         if step.reaction is not None:
             lines.append(f"        reaction  {_term_text(step.reaction)}")
         if step.data_age is not None:
             lines.append(f"        data age  {_term_text(step.data_age)}")
-        lines.append(f"        best      {_t(step.best)}")
-    lines.append(f"    reaction time {_t(c.reaction_time.worst)} (reduced {_t(c.reaction_time_reduced.worst)}), "
-                 f"data age {_t(c.data_age_reduced.worst)} reduced / {_t(c.data_age_non_reduced.worst)} "
-                 f"non-reduced, best {_t(c.reaction_time.best)}")
+        if step.data_age_non_reduced is not None:
+            lines.append(f"        non-reduced data age adds  {_term_text(step.data_age_non_reduced)}")
+        lines.append(f"        best      {_term_text(step.best_term)}")
+        if step.best_non_reduced is not None:
+            lines.append(f"        non-reduced best adds  {_term_text(step.best_non_reduced)}")
+    for name, bound in (("reaction time", c.reaction_time), ("reaction time (reduced)", c.reaction_time_reduced),
+                        ("data age (reduced)", c.data_age_reduced),
+                        ("data age (non-reduced)", c.data_age_non_reduced)):
+        lines.append(f"    {name} {_t(bound.worst)} by {bound.rule}; best {_t(bound.best)} "
+                     f"(§7.5 Σ best terms{' + least read gap' if 'non-reduced' in name else ''})")
     return lines
 
 
