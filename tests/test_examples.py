@@ -38,6 +38,47 @@ def test_navigation_model_shape():
     assert model.task("laser.LaserTask").activation.period == Fraction(1, 40)
 
 
+@pytest.mark.parametrize("name", ["navigation.vfy", "navigation-holes.vfy"])
+def test_every_model_node_points_at_the_source(name):
+    """Every node of the semantic model carries the span of the text it comes from (issue: a source
+    span on every node), and spans name the line the node's text is on."""
+    import dataclasses
+
+    from verify.model import Hole
+    from verify.source import NO_SPAN
+
+    loaded = verify.load(str(EXAMPLES / "navigation" / name))
+    model = loaded.system()
+    seen = set()
+
+    def walk(node, path):
+        if isinstance(node, (tuple, list)):
+            for n, item in enumerate(node):
+                walk(item, f"{path}[{n}]")
+            return
+        if not dataclasses.is_dataclass(node) or id(node) in seen or type(node).__module__ != "verify.model":
+            return
+        seen.add(id(node))
+        if isinstance(node, Hole):
+            span = node.activation.span  # the syntax node it keeps
+        else:
+            span = node.span
+        assert span != NO_SPAN, f"{path} ({type(node).__name__}) has no span"
+        line = loaded.sources[span.file].text.splitlines()[span.line - 1]
+        assert line.strip(), (path, span)
+        for f in dataclasses.fields(node):
+            if f.name not in ("span", "activation") or not isinstance(node, Hole):
+                walk(getattr(node, f.name), f"{path}.{f.name}")
+
+    walk(model, "model")
+    assert len(seen) > 30
+    for chain in model.chains:
+        for kind in ("reaction_time", "data_age", "jitter"):
+            if getattr(chain, kind) is not None:
+                span = chain.spec_span(kind)
+                assert kind in loaded.sources[span.file].text.splitlines()[span.line - 1]
+
+
 def test_holes_variant_has_holes():
     model = verify.load(str(EXAMPLES / "navigation" / "navigation-holes.vfy")).system()
     assert sorted(t.id for t in model.holes) == ["mapper.CurMapTask", "oa.OATask", "planner.PlannerTask"]

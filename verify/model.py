@@ -30,6 +30,7 @@ class Periodic:
 
     period: Fraction
     phase: Fraction | None = None
+    span: Span = _span()  # the activation in the binding (NO_SPAN when synthesised)
 
     @property
     def kind(self) -> str:
@@ -42,6 +43,7 @@ class SporadicSource:
 
     min_interarrival: Fraction
     max_interarrival: Fraction
+    span: Span = _span()
 
     @property
     def kind(self) -> str:
@@ -61,6 +63,7 @@ class DataTriggered:
     members: tuple[str, ...]
     mode: Literal["single", "and", "or"] = "single"
     prescaler: int = 1
+    span: Span = _span()
 
     @property
     def kind(self) -> str:
@@ -90,6 +93,7 @@ class ReadModel:
     optional: bool
     oversampling: s.Tolerance | None
     undersampling: s.Tolerance | None
+    span: Span = _span()  # the read in the component
 
 
 @dataclass(frozen=True)
@@ -138,6 +142,7 @@ class HopModel:
     writer: str
     reader: str
     link: LinkModel
+    span: Span = _span()  # the chain element the hop reaches
 
 
 @dataclass(frozen=True)
@@ -149,7 +154,11 @@ class ChainModel:
     data_age: Fraction | None = None
     jitter: Fraction | None = None
     span: Span = _span()
-    spec_spans: dict[str, Span] = field(default_factory=dict, compare=False, repr=False)
+    spec_spans: tuple[tuple[str, Span], ...] = field(default=(), compare=False, repr=False)  # (kind, span)
+
+    def spec_span(self, kind: str, default: Span = NO_SPAN) -> Span:
+        """Where the ``kind`` spec (reaction_time, data_age, jitter) is written."""
+        return next((span for k, span in self.spec_spans if k == kind), default)
 
 
 @dataclass(frozen=True)
@@ -291,15 +300,15 @@ def activation_model(act: s.Activation, component: s.Component) -> ActivationMod
     if isinstance(act, s.Timer):
         if isinstance(act.period, s.PeriodHole):
             return Hole(act)
-        return _new_periodic(quantity_seconds(act.period), _seconds(act.phase))
+        return _new_periodic(quantity_seconds(act.period), _seconds(act.phase), act.span)
     if isinstance(act, s.Sporadic):
         a, b = quantity_seconds(act.low), quantity_seconds(act.high)
-        return SporadicSource(min(a, b), max(a, b))
+        return SporadicSource(min(a, b), max(a, b), act.span)
     if isinstance(act, s.Trigger):
         if isinstance(act.prescaler, s.PrescalerHole):
             return Hole(act)
         mode, members = _trigger_members(component, act.port.text)
-        return DataTriggered(act.port.text, members, mode, int(act.prescaler.value))
+        return DataTriggered(act.port.text, members, mode, int(act.prescaler.value), act.span)
     return Hole(act)
 
 
@@ -351,7 +360,8 @@ def _task_model(inst: s.Instance, task: s.Task, binding: s.TaskBinding, componen
         priority=int(binding.priority.value),
         bcet=quantity_seconds(task.bcet) if task.bcet else Fraction(0),
         wcet=quantity_seconds(task.wcet),
-        reads=tuple([_new_read(r.port.text, r.optional, r.oversampling, r.undersampling) for r in task.reads]),
+        reads=tuple([_new_read(r.port.text, r.optional, r.oversampling, r.undersampling, r.span)
+                     for r in task.reads]),
         produces=tuple(p.text for p in task.produces),
         activation=activation_model(binding.activation, component),
         min_rate=quantity_hertz(c.min) if c and c.min else None,
@@ -418,7 +428,7 @@ def chain_path(chain: s.Chain, model: SystemModel, scope: SystemScope):
             reader = readers[0]
         if not candidates:
             return tasks, hops, (i, "unreachable", reader)
-        hops.append(_new_hop(tasks[-1], reader, candidates[0]))
+        hops.append(_new_hop(tasks[-1], reader, candidates[0], ref.span))
         tasks.append(reader)
     return tasks, hops, None
 
@@ -428,4 +438,4 @@ def _chain_model(chain: s.Chain, model: SystemModel, scope: SystemScope) -> Chai
     bounds = {sp.kind: quantity_seconds(sp.bound) for sp in chain.specs}
     return ChainModel(chain.name.text, tuple(tasks), tuple(hops), bounds.get("reaction_time"),
                       bounds.get("data_age"), bounds.get("jitter"), chain.span,
-                      {sp.kind: sp.span for sp in chain.specs})
+                      tuple((sp.kind, sp.span) for sp in chain.specs))

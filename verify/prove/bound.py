@@ -61,7 +61,7 @@ def obligations(model: SystemModel, variant: str, responses: Mapping[str, TaskRe
             out.append(_new_obligation("chain", chain.name, check.kind, check.spec, check.bound,
                                        _new_target(kind, chain.name),
                                        "non-reduced" if check.kind == "reaction_time" else variant,
-                                       chain.spec_spans.get(check.kind, chain.span), related))
+                                       chain.spec_span(check.kind, chain.span), related))
     for task in model.tasks:
         r = responses[task.id]
         if r.deadline is None:

@@ -83,7 +83,7 @@ def collect_statements(model: SystemModel, scope: SystemScope | None) -> tuple[S
             bound = getattr(chain, kind)
             if bound is None:
                 continue
-            add(Statement(f"spec:{chain.name}:{kind}", "spec", chain.spec_spans.get(kind, NO_SPAN), "spec bound",
+            add(Statement(f"spec:{chain.name}:{kind}", "spec", chain.spec_span(kind), "spec bound",
                           f"{kind} <= {fmt_time(bound)}", chain.tasks, chain=chain.name, spec_kind=kind))
     return tuple(sorted(found.values(), key=Statement.order_key))
 
