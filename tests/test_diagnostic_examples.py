@@ -148,6 +148,16 @@ def test_every_section_has_one_example():
 # ------------------------------------------------------------------ each example
 
 
+def matches_golden(golden, text: str) -> None:
+    """``text`` equals the golden file (rewritten instead with ``UPDATE_GOLDEN=1``)."""
+    if UPDATE:
+        golden.parent.mkdir(parents=True, exist_ok=True)
+        golden.write_text(text, encoding="utf-8")
+    else:
+        assert golden.exists(), f"no golden file {golden}: run with UPDATE_GOLDEN=1 and read it"
+        assert text == golden.read_text(encoding="utf-8")
+
+
 @pytest.mark.parametrize("code", _params())
 def test_example_reports_its_code(code, tmp_path):
     section = SECTIONS[code]
@@ -160,13 +170,7 @@ def test_example_reports_its_code(code, tmp_path):
     for word in FORBIDDEN:
         assert word not in text, f"{code}: the message shows `{word}`:\n{text}"
     assert str(tmp_path) not in text
-    golden = GOLDEN / f"{code}.txt"
-    if UPDATE:
-        golden.parent.mkdir(parents=True, exist_ok=True)
-        golden.write_text(text, encoding="utf-8")
-    else:
-        assert golden.exists(), f"no golden file {golden}: run with UPDATE_GOLDEN=1 and read it"
-        assert text == golden.read_text(encoding="utf-8")
+    matches_golden(GOLDEN / f"{code}.txt", text)
 
 
 @pytest.mark.parametrize("code", REQUIRED)
@@ -398,10 +402,4 @@ def test_rule_variant(name, code, source, words, tmp_path):
     for word in words:
         assert word in d.message, d.message
     text = render_all_text(list(result.diagnostics), result.sources).replace(str(tmp_path) + os.sep, "") + "\n"
-    golden = GOLDEN / "variants" / f"{name}.txt"
-    if UPDATE:
-        golden.parent.mkdir(parents=True, exist_ok=True)
-        golden.write_text(text, encoding="utf-8")
-    else:
-        assert golden.exists(), f"no golden file {golden}: run with UPDATE_GOLDEN=1 and read it"
-        assert text == golden.read_text(encoding="utf-8")
+    matches_golden(GOLDEN / "variants" / f"{name}.txt", text)
