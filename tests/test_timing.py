@@ -378,6 +378,17 @@ def test_utilisation_above_one_is_e311_with_fraction_and_percentage():
     assert "E312" in codes(result) and result.task("m.B").wcrt is None
 
 
+def test_a_crowded_core_is_named_in_a_readable_list():
+    """E311 and E312 name at most twelve tasks, then how many more: on a core with 30 tasks the
+    message stays one line, not 30 names (nor, for E312, a note per task with every other task)."""
+    tasks = [task(f"m{n}.T", timer(100), wcet=5 * MS, prio=n) for n in range(30)]
+    result = analyze(system(tasks))
+    (e311,) = [d for d in diagnostics_of(result) if d.code == "E311"]
+    assert "`m0.T`" in e311.message and "and 18 more" in e311.message and "`m29.T`" not in e311.message
+    notes = [n for d in diagnostics_of(result) if d.code == "E312" for n in d.notes]
+    assert notes and all(n.count(".T`") <= 12 and "more" in n for n in notes)
+
+
 def test_deadline_miss_is_e312_naming_core_and_task():
     result = analyze(system([task("m.T", timer(100), wcet=20 * MS, deadline=10 * MS)]))
     (d,) = diagnostics_of(result)

@@ -92,3 +92,11 @@ def suggest(word: str, candidates) -> str | None:
             return lowered[word.lower()]
         return None
     return matches[0]
+
+
+def name_list(names, limit: int = 12) -> str:
+    """Names for a message, each in backquotes: at most ``limit`` of them, then how many more (a
+    diagnostic about a task on a crowded core stays readable)."""
+    names = list(names)
+    shown = ", ".join(f"`{n}`" for n in names[:limit])
+    return shown + (f" and {len(names) - limit} more" if len(names) > limit else "")

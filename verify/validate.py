@@ -11,7 +11,7 @@ from fractions import Fraction
 import networkx as nx
 
 from . import syntax as s
-from .diagnostics import DiagnosticSink, Label
+from .diagnostics import DiagnosticSink, Label, name_list
 from .model import SystemModel, chain_path, quantity_base, quantity_hertz, quantity_seconds
 from .resolve import ComponentScope, Resolution, SystemScope
 from .units import fmt_number, fmt_quantity, fmt_rate, fmt_time
@@ -544,7 +544,7 @@ def _check_trigger_sources(scope: SystemScope, sink: DiagnosticSink) -> None:
                   "part of the cycle",
                   secondary=tuple(Label(scope.bindings[tuple(m.split(".", 1))].activation.span, f"`{m}`")
                                   for m in members[1:]),
-                  notes=(("in the same cycle of triggers: " + ", ".join(f"`{m}`" for m in others),)
+                  notes=(("in the same cycle of triggers: " + name_list(others),)
                          if others else ()),
                   help="activate one task of the cycle by a timer or a sporadic source")
 

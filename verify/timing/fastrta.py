@@ -229,20 +229,25 @@ class Round:
         load = 0 if events.silent else None if period is None else cost * (self.unit // period)
         return _Stream(n, cost, period, self.ticks(jitter), events.silent, load)
 
-    def _causal_paths(self) -> dict[int, list[tuple[int, tuple[int, ...], Fraction]]]:
-        """target -> [(source, prescalers, L⁺)] for every ``rta.causal_path(source, target)``."""
+    def _causal_paths(self) -> dict[int, list[tuple[int, int, Fraction]]]:
+        """target -> [(source, Π prescalers, L⁺)] for every ``rta.causal_path(source, target)`` that
+        ``_capped_into`` can use: source on target's core at no lower priority. The prescalers enter
+        only as nested ceiling divisions (``rta.Interferer.causal_cap``), and ⌈⌈n/a⌉/b⌉ = ⌈n/(ab)⌉
+        for positive integers, so their product stands for them (a long trigger chain would
+        otherwise hold a tuple per pair of its tasks)."""
         capped: dict[int, list] = {}
-        trigger, estimates = self.static.trigger, self.estimates
-        for source in range(len(self.tasks)):
-            prescalers: list[int] = []
-            latency, seen, current, found = ZERO, {source}, source, set()
+        trigger, estimates, tasks = self.static.trigger, self.estimates, self.tasks
+        for source in range(len(tasks)):
+            product, latency, seen, current, found = 1, ZERO, {source}, source, set()
+            core, priority = tasks[source].core, tasks[source].priority
             while trigger[current] is not None:
                 k, delay, writer = trigger[current]
-                prescalers.append(k)
+                product *= k
                 latency += delay
                 if writer not in found:
                     found.add(writer)
-                    capped.setdefault(writer, []).append((source, tuple(prescalers), latency))
+                    if writer != source and tasks[writer].core == core and priority >= tasks[writer].priority:
+                        capped.setdefault(writer, []).append((source, product, latency))
                 if writer in seen or estimates[writer] is None:
                     break
                 seen.add(writer)
@@ -395,10 +400,10 @@ class Round:
         if blocking is None:
             return None, None, None, "a cooperative sibling's hold time is not bounded", None, remote
         capped = []
-        for source, prescalers, latency in self._capped_into(n):
+        for source, product, latency in self._capped_into(n):
             carry = carry_in(task, events, self.estimates[n], latency)
             if carry is not None:
-                capped.append((self.streams[source], prescalers, carry))
+                capped.append((self.streams[source], product, carry))
         return self._wcrt(n, core, with_self, blocking, capped, remote) + (blocking, remote)
 
     def _capped_into(self, n: int):
@@ -456,7 +461,7 @@ class Round:
             if q == 1 and reuse:  # the same iteration as the hold time's
                 w, why, left = self._hold_run[n]
             else:
-                caps = [(s, _cap(prescalers, carry, q)) for s, prescalers, carry in capped]
+                caps = [(s, _cap(product, carry, q)) for s, product, carry in capped]
                 w, why, left = self._lfp(q * cost, w + cost, *self._interference(n, core, with_self, caps, remote),
                                          limit, left)
             if w is None:
@@ -521,12 +526,9 @@ class Round:
                              deadline_rule, blocking, self.hold(n), q, crit, names, failure)
 
 
-def _cap(prescalers: tuple[int, ...], carry: int, q: int) -> int:
-    """``rta.Interferer.causal_cap``."""
-    n = q - 1 + carry
-    for k in reversed(prescalers):
-        n = -((-n) // k)
-    return n
+def _cap(product: int, carry: int, q: int) -> int:
+    """``rta.Interferer.causal_cap``, with the product of the path's prescalers."""
+    return -((-(q - 1 + carry)) // product)
 
 
 def response_times(system: SystemModel, events: Mapping[str, EventModel],

@@ -26,7 +26,7 @@ from typing import Mapping
 
 
 from ..construct import direct_constructor
-from ..diagnostics import DiagnosticSink, Label
+from ..diagnostics import DiagnosticSink, Label, name_list
 from ..model import CompoundModel, DataTriggered, LinkModel, Periodic, SporadicSource, SystemModel, TaskModel
 from ..units import fmt_number, fmt_rate, fmt_time
 
@@ -708,7 +708,7 @@ def check_compound_constraints(system: SystemModel, infos: Mapping[str, Activati
         notes = [f"the constraint is {text}" + ("" if compound.changeable or text.endswith("fixed") else " fixed"),
                  "the analysis uses the propagated rate: nothing in the system enforces the constraint"]
         if triggered:
-            notes.append("it triggers " + ", ".join(f"`{t}`" for t in triggered))
+            notes.append("it triggers " + name_list(triggered))
         sink.emit("E314", f"{kind} compound in-port `{compound.id}` is activated at {rate} ({derivation}), {where}",
                   compound.span, f"`{compound.name}` activated at {rate}", secondary=tuple(secondary),
                   notes=tuple(notes),

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 from fractions import Fraction
 from typing import Mapping
 
-from ..diagnostics import DiagnosticSink, Label
+from ..diagnostics import DiagnosticSink, Label, name_list
 from ..model import DataTriggered, Hole, SystemModel, TaskModel
 from ..units import fmt_number, fmt_time
 from .rates import ActivationInfo, EventModel, ratio_sum
@@ -129,7 +129,7 @@ def check_utilisation(system: SystemModel, loads: tuple[CoreLoad, ...], infos: M
         shares = [f"`{t}` {fmt_number(system.task(t).wcet * infos[t].rate.high)}" for t in load.tasks]
         secondary = tuple(Label(system.task(t).span, f"`{t}` on `{load.core}`") for t in load.tasks)
         sink.emit("E311", f"core `{load.core}` is utilised {ratio(load.utilisation)} "
-                  f"({percent(load.utilisation)}) by " + ", ".join(f"`{t}`" for t in load.tasks),
+                  f"({percent(load.utilisation)}) by " + name_list(load.tasks),
                   spans.get(load.core, system.task(load.tasks[0]).span), "utilisation above 1",
                   secondary=secondary, notes=("shares (wcet × highest rate): " + ", ".join(shares),),
                   help="move tasks to another core, lower their rates or their execution times")
@@ -427,7 +427,7 @@ def check_response_times(system: SystemModel, responses: Mapping[str, TaskRespon
                     else "any deadline (it has none)")
         reason = r.failure or "no bound"
         notes = [f"higher-or-equal-priority tasks on `{r.core}`: "
-                 + (", ".join(f"`{t}`" for t in r.interferers) or "none")]
+                 + (name_list(r.interferers) or "none")]
         if r.blocking:
             notes.append(f"cooperative blocking per job: {fmt_time(r.blocking)}")
         sink.emit("E312", f"no response-time bound for `{task.id}` on core `{r.core}` within {deadline}: "
