@@ -227,3 +227,72 @@ def test_check_leaves_rates_behind_a_hole_to_synth(write):
     assert verify.load_text(_HOLE_UPSTREAM.format(writer="?"), "m.vfy").ok
     (d,) = verify.load_text(_HOLE_UPSTREAM.format(writer="100 ms"), "m.vfy").diagnostics
     assert d.code == "E305" and "5 Hz (10 Hz / 2)" in d.message
+
+
+# ------------------------------------------------------------------ analyze: which failures are exit 1
+
+
+OVERLOADED = """component A {
+  task T {
+    wcet 60 ms
+  }
+}
+
+system S {
+  core c
+  instance a : A on c {
+    task T priority 2 timer 100 ms
+  }
+  instance b : A on c {
+    task T priority 1 timer 100 ms
+  }
+}
+"""
+
+
+def test_analyze_exits_1_when_the_configured_system_misses_its_timing(write, capsys):
+    """An overloaded core (E311) and a response time without a bound (E312) are timing failures of a
+    valid configuration, exit 1 as `prove` exits on a missed deadline; `check` accepts the file."""
+    path = write({"over.vfy": OVERLOADED})
+    assert main(["check", path]) == 0
+    capsys.readouterr()
+    assert main(["analyze", path]) == 1
+    err = capsys.readouterr().err
+    assert "error[E311]" in err and "error[E312]" in err
+    assert main(["prove", path]) == 1
+
+
+def test_check_reports_a_compound_constraint_like_every_later_command(write, capsys):
+    """E314 (a compound in-port's own constraint) is a property of the configuration: `check` reports
+    it, and analyze, prove and synth stop at it with exit 2, each reporting it once."""
+    import re
+
+    from .conftest import ROOT
+
+    text = (ROOT / "specs" / "diagnostics.md").read_text(encoding="utf-8")
+    section = text[text.index("## E314"):]
+    example = re.search(r"```vfy[^\n]*\n(.*?)```", section, re.S).group(1)
+    path = write({"e314.vfy": example})
+    for command in ("check", "analyze", "prove", "synth"):
+        assert main([command, path]) == 2, command
+        err = capsys.readouterr().err
+        assert err.count("error[E314]") == 1, (command, err)
+
+
+def test_a_system_selection_error_is_json_when_json_is_asked(write, capsys):
+    """Two systems and no --system: E105, as a JSON document on stdout for analyze and synth too."""
+    unit = "component A {\n  task T {\n    wcet 1 ms\n  }\n}\n"
+    body = "  core c\n  instance a : A on c {\n    task T priority 1 timer 10 ms\n  }\n"
+    path = write({"two.vfy": unit + "".join(f"system S{n} {{\n{body}}}\n" for n in (1, 2))})
+    for command in ("analyze", "synth", "prove"):
+        assert main([command, path, "--format", "json"]) == 2
+        doc = json.loads(capsys.readouterr().out)
+        assert [d["code"] for d in doc["diagnostics"]] == ["E105"], command
+
+
+def test_an_empty_file_name_and_a_code_prefix(capsys):
+    assert main(["check", ""]) == 2
+    err = capsys.readouterr().err
+    assert "error[E004]: no file name given" in err and "directory" not in err
+    assert main(["explain", "E10"]) == 2
+    assert "did you mean one of E101, E102" in capsys.readouterr().err

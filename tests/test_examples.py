@@ -59,10 +59,7 @@ def test_every_model_node_points_at_the_source(name):
         if not dataclasses.is_dataclass(node) or id(node) in seen or type(node).__module__ != "verify.model":
             return
         seen.add(id(node))
-        if isinstance(node, Hole):
-            span = node.activation.span  # the syntax node it keeps
-        else:
-            span = node.span
+        span = node.span  # (a Hole's is that of the syntax node it keeps)
         assert span != NO_SPAN, f"{path} ({type(node).__name__}) has no span"
         line = loaded.sources[span.file].text.splitlines()[span.line - 1]
         assert line.strip(), (path, span)

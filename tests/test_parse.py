@@ -303,3 +303,16 @@ def test_a_byte_order_mark_does_not_shift_the_snippet():
     _, diags = _parse(text)
     rendered = render_all_text(diags, {"m.vfy": SourceFile("m.vfy", text)})
     assert "1 | component A { outx : T }\n  |               ^^^^" in rendered
+
+
+@pytest.mark.parametrize("written, unit", [("hz", "Hz"), ("KHZ", "kHz"), ("MS", "ms"), ("Us", "us")])
+def test_a_unit_in_the_wrong_case_is_one_error_naming_the_unit(written, unit, tmp_path):
+    """`50 hz` is one E001 at the unit with the right spelling as help, and parsing goes on as if the
+    unit were right (no second error at the next `}`)."""
+    text = ("component A {\n  task T {\n    wcet 1 ms\n  }\n}\nsystem S {\n  core c\n"
+            f"  instance a : A on c {{\n    task T priority 1 timer 50 {written}\n  }}\n}}\n")
+    sink = DiagnosticSink()
+    assert parse_text(text, "u.vfy", sink) is None
+    (d,) = sink.items
+    assert d.code == "E001" and f"`{written}`" in d.message and "case-sensitive" in d.message
+    assert (d.span.line, d.span.column) == (9, 32) and d.help == f"write `{unit}`"

@@ -166,3 +166,16 @@ def _fifo_checks(main_file, fifo, capsys):
     assert main(["fmt", fifo]) == 2
     err = capsys.readouterr().err
     assert "error[E004]" in err and "Traceback" not in err
+
+
+def test_the_snippet_under_a_diagnostic_is_the_line_it_names(write, capsys):
+    """Lines are counted at "\\n" only, as the lexer counts them: a form feed (whitespace) or a U+2028
+    in a comment does not shift the source line shown under a diagnostic."""
+    from verify.cli import main
+
+    text = "\f// a page break above\ncomponent A { // note \u2028 still the comment\n  out x : T\n  bad here\n}\n"
+    path = write({"ff.vfy": text})
+    assert main(["check", path]) == 2
+    err = capsys.readouterr().err
+    assert "ff.vfy:4:" in err
+    assert "4 |   bad here" in err

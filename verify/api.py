@@ -111,14 +111,16 @@ def _finish(project: Project, sink: DiagnosticSink) -> LoadResult:
     return LoadResult(project, resolution, models, diagnostics)
 
 
-#: what ``check_propagated_rates`` reports (the rates stage reports more, e.g. compound constraints, E314,
-#: which stay with ``analyze``)
-RATE_CODES = frozenset({"E305", "E306"})
+#: what ``check_propagated_rates`` reports: the constraints of triggered tasks (E305/E306) and of
+#: compound in-ports (E314) against their propagated rates (the rates stage reports more, e.g. sampling
+#: tolerances, which stay with ``analyze``)
+RATE_CODES = frozenset({"E305", "E306", "E314"})
 
 
 def check_propagated_rates(model: SystemModel, sink: DiagnosticSink) -> None:
-    """E305/E306 for a data-triggered task whose propagated rate leaves its activation constraint
-    (specs/language.md §4), computed by the rates stage of the timing analysis. A task whose rate is
+    """E305/E306 for a data-triggered task whose propagated rate leaves its activation constraint, and
+    E314 for such a compound in-port (specs/language.md §4), computed by the rates stage of the timing
+    analysis. A task whose rate is
     not bounded (a synthesis hole or a trigger cycle upstream) is not checked here: ``synth`` and
     ``analyze`` deal with it."""
     from .timing.rates import activation_rates, check_trigger_constraints

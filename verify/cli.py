@@ -57,7 +57,8 @@ def _select(result: api.LoadResult, args):
     try:
         return result.system(args.system)
     except api.SelectionError as err:
-        print(render_all_text([err.diagnostic], result.sources), file=sys.stderr)
+        _emit_diagnostics(api.LoadResult(result.project, result.resolution, {}, (err.diagnostic,)),
+                          getattr(args, "format", "text"))
         return None
 
 
@@ -171,7 +172,8 @@ def cmd_explain(args) -> int:
     if code not in CODES:
         from .diagnostics import suggest
 
-        hint = suggest(code, CODES)
+        starting = sorted(c for c in CODES if c.startswith(code)) if len(code) >= 2 else []
+        hint = ("one of " + ", ".join(starting) if starting else suggest(code, CODES))
         print(f"error: unknown diagnostic code {args.code}" + (f"; did you mean {hint}?" if hint else ""),
               file=sys.stderr)
         return EXIT_INVALID
@@ -203,9 +205,20 @@ def cmd_analyze(args) -> int:
         print(to_text(analysis))
         if problems:
             print(render_all_text(problems, result.sources), file=sys.stderr)
-    if any(d.severity.value == "error" for d in problems):
-        return EXIT_INVALID
-    return EXIT_OK
+    return analysis_exit_code(problems)
+
+
+#: analysis errors that say the configured system misses its timing (overload, a response time with
+#: no bound within the deadline): exit 1, as `prove` exits 1 on a missed deadline (E503); every other
+#: analysis error (a rate outside a constraint or tolerance) says the configuration is invalid: exit 2
+TIMING_FAILURES = frozenset({"E311", "E312"})
+
+
+def analysis_exit_code(problems) -> int:
+    errors = {d.code for d in problems if d.severity.value == "error"}
+    if not errors:
+        return EXIT_OK
+    return EXIT_VIOLATED if errors <= TIMING_FAILURES else EXIT_INVALID
 
 
 def _parser() -> argparse.ArgumentParser:

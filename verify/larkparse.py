@@ -298,6 +298,14 @@ def _exponent_after(text: str, number: tuple) -> str | None:
     return m.group(0) if m else None
 
 
+def _unit_in_other_case(token: Token) -> str | None:
+    """The unit ``token`` spells in another case (``hz``, ``KHZ``, ``MS``), if it is a word that does."""
+    word = str(token)
+    if token.type not in ("NAME",) and not word.isalpha():
+        return None
+    return next((u for u in _UNITS if u.lower() == word.lower() and u != word), None)
+
+
 def _report_unexpected(sink: DiagnosticSink, path: str, err: UnexpectedInput, text: str) -> None:
     if isinstance(err, UnexpectedToken):
         expected = getattr(err, "verify_accepted", None)
@@ -314,6 +322,11 @@ def _report_unexpected(sink: DiagnosticSink, path: str, err: UnexpectedInput, te
                       Span(path, line, col, line, end_col + len(exponent)), "a number with an exponent",
                       help="write the number out in full with a unit, or choose a larger or smaller unit "
                            "to keep it short, e.g. `2 s` instead of `2000 ms`")
+            return
+        unit = _unit_in_other_case(err.token) if "UNIT" in expected else None
+        if unit is not None:
+            sink.emit("E001", f"unknown unit `{err.token}`: units are case-sensitive", span, "not a unit",
+                      help=f"write `{unit}`")
             return
         if number is not None:  # a missing unit: point at the number that lacks it
             sink.emit("E001", f"expected a unit after the number `{number[0]}`, found {_describe_found(err.token)}",
@@ -379,6 +392,10 @@ def _repair(err: UnexpectedToken, text: str) -> None:
     if glued is not None:  # `outx : T`: go on as if it read `out x : T`
         parser.feed_token(glued[1])
         parser.feed_token(glued[2])
+        return
+    unit = _unit_in_other_case(err.token) if "UNIT" in (err.expected or ()) else None
+    if unit is not None:  # `50 hz`: go on as if it read `50 Hz`
+        parser.feed_token(Token("UNIT", unit, line=err.token.line, column=err.token.column))
         return
     keywords = _keyword_terminals()
     keyword_names = set(keywords.values())

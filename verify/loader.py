@@ -106,6 +106,10 @@ def _not_regular(shown: str, path: str, where: Span, sink: DiagnosticSink) -> No
 
 def load_project(root: str, sink: DiagnosticSink) -> Project:
     """Parse ``root`` and its imports. Diagnostics go to ``sink``; the project holds what parsed."""
+    if not root:
+        sink.emit("E004", "no file name given", Span("<command line>", 1, 1, 1, 1), "cannot be read",
+                  help="name a .vfy file, e.g. `verify check examples/navigation/navigation.vfy`")
+        return Project(root, (), {})
     root = os.path.normpath(root)
     modules: list[s.Module] = []
     sources: dict[str, SourceFile] = {}

@@ -80,6 +80,11 @@ class Hole:
     def kind(self) -> str:
         return "hole"
 
+    @property
+    def span(self) -> Span:
+        """The activation with the hole, as written."""
+        return self.activation.span
+
 
 ActivationModel = Union[Periodic, SporadicSource, DataTriggered, Hole]
 

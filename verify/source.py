@@ -34,7 +34,9 @@ class SourceFile:
 
     def line(self, number: int) -> str:
         text = self.text[1:] if self.text.startswith("\ufeff") else self.text  # (parse skips a BOM)
-        lines = text.splitlines()
+        # lines as the lexer counts them: only "\n" ends one (``splitlines`` would also split at a form
+        # feed, U+2028 and the like, and show the wrong line under a diagnostic)
+        lines = text.split("\n")
         if 1 <= number <= len(lines):
-            return lines[number - 1]
+            return lines[number - 1].removesuffix("\r")
         return ""

@@ -273,7 +273,7 @@ def _task_line(t: TaskTiming) -> str:
     r = t.response
     wcrt = _t(r.wcrt) + (f" ({r.rule}, §6.2)" if r.wcrt is not None else f" ({r.failure or 'unbounded'})")
     line = (f"  {t.id}  [{t.core}, priority {t.priority}{', cooperative' if t.kind == 'cooperative' else ''}]"
-            f"  {_rate_text(t)}\n"
+            f"  {_rate_text(t)} (§5.1)\n"
             f"      C {_t(t.bcet)} .. {_t(t.wcet)}   R {_t(r.bcrt)} (§6.4 bcet) .. {wcrt}"
             f"   deadline {_t(r.deadline)} ({r.deadline_rule}, §6.2)"
             f"\n      {_a_max_text(t.events)}")
@@ -300,7 +300,7 @@ def _link_line(s: LinkSampling) -> str:
             what += " (worst direction of the rate intervals)"
     w = "?" if s.writer_rate is None else str(s.writer_rate)
     r = "?" if s.reader_rate is None else str(s.reader_rate)
-    return f"  {s.source} -> {s.target}  ({s.writer} {w} → {s.reader} {r}): {what}"
+    return f"  {s.source} -> {s.target}  ({s.writer} {w} → {s.reader} {r}): {what} (§5.3)"
 
 
 def _spec_cell(c: ChainBounds, kind: str) -> tuple[str, str]:
@@ -392,7 +392,7 @@ def to_text(result: AnalysisResult) -> str:
     the chain table and each chain's breakdown with the rule behind every term."""
     out = [f"system {result.system}  (analysis {SCHEMA}; data age {result.data_age_variant}; "
            f"{'converged' if result.converged else 'NOT converged'} after {result.rounds} round"
-           f"{'s' if result.rounds != 1 else ''})", "", "cores"]
+           f"{'s' if result.rounds != 1 else ''}, §6.5)", "", "cores (utilisation Σ C⁺·f⁺, §6.1)"]
     for c in result.cores:
         u = "unbounded" if c.utilisation is None else f"{fmt_number(c.utilisation)} ({percent(c.utilisation)})"
         out.append(f"  {c.core}  utilisation {u}{'  OVERLOADED' if c.overloaded else ''}: " + ", ".join(c.tasks))
