@@ -17,7 +17,7 @@ import random
 from dataclasses import dataclass, field
 from fractions import Fraction as F
 
-from hypothesis import HealthCheck, assume, given, settings
+from hypothesis import HealthCheck, assume, example, given, settings
 from hypothesis import strategies as st
 
 import verify
@@ -219,6 +219,10 @@ def test_scaling_every_time_by_10_scales_the_answer(system, objective):
 
 
 @settings(max_examples=25, **SETTINGS)
+@example(System([Task(0, None, "grid 5 5 2", 2, 0, 0, 1, (F(50), F(200))),
+                 Task(1, 0, "trigger 1", 2, 0, 0, 1, (F(1), F(2))),
+                 Task(2, 0, "trigger 1", 2, 0, 0, 1, (F(1), F(2)), tolerance="oversampling forbidden")],
+                1, age=20), 0)  # two symmetric cores: pruning's blame must not follow declaration order
 @given(systems(), st.integers(0, 2**16))
 def test_reordering_declarations_changes_nothing(system, seed):
     plain = synthesize(load(render(system)))

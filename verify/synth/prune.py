@@ -147,16 +147,21 @@ class Pruner:
             self.choices[tid] = make_choice(tid, tuple(choice.candidates[i] for i in keep),
                                             tuple(choice.excluded[i] for i in keep), choice.hole)
 
+    def _blame(self, why: str, culprit: tuple[tuple[str, ...], tuple[str, ...]]) -> None:
+        """Record the first infeasibility found (rules visit tasks, links and chains by name)."""
+        if self.infeasible is None:
+            self.infeasible, self.culprit = why, culprit
+
     def _dead(self, tasks: dict[str, Bounds], per: dict[tuple[str, int], Bounds]) -> set[tuple[str, int]]:
         dead: set[tuple[str, int]] = set()
         for (tid, i), b in per.items():
             if not self._rate_ok(self.model.task(tid), self.choices[tid].candidates[i], b):
                 dead.add((tid, i))
-        for t in self.model.tasks:
+        for t in sorted(self.model.tasks, key=lambda t: t.id):  # (by name: the blame must not depend on order)
             if t.id not in self.choices and isinstance(t.activation, DataTriggered) and not self._rate_ok(
                     t, _FIXED_TRIGGER, tasks.get(t.id, UNKNOWN)):
-                self.infeasible = f"`{t.id}` is activated outside its activation constraint in every configuration"
-                self.culprit = ((), (t.id,))
+                self._blame(f"`{t.id}` is activated outside its activation constraint in every configuration",
+                            ((), (t.id,)))
         dead |= self._schedulability()
         dead |= self._sampling(tasks, per)
         dead |= self._utilisation(tasks, per)
@@ -170,12 +175,12 @@ class Pruner:
 
         dead: set[tuple[str, int]] = set()
         floors = first_job_bounds(self.model, self.choices)
-        for task in self.model.tasks:
+        for task in sorted(self.model.tasks, key=lambda t: t.id):
             if task.wcrt_bound is not None:
                 continue
             floor = floors[task.id]
             if task.deadline is not None:
-                if floor > task.deadline:
+                if floor > task.deadline and self.infeasible is None:
                     self.infeasible = f"`{task.id}` cannot meet its deadline in any configuration"
                 continue
             choice = self.choices.get(task.id)
@@ -194,8 +199,8 @@ class Pruner:
 
     def _sampling(self, tasks, per) -> set[tuple[str, int]]:
         dead: set[tuple[str, int]] = set()
-        for link in self.model.links:
-            for reader_id in link.readers:
+        for link in sorted(self.model.links, key=lambda lk: (lk.source, lk.target)):
+            for reader_id in sorted(link.readers):
                 reader = self.model.task(reader_id)
                 port = link.target.split(".", 1)[1]
                 read = next((r for r in reader.reads if r.port == port), None)
@@ -223,8 +228,8 @@ class Pruner:
             if bad and index is not None:
                 dead.add((reader.id, index))
             elif bad:
-                self.infeasible = f"`{reader.id}` violates its {direction}sampling tolerance on `{port}` in every configuration"
-                self.culprit = ((), (reader.id, writer))
+                self._blame(f"`{reader.id}` violates its {direction}sampling tolerance on `{port}` in every "
+                            "configuration", ((), (reader.id, writer)))
         wchoice = self.choices.get(writer)
         if wchoice is not None and not _triggered_by(reader, choice, port):
             r = tasks.get(reader.id, UNKNOWN)
@@ -244,8 +249,8 @@ class Pruner:
                 b = tasks.get(t.id, UNKNOWN)
                 floor += t.wcet * (b.fh[0] if b.fh is not None else ZERO)
             if floor > 1:
-                self.infeasible = f"core `{core}` is above 100 % utilisation even at the slowest candidates"
-                self.culprit = ((), tuple(t.id for t in by_core[core]))
+                self._blame(f"core `{core}` is above 100 % utilisation even at the slowest candidates",
+                            ((), tuple(t.id for t in by_core[core])))
                 return dead
             for t in by_core[core]:
                 choice = self.choices.get(t.id)
@@ -260,14 +265,14 @@ class Pruner:
 
     def _latency(self, tasks, per) -> set[tuple[str, int]]:
         dead: set[tuple[str, int]] = set()
-        for chain in self.model.chains:
+        for chain in sorted(self.model.chains, key=lambda c: c.name):
             for bound, kind in ((chain.reaction_time, "reaction"), (chain.data_age, "age")):
                 if bound is None:
                     continue
                 lower = ChainLowerBound(self, chain, kind, tasks, per)
                 if lower.total > bound:
-                    self.infeasible = f"chain `{chain.name}` cannot meet its {kind} bound at any candidate"
-                    self.culprit = ((chain.name,), ())
+                    self._blame(f"chain `{chain.name}` cannot meet its {kind} bound at any candidate",
+                                ((chain.name,), ()))
                     return dead
                 for tid in dict.fromkeys(chain.tasks):
                     choice = self.choices.get(tid)
