@@ -457,3 +457,83 @@ def test_ordered_map_keeps_input_order_across_workers():
     assert list(ordered_map(lambda i: i * i, range(7), 2)) == [i * i for i in range(7)]
     assert os.getpid() not in set(ordered_map(lambda i: os.getpid(), range(4), 2))  # really forked
     assert list(ordered_map(lambda i: -i, range(3), 1)) == [0, -1, -2]
+
+
+RIGID_GAP = """component Ctl {
+  out o : Msg
+  task H {
+    produces o
+    bcet 5 ms
+    wcet 5 ms
+  }
+}
+component Mon {
+  in i : Msg
+  task L {
+    reads i
+    bcet 1 ms
+    wcet 1 ms
+  }
+}
+system R {
+  core c0
+  instance c : Ctl on c0 {
+    task H priority 2 timer 10 ms
+  }
+  instance m : Mon on c0 {
+    task L priority 1 timer 8 ms
+  }
+  connect c.o -> m.i
+  chain ctl: c.o -> m.L {
+    reaction_time <= 20 ms
+  }
+}
+"""
+
+
+def test_undecided_says_why_the_exact_searches_did_not_decide():
+    """Exact worst case 19 ms, bound 24 ms, spec 20 ms: proved exactly with the default budget. With a
+    budget too small for the 53 representatives the note gives their number and the budget, and what
+    became of the Z3 search: not applicable (too large an unrolling) here; out of resources on a
+    smaller variant (a 10 ms reader, a 25 ms spec below its exact worst case of 26 ms)."""
+    sysm = verify.load_text(RIGID_GAP, "gap.vfy").system()
+    proved = prove(sysm).verdict("ctl", "reaction_time")
+    assert (proved.status, proved.method, proved.exact, proved.bound) == ("proved", "exact-enumeration",
+                                                                          F(19, 1000), F(24, 1000))
+    v = prove(sysm, budget=1).verdict("ctl", "reaction_time")
+    assert v.status == "undecided"
+    assert "has 53 phase representatives, more than the budget of 1 scenarios (raise --budget)" in v.note
+    assert "the Z3 search does not apply: its unrolling would have 4400 cells" in v.note
+    small = verify.load_text(RIGID_GAP.replace("timer 8 ms", "timer 10 ms").replace("<= 20 ms", "<= 25 ms"),
+                             "gap.vfy").system()
+    assert prove(small).verdict("ctl", "reaction_time").exact == F(26, 1000)
+    z = prove(small, budget=1, rlimit=1).verdict("ctl", "reaction_time")
+    assert z.status == "undecided" and "the Z3 search did not decide within its resource limit" in z.note
+
+
+def test_output_paths_are_checked_before_the_proof(tmp_path, capsys):
+    """The model itself, a missing directory and two names of one file (through a link) are refused
+    at once, with exit 2, whatever --force says; nothing is written."""
+    import os
+    import shutil
+
+    for name in ("components.vfy", "navigation.vfy"):
+        shutil.copy(NAV / name, tmp_path / name)
+    model = str(tmp_path / "navigation.vfy")
+    before = open(model).read()
+    assert main(["prove", model, "-o", model, "--force"]) == 2
+    assert "is the model being proved" in capsys.readouterr().err and open(model).read() == before
+    assert main(["prove", model, "-o", str(tmp_path / "no" / "r.json")]) == 2
+    assert "does not exist" in capsys.readouterr().err
+    os.symlink(tmp_path / "r.json", tmp_path / "link.json")
+    assert main(["prove", model, "-o", str(tmp_path / "link.json"), "--trace-svg", str(tmp_path / "r.json"),
+                 "--force"]) == 2
+    assert "name the same file" in capsys.readouterr().err
+    assert not (tmp_path / "r.json").exists()
+
+
+def test_jobs_beyond_the_cpus_are_capped():
+    from verify.prove.parallel import available_workers, resolve_workers
+
+    assert resolve_workers(10**6) == 4 * available_workers() and resolve_workers(0) == available_workers()
+    assert resolve_workers(1) == 1

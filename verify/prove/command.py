@@ -86,9 +86,15 @@ def cmd_prove(args) -> int:
     if args.jobs < 0:
         return _fail("--jobs must be 0 (every available CPU) or a positive number of processes")
     for path, what in ((args.output, "-o"), (args.trace_svg, "--trace-svg")):
-        if path and os.path.exists(path) and not args.force:
+        if not path:
+            continue
+        if os.path.realpath(path) == os.path.realpath(args.file):
+            return _fail(f"{what} {path} is the model being proved; name another file")
+        if os.path.exists(path) and not args.force:
             return _fail(f"{path} exists; refusing to overwrite it (pass --force to replace it)")
-    if args.output and args.trace_svg and os.path.abspath(args.output) == os.path.abspath(args.trace_svg):
+        if not os.path.isdir(os.path.dirname(os.path.abspath(path))):
+            return _fail(f"{what} {path}: the directory {os.path.dirname(os.path.abspath(path))} does not exist")
+    if args.output and args.trace_svg and os.path.realpath(args.output) == os.path.realpath(args.trace_svg):
         return _fail("-o and --trace-svg name the same file")
     result = api.load(args.file)
     if not result.ok:

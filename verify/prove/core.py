@@ -19,8 +19,8 @@ from ..timing import response_and_chain_bounds
 from ..units import fmt_time
 from . import bound as bound_mod
 from .bound import Obligation
-from .exact import (Budget, ExactResult, Goal, approach, enumerate_exact, exact_class, grid_of, search,
-                    search_horizon)
+from .exact import (Budget, ExactResult, Goal, approach, count_representatives, enumerate_exact, exact_class,
+                    grid_of, search, search_horizon)
 from .scenario import Measured
 from .verdict import Counterexample, ProofResult, Verdict
 
@@ -33,7 +33,8 @@ def prove(model: SystemModel, *, budget: int = DEFAULT_BUDGET, rlimit: int = DEF
           jobs: int | None = None) -> ProofResult:
     """Prove every chain spec and task deadline of ``model`` (which must have no synthesis holes).
 
-    ``budget`` bounds the number of simulated scenarios, ``rlimit`` the resources of each Z3 query;
+    ``budget`` bounds the number of simulated scenarios, ``rlimit`` the resources of the Z3 search (all
+    its queries together);
     ``timeout`` (seconds, wall clock) is off unless given; ``jobs`` processes may share a large
     exact enumeration (None: every available CPU). Deterministic for fixed arguments other than
     ``jobs``, which never changes the result."""
@@ -70,14 +71,20 @@ def _decide(model: SystemModel, open_: list[tuple[int, Obligation]], budget: Bud
     if reason is None:
         exact = enumerate_exact(model, targets, budget, want_best, jobs=jobs)
         if exact is None and use_z3:
-            from .z3bmc import EncodingMismatch, z3_exact
+            from .z3bmc import EncodingMismatch, z3_applicable, z3_exact
 
             try:
                 exact = z3_exact(model, targets, want_best, rlimit=rlimit, budget=budget)
             except EncodingMismatch:  # a bug: the encoding and the simulator disagree; decide nothing by it
                 exact = None
         if exact is None:
-            reason = "the exact search space does not fit in the budget (raise --budget)"
+            reason = (f"the exact search space has {count_representatives(grid_of(model))} phase representatives, "
+                      f"more than the budget of {budget.left + budget.used} scenarios (raise --budget)")
+            if use_z3:
+                why_not = z3_applicable(model)
+                reason += (", and the Z3 search did not decide within its resource limit"
+                           + (" and the time limit" if budget.deadline is not None else "")
+                           if why_not is None else f", and the Z3 search does not apply: {why_not}")
         elif not exact.complete:
             reason = exact.reason
     out: dict[int, Verdict] = {}
@@ -227,10 +234,17 @@ def diagnostics(model: SystemModel, verdicts) -> list:
             notes.append(f"searched {v.explored} scenario{'s' * (v.explored != 1)} without a violation; "
                          f"not exact because {v.note}")
             what = f"chain `{v.name}`: {_spec_text(v)}" if v.subject == "chain" else f"`{v.name}`: {_spec_text(v)}"
-            sink.emit("E502", f"cannot decide {what} within the budget", v.span,
-                      "neither proved nor refuted", notes=notes,
-                      help="raise `--budget`, tighten the model (constant execution times and delays make the "
-                           "exact search apply), or improve the bound")
+            if "budget" in (v.note or "") or "time limit" in (v.note or ""):
+                sink.emit("E502", f"cannot decide {what} within the budget", v.span,
+                          "neither proved nor refuted", notes=notes,
+                          help="raise `--budget` (or `--timeout`), or tighten the model (constant execution "
+                               "times and delays make the exact search apply)")
+            else:  # outside the exact class: more budget only searches longer for a violation
+                sink.emit("E502", f"cannot decide {what}: no exact method applies and no run violates it",
+                          v.span, "neither proved nor refuted", notes=notes,
+                          help="make the execution times and delays along the chain constant (the exact "
+                               "search then decides it), or shorten periods and response times until the "
+                               "bound proves it")
     return sink.items
 
 

@@ -25,8 +25,10 @@ def available_workers() -> int:
 
 
 def resolve_workers(jobs: int | None) -> int:
-    """``jobs`` as given (at least 1), or every available CPU for None / 0."""
-    return available_workers() if not jobs else max(1, jobs)
+    """``jobs`` as given (at least 1, at most four per available CPU: more processes only compete),
+    or every available CPU for None / 0."""
+    cpus = available_workers()
+    return cpus if not jobs else max(1, min(jobs, 4 * cpus))
 
 
 def _run(i: int):

@@ -14,8 +14,9 @@ The window is justified by a query that must be unsatisfiable (in *no* scenario 
 states at ``t_s`` and ``t_s + H`` differ, so the timing repeats from ``t_s`` in all of them) and by
 the analysis' bounds, which say by when every sample class has completed (``W``). Then the supremum is found by asking for a sample above the best
 value so far; every model is replayed in the reference simulator (``measure_periodic``), whose
-value becomes the new best, until the query is unsatisfiable. Resource limits are Z3 ``rlimit``
-units (deterministic); an exhausted limit gives no result (the caller reports "undecided").
+value becomes the new best, until the query is unsatisfiable. All queries share one resource limit
+in Z3 ``rlimit`` units (deterministic) and stop at the caller's deadline; an exhausted limit gives no
+result (the caller reports "undecided").
 """
 from __future__ import annotations
 
@@ -27,11 +28,12 @@ from ..model import DataTriggered, Periodic, SystemModel
 from .exact import Budget, Extreme, ExactResult, Grid, exact_class, grid_of, scenario_of
 from .scenario import Measured, Target, ceil_to, floor_to, measure_periodic
 
-MAX_CELLS = 60_000
+MAX_CELLS = 2_500  # instants × tasks: beyond, bit-blasting alone can outlast any resource limit
+MAX_PERIODS = 8  # hyperperiods tried for the start of the repetition
 
 
 class EncodingMismatch(AssertionError):
-    """A Z3 model that the reference simulator does not confirm (a bug in the encoding)."""  # instants × tasks beyond which the encoding is not attempted
+    """A Z3 model that the reference simulator does not confirm (a bug in the encoding)."""
 
 
 def z3_applicable(model: SystemModel) -> str | None:
@@ -52,6 +54,10 @@ def z3_applicable(model: SystemModel) -> str | None:
         if (t.core, t.priority) in seen:
             return f"`{t.id}` and `{seen[(t.core, t.priority)]}` share a priority on `{t.core}`"
         seen[(t.core, t.priority)] = t.id
+    grid = grid_of(model)
+    cells = (MAX_PERIODS + 3) * int(grid.hyper / grid.h) * len(model.tasks)
+    if cells > MAX_CELLS:
+        return f"its unrolling would have {cells} cells (instants × tasks), more than {MAX_CELLS}"
     return None
 
 
@@ -297,33 +303,55 @@ def _exceeds(enc: Encoding, target: Target, W: int, threshold_units: Fraction, s
     return z3.Or([z3.And(e, z3.ULT(val, bound)) for e, val in terms])
 
 
-def _solver(enc: Encoding, rlimit: int) -> z3.Solver:
+def _solver(enc: Encoding) -> z3.Solver:
     s = z3.SolverFor("QF_BV")
-    s.set("rlimit", rlimit)
     s.add(enc.cons)
     return s
 
 
+class _Spend:
+    """One resource limit for every query of a search (Z3 ``rlimit`` units, deterministic), and the
+    caller's deadline (``--timeout``): a query gets what is left, and none is asked once it is spent
+    or the deadline has passed (``unknown``)."""
+
+    def __init__(self, total: int, budget: Budget | None):
+        self.left, self.budget = total, budget
+
+    def check(self, solver: z3.Solver):
+        if self.left <= 0 or (self.budget is not None and self.budget.expired()):
+            return z3.unknown
+        solver.set("rlimit", self.left)
+        before = _rlimit_count(solver)
+        result = solver.check()
+        self.left -= max(0, _rlimit_count(solver) - before)
+        return result
+
+
+def _rlimit_count(solver: z3.Solver) -> int:
+    """Z3's resource counter (one per context, cumulative; absent before the context's first query)."""
+    stats = solver.statistics()
+    return stats.get_key_value("rlimit count") if "rlimit count" in stats.keys() else 0
+
+
 def z3_exact(model: SystemModel, targets: list[Target], want_best=frozenset(), *, rlimit: int = 20_000_000,
-             budget: Budget | None = None, max_periods: int = 8) -> ExactResult | None:
+             budget: Budget | None = None, max_periods: int = MAX_PERIODS) -> ExactResult | None:
     """The exact extremes of ``targets`` by the encoding (None when it does not apply, is too large,
-    or a query exhausts its resource limit)."""
+    or its queries together exhaust ``rlimit``, or the budget's deadline passes)."""
     if z3_applicable(model) is not None:
         return None
     grid = grid_of(model)
     H = int(grid.hyper / grid.h)
-    if (max_periods + 3) * H * len(model.tasks) > MAX_CELLS:
-        return None
     chains = sorted({t.name for t in targets if t.kind != "response"})
     width = ((max_periods + 4) * H * 2 + 4).bit_length() + 1
     enc = Encoding(model, grid, chains, width)
+    spend = _Spend(rlimit, budget)
     # 1. a t_s from which the timing state repeats in every scenario
     ts = None
     for k in range(1, max_periods + 1):
         enc.extend((k + 1) * H)
-        s = _solver(enc, rlimit)
+        s = _solver(enc)
         s.add(z3.Or([a != b for a, b in zip(enc.state(k * H), enc.state((k + 1) * H))]))
-        r = s.check()
+        r = spend.check(s)
         if r == z3.unknown:
             return None
         if r == z3.unsat:
@@ -352,10 +380,10 @@ def z3_exact(model: SystemModel, targets: list[Target], want_best=frozenset(), *
         return None
     enc.extend(W)
     result = ExactResult("exact-z3", grid=grid)
-    base = _solver(enc, rlimit)
+    base = _solver(enc)
     for side, chosen in (("worst", targets), ("best", sorted(want_best))):
         for t in chosen:
-            ext = _optimise(model, enc, base, grid, t, W, side, budget, result)
+            ext = _optimise(model, enc, base, grid, t, W, side, budget, result, spend)
             if ext is None:
                 return None
             getattr(result, side)[t] = ext
@@ -363,7 +391,7 @@ def z3_exact(model: SystemModel, targets: list[Target], want_best=frozenset(), *
 
 
 def _optimise(model, enc: Encoding, solver: z3.Solver, grid: Grid, target: Target, W: int, side: str,
-              budget: Budget | None, result: ExactResult) -> Extreme | None:
+              budget: Budget | None, result: ExactResult, spend: _Spend) -> Extreme | None:
     measured = measure_periodic(model, scenario_of({a: Fraction(0) for a in grid.timers}, {}), [target],
                                 grid.hyper)
     result.explored += 1
@@ -375,7 +403,7 @@ def _optimise(model, enc: Encoding, solver: z3.Solver, grid: Grid, target: Targe
         else:
             value = getattr(best.values[target], side).value
             solver.add(_exceeds(enc, target, W, value / grid.h, side))
-        r = solver.check()
+        r = spend.check(solver)
         if r == z3.unknown:
             solver.pop()
             return None
