@@ -29,6 +29,7 @@ from verify.sim import KINDS, Scenario, chain_latencies, random_scenario, simula
 from verify.timing import analyze
 from verify.timing.chains import REGISTER, SAME_CORE
 
+from .test_bounds_vs_simulation import _slowest
 from .test_timing import bound_violations
 
 MS = Fraction(1, 1000)
@@ -313,13 +314,6 @@ def hop_systems(draw) -> tuple[str, bool]:
     text = ("\n\n".join(comps) + "\n\nsystem S {\n  core c0\n  core c1\n" + "\n".join(insts) + "\n"
             + "\n".join(conns) + "\n  chain ch: " + " -> ".join(chain) + "\n}\n")
     return text, applies
-
-
-def _slowest(scenario: Scenario, model) -> Scenario:
-    def delay(src, dst, _i):
-        return next(lk.delay_max for lk in model.links if (lk.source, lk.target) == (src, dst))
-
-    return Scenario(scenario.horizon, scenario.phases, None, delay, None, scenario.counter_phase)
 
 
 @settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
