@@ -302,6 +302,15 @@ class ChainSamples:
         memo: dict = {}
         port_index: dict = {}
 
+        def message(pos: int, job: _Job):
+            """What ``job`` (at chain position ``pos`` ≥ 1) read on the hop's in-port, or None."""
+            pk = (job.task, hop_port[pos])
+            idx = port_index.get(pk)
+            if idx is None:
+                ports = sim.read_ports[job.task]
+                idx = port_index[pk] = ports.index(hop_port[pos]) if hop_port[pos] in ports else -1
+            return None if idx < 0 else job.reads[idx]
+
         def stamp(pos: int, job: _Job):
             if pos == 0:
                 assert job.start is not None
@@ -309,12 +318,7 @@ class ChainSamples:
             key = (pos, job.task, job.index)
             if key in memo:
                 return memo[key]
-            pk = (job.task, hop_port[pos])
-            idx = port_index.get(pk)
-            if idx is None:
-                ports = sim.read_ports[job.task]
-                idx = port_index[pk] = ports.index(hop_port[pos]) if hop_port[pos] in ports else -1
-            msg = None if idx < 0 else job.reads[idx]
+            msg = message(pos, job)
             value = None if msg is None else stamp(pos - 1, jobs[msg[2]][msg[3]])
             memo[key] = value
             return value
@@ -324,7 +328,7 @@ class ChainSamples:
             if job.finish is None:
                 continue
             # deep chains: resolve from the first position up so the recursion stays shallow
-            st = _stamp_iterative(stamp, job, n - 1, jobs, sim, hop_port, port_index, memo)
+            st = _stamp_iterative(stamp, message, job, n - 1, jobs, memo)
             if st is not None:
                 holders.append((st[1], st[0], job))
         self.holders = holders
@@ -367,22 +371,16 @@ class ChainSamples:
         return react if kind == "reaction_time" else react_r
 
 
-def _stamp_iterative(stamp, job, pos, jobs, sim, hop_port, port_index, memo):
+def _stamp_iterative(stamp, message, job, pos, jobs, memo):
     """``stamp(pos, job)``, first filling the memo along the chain of writers from the back so
     that the recursion in ``stamp`` is at most one level deep per call."""
     path = []
     cur, p = job, pos
     while p > 0:
-        key = (p, cur.task, cur.index)
-        if key in memo:
+        if (p, cur.task, cur.index) in memo:
             break
         path.append((p, cur))
-        pk = (cur.task, hop_port[p])
-        idx = port_index.get(pk)
-        if idx is None:
-            ports = sim.read_ports[cur.task]
-            idx = port_index[pk] = ports.index(hop_port[p]) if hop_port[p] in ports else -1
-        msg = None if idx < 0 else cur.reads[idx]
+        msg = message(p, cur)
         if msg is None:
             break
         cur, p = jobs[msg[2]][msg[3]], p - 1
