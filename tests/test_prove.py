@@ -216,6 +216,12 @@ def test_jitter_violation_has_two_runs():
     hi = chain_latencies(replay(sysm, cex.scenario), sysm.chains[0]).worst("data_age").value
     lo = chain_latencies(replay(sysm, cex.best_scenario), sysm.chains[0]).best("data_age").value
     assert hi - lo == cex.latency > F(5, 1000)
+    from verify.prove.trace import to_svg
+    from verify.units import fmt_time
+
+    label = ET.fromstring(to_svg(sysm, v)).findall(".//{http://www.w3.org/2000/svg}text")
+    texts = [t.text or "" for t in label]
+    assert any(f"jitter {fmt_time(cex.latency)} = {fmt_time(hi)} − {fmt_time(lo)} of a second run" in t for t in texts)
 
 
 def test_deterministic(capsys):
