@@ -19,6 +19,7 @@ from ..timing import response_and_chain_bounds
 from ..units import fmt_time
 from . import bound as bound_mod
 from .bound import Obligation
+from .cone import SliceMismatch, check_carries_over, slices, subsystem
 from .exact import (Budget, ExactResult, Goal, approach, count_representatives, enumerate_exact, exact_class,
                     grid_of, search, search_horizon)
 from .scenario import Measured
@@ -64,6 +65,28 @@ def prove(model: SystemModel, *, budget: int = DEFAULT_BUDGET, rlimit: int = DEF
 
 def _decide(model: SystemModel, open_: list[tuple[int, Obligation]], budget: Budget, rlimit: int,
             use_z3: bool, jobs: int | None = None) -> dict[int, Verdict]:
+    """Decide the obligations the bound left open, cone by cone (proof spec §4.0): each group of
+    obligations with the same cone is searched on the subsystem of its cone, and every counterexample
+    found there is replayed on the whole system (if one did not carry over, a bug, the group is decided
+    again on the whole system)."""
+    out: dict[int, Verdict] = {}
+    for sub, targets in slices(model, sorted({ob.target for _, ob in open_})):
+        members = set(targets)
+        items = [(i, ob) for i, ob in open_ if ob.target in members]
+        decided = _decide_slice(sub, items, budget, rlimit, use_z3, jobs)
+        if sub is not model:
+            try:
+                for v in decided.values():
+                    if v.counterexample is not None:
+                        check_carries_over(model, v.counterexample)
+            except SliceMismatch:  # a bug: decide these on the whole system rather than trust the cone
+                decided = _decide_slice(model, items, budget, rlimit, use_z3, jobs)
+        out.update(decided)
+    return out
+
+
+def _decide_slice(model: SystemModel, open_: list[tuple[int, Obligation]], budget: Budget, rlimit: int,
+                  use_z3: bool, jobs: int | None = None) -> dict[int, Verdict]:
     targets = sorted({ob.target for _, ob in open_})
     want_best = frozenset(ob.target for _, ob in open_ if ob.kind == "jitter")
     reason = exact_class(model)
@@ -234,7 +257,8 @@ def diagnostics(model: SystemModel, verdicts) -> list:
             notes.append(f"searched {v.explored} scenario{'s' * (v.explored != 1)} without a violation; "
                          f"not exact because {v.note}")
             what = f"chain `{v.name}`: {_spec_text(v)}" if v.subject == "chain" else f"`{v.name}`: {_spec_text(v)}"
-            if exact_class(model) is None:  # an exact search applies; it did not finish
+            # an exact search applies to the obligation's cone (§4.0), it did not finish:
+            if exact_class(subsystem(model, v.subject, v.name)) is None:
                 sink.emit("E502", f"cannot decide {what} within the budget", v.span,
                           "neither proved nor refuted", notes=notes,
                           help="raise `--budget` (or `--timeout`), or tighten the model (constant execution "
@@ -242,9 +266,10 @@ def diagnostics(model: SystemModel, verdicts) -> list:
             else:  # outside the exact class: more budget only searches longer for a violation
                 sink.emit("E502", f"cannot decide {what}: no exact method applies and no run violates it",
                           v.span, "neither proved nor refuted", notes=notes,
-                          help="make the execution times and delays along the chain constant (the exact "
-                               "search then decides it), or shorten periods and response times until the "
-                               "bound proves it")
+                          help="make the execution times and delays constant in the cone of this spec (its "
+                               "tasks, the writers that trigger them, equal or higher priorities on their "
+                               "cores, cooperative siblings: proof spec §4.0), and the exact search decides "
+                               "it; or shorten periods and response times until the bound proves it")
     return sink.items
 
 

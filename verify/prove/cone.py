@@ -1,0 +1,118 @@
+"""The cone of an obligation: the tasks whose choices can change its samples (specs/proof.md §4.0).
+
+A job of task ``x`` is released by its own timer or sporadic source, or by arrivals on its trigger
+ports, whose messages come from the writers of those ports; it is scheduled on its core against the
+jobs of equal or higher priority (a lower-priority job never delays it under preemptive
+fixed-priority scheduling); if it is cooperative, it waits for the token of its instance, held by the
+cooperative siblings. A chain's samples follow values along its hops, whose writers are chain tasks.
+The **cone** of an obligation is the least set of tasks holding the obligation's own tasks (the
+chain's tasks, or the task of a deadline) and closed under these three dependencies. The run of the
+cone's tasks depends only on the choices (phases, execution times, delays, counters) of the cone:
+every run of the system restricted to the cone is a run of the cone's subsystem (``restrict``), and
+every run of the subsystem is the restriction of runs of the system — whatever the tasks outside do.
+Extremes over the subsystem's runs are therefore those over the system's: the exact search, the
+falsifying search and the exact class (a sporadic task, an execution-time range, a trigger cycle)
+only look at the cone.
+"""
+from __future__ import annotations
+
+from ..model import DataTriggered, SystemModel
+from .scenario import Target, _chain_samples, _response_samples, replay
+
+
+def cone(model: SystemModel, roots: list[str]) -> frozenset[str]:
+    """The least set of task ids holding ``roots`` and closed under trigger writers, same-core tasks
+    of equal or higher priority, and cooperative siblings."""
+    by_core: dict[str, list] = {}
+    siblings: dict[str, list[str]] = {}
+    for t in model.tasks:
+        by_core.setdefault(t.core, []).append(t)
+        if t.kind == "cooperative":
+            siblings.setdefault(t.instance, []).append(t.id)
+    found = set(roots)
+    todo = list(roots)
+    while todo:
+        task = model.task(todo.pop())
+        depends = [t.id for t in by_core[task.core] if t.priority >= task.priority]
+        if task.kind == "cooperative":
+            depends += siblings[task.instance]
+        act = task.activation
+        if isinstance(act, DataTriggered):
+            for member in act.members:
+                link = model.link_into(f"{task.instance}.{member}")
+                if link is not None:
+                    depends.append(link.writer)
+        for other in depends:
+            if other not in found:
+                found.add(other)
+                todo.append(other)
+    return frozenset(found)
+
+
+def roots_of(model: SystemModel, target: Target) -> list[str]:
+    """The tasks an obligation measures: a chain's tasks, or the task of a response time."""
+    if target.kind == "response":
+        return [target.name]
+    return list(next(c for c in model.chains if c.name == target.name).tasks)
+
+
+def restrict(model: SystemModel, tasks: frozenset[str], chains: set[str]) -> SystemModel:
+    """The subsystem of ``tasks`` (in system order) with the connections between them and the chains
+    named in ``chains``. A connection from outside into one of its tasks is left out: by the closure
+    of ``cone`` it ends on a port that triggers nothing and carries no chain, so it changes no
+    timing and no sample."""
+    kept = [t for t in model.tasks if t.id in tasks]
+    links = []
+    for lk in model.links:
+        readers = tuple(r for r in lk.readers if r in tasks)
+        if lk.writer in tasks and readers:
+            links.append(lk if readers == lk.readers else type(lk)(lk.source, lk.target, lk.writer, readers,
+                                                                   lk.delay_min, lk.delay_max, lk.span))
+    instances = {t.instance for t in kept}
+    cores = {t.core for t in kept}
+    return SystemModel(model.name, tuple(c for c in model.cores if c.name in cores), tuple(kept), tuple(links),
+                       tuple(c for c in model.chains if c.name in chains), model.span,
+                       tuple(c for c in model.compounds if c.instance in instances))
+
+
+def slices(model: SystemModel, targets: list[Target]) -> list[tuple[SystemModel, list[Target]]]:
+    """The targets grouped by cone, each group with its subsystem (groups in the order of their first
+    target; the whole model itself when a cone is the whole system)."""
+    groups: dict[frozenset[str], list[Target]] = {}
+    for t in targets:
+        groups.setdefault(cone(model, roots_of(model, t)), []).append(t)
+    out = []
+    for tasks, members in groups.items():
+        if len(tasks) == len(model.tasks):
+            out.append((model, members))
+        else:
+            out.append((restrict(model, tasks, {t.name for t in members if t.kind != "response"}), members))
+    return out
+
+
+def subsystem(model: SystemModel, subject: str, name: str) -> SystemModel:
+    """The subsystem of the cone of a verdict's subject (a chain, or a task)."""
+    roots = [name] if subject == "task" else list(next(c for c in model.chains if c.name == name).tasks)
+    tasks = cone(model, roots)
+    if len(tasks) == len(model.tasks):
+        return model
+    return restrict(model, tasks, set() if subject == "task" else {name})
+
+
+class SliceMismatch(AssertionError):
+    """A run of a cone's subsystem whose sample the whole system does not reproduce (a bug)."""
+
+
+def check_carries_over(model: SystemModel, cex) -> None:
+    """Replay a counterexample found on a subsystem on the whole ``model``: the same scenario (tasks
+    outside the cone take the simulator's defaults) must hold the same sample(s)."""
+    for scenario, sample in ((cex.scenario, cex.sample), (cex.best_scenario, cex.best_sample)):
+        if scenario is None:
+            continue
+        trace = replay(model, scenario)
+        if cex.target.kind == "response":
+            samples = _response_samples(trace, cex.target, with_open=True)
+        else:
+            samples = _chain_samples(trace, model, cex.target)
+        if sample not in samples:
+            raise SliceMismatch(f"the run of the cone of {cex.target} does not carry over to `{model.name}`")
