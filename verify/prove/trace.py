@@ -144,6 +144,32 @@ def to_svg(model: SystemModel, verdict: Verdict) -> str:
     """A Gantt chart of the counterexample: one row per task (the chain's tasks and the tasks sharing
     their cores), jobs as bars from start to completion (preemptions are not drawn), releases as
     ticks, the chain's jobs highlighted with data-flow arrows, the violating interval shaded."""
+    return "\n".join(_chart(model, verdict)[2]) + "\n"
+
+
+def to_svg_all(model: SystemModel, verdicts: list[Verdict]) -> str:
+    """One SVG document with the chart of every counterexample of ``verdicts``, one below the other
+    (each a nested ``svg``; for a single one, ``to_svg``)."""
+    if len(verdicts) == 1:
+        return to_svg(model, verdicts[0])
+    charts = [_chart(model, v, f"arrow{i}", position=True) for i, v in enumerate(verdicts, 1)]
+    width = max(w for w, _, _ in charts)
+    out, y = [], 0
+    for w, h, lines in charts:
+        out.append(lines[0].replace("<svg ", f'<svg x="0" y="{y}" ', 1))
+        out.extend(lines[1:])
+        y += h
+    head = (f'<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="{y}" viewBox="0 0 {width} {y}" '
+            'font-family="sans-serif" font-size="12">')
+    title = f"<title>{len(verdicts)} counterexamples of {escape(model.name)}</title>"
+    return "\n".join([head, title, '<rect x="0" y="0" width="100%" height="100%" fill="white"/>', *out,
+                      "</svg>"]) + "\n"
+
+
+def _chart(model: SystemModel, verdict: Verdict, marker: str = "arrow",
+           position: bool = False) -> tuple[int, int, list[str]]:
+    """(width, height, lines) of one counterexample's chart; its first line opens its ``svg`` element
+    (without ``xmlns`` when it is to be nested: ``position``)."""
     cex = verdict.counterexample
     assert cex is not None
     trace = replay(model, cex.scenario)
@@ -175,10 +201,11 @@ def to_svg(model: SystemModel, verdict: Verdict) -> str:
 
     title = (f"{verdict.label}: {fmt_time(cex.latency)} > {fmt_time(verdict.spec)} "
              f"(counterexample by {verdict.method})")
-    out = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{left + width + 40}" height="{height}" '
+    xmlns = "" if position else 'xmlns="http://www.w3.org/2000/svg" '
+    out = [f'<svg {xmlns}width="{left + width + 40}" height="{height}" '
            f'viewBox="0 0 {left + width + 40} {height}" font-family="sans-serif" font-size="12">',
            f"<title>{escape(title)}</title>",
-           '<defs><marker id="arrow" viewBox="0 0 10 10" refX="10" refY="5" markerWidth="7" markerHeight="7" '
+           f'<defs><marker id="{marker}" viewBox="0 0 10 10" refX="10" refY="5" markerWidth="7" markerHeight="7" '
            'orient="auto-start-reverse"><path d="M 0 0 L 10 5 L 0 10 z" fill="#c0392b"/></marker></defs>',
            '<rect x="0" y="0" width="100%" height="100%" fill="white"/>',
            f'<text x="10" y="20" font-size="14" font-weight="bold">{escape(title)}</text>',
@@ -220,11 +247,11 @@ def to_svg(model: SystemModel, verdict: Verdict) -> str:
             continue
         out.append(f'<line class="flow" x1="{_num(x(m.written))}" y1="{_num(y(a.job.task) + row_h / 2)}" '
                    f'x2="{_num(x(b.job.start))}" y2="{_num(y(b.job.task) + row_h / 2)}" stroke="#c0392b" '
-                   f'stroke-width="1.5" marker-end="url(#arrow)"><title>{escape(m.source)} -> {escape(m.target)}: '
+                   f'stroke-width="1.5" marker-end="url(#{marker})"><title>{escape(m.source)} -> {escape(m.target)}: '
                    f'written {escape(_t(m.written))}, arrives {escape(_t(m.arrival))}</title></line>')
     for frac in range(0, 5):
         t = t0 + (t1 - t0) * frac / 4
         out.append(f'<text x="{_num(x(t))}" y="{height - 12}" text-anchor="middle" fill="#555">'
                    f'{escape(fmt_time(t))}</text>')
     out.append("</svg>")
-    return "\n".join(out) + "\n"
+    return left + width + 40, height, out
