@@ -142,6 +142,24 @@ def test_sarif_validates_and_points_at_the_spec(capsys, tmp_path, monkeypatch):
                     str(out_file)], capsys)[0] == 2
 
 
+def test_sarif_uri_of_a_file_outside_the_working_directory(capsys, tmp_path, monkeypatch):
+    """A model outside the working directory gets an absolute file: URI (not ``../..``), percent-encoded."""
+    folder = tmp_path / "my models"
+    folder.mkdir()
+    for name in ("navigation-violated.vfy", "components.vfy"):
+        (folder / name).write_text((NAV / name).read_text())
+    elsewhere = tmp_path / "cwd"
+    elsewhere.mkdir()
+    monkeypatch.chdir(elsewhere)
+    code, out, _ = run_cli(["prove", str(folder / "navigation-violated.vfy"), "--format", "sarif"], capsys)
+    assert code == 1
+    log = json.loads(out)
+    jsonschema.Draft4Validator(_sarif_schema()).validate(log)
+    (res,) = log["runs"][0]["results"]
+    uri = res["locations"][0]["physicalLocation"]["artifactLocation"]["uri"]
+    assert uri == (folder / "navigation-violated.vfy").as_uri() and "%20" in uri and ".." not in uri
+
+
 def test_sarif_of_a_proved_system_validates(capsys):
     code, out, _ = run_cli(["prove", str(NAV / "navigation.vfy"), "--format", "sarif"], capsys)
     assert code == 0

@@ -4,12 +4,15 @@ One run, tool driver "verify" whose rules are the diagnostic codes used (in code
 per diagnostic: ``level`` from the severity, the primary location at the diagnostic's span (for a
 violated spec: the spec in the DSL), ``relatedLocations`` for its secondary labels (the chain's
 hops), notes and help appended to the message. URIs are relative to the working directory with
-forward slashes. The output is deterministic (no timestamps, no absolute paths).
+forward slashes (percent-encoded); a file outside it gets an absolute ``file:`` URI. The output is
+deterministic (no timestamps; no absolute paths for files below the working directory).
 """
 from __future__ import annotations
 
 import os
+import pathlib
 import re
+from urllib.parse import quote
 
 from .. import __version__ as VERSION
 from ..codes import CODES, spec_anchor
@@ -21,8 +24,17 @@ LEVELS = {Severity.ERROR: "error", Severity.WARNING: "warning", Severity.NOTE: "
 
 
 def _uri(path: str) -> str:
-    rel = os.path.relpath(path) if os.path.isabs(path) or os.path.exists(path) else path
-    return rel.replace(os.sep, "/")
+    """A URI reference for ``path``: relative to the working directory when the file lies below it
+    (forward slashes, percent-encoded as RFC 3986 asks, e.g. a space as ``%20``), else an absolute
+    ``file:`` URI (a ``../`` path would point outside the repository that code scanning resolves
+    relative URIs against)."""
+    if not (os.path.isabs(path) or os.path.exists(path)):
+        return quote(path.replace(os.sep, "/"), safe="/")  # a name that is no file (``<text>``)
+    absolute = os.path.abspath(path)
+    rel = os.path.relpath(absolute)
+    if rel == os.pardir or rel.startswith(os.pardir + os.sep) or os.path.isabs(rel):
+        return pathlib.Path(absolute).as_uri()
+    return quote(rel.replace(os.sep, "/"), safe="/")
 
 
 def _location(span: Span, message: str | None = None, ident: int | None = None) -> dict:
