@@ -141,3 +141,19 @@ def test_a_range_outside_the_cone_no_longer_leaves_a_spec_undecided():
     v = prove(sysm, budget=60).verdict("ctl", "reaction_time")
     assert (v.status, v.method) == ("proved", "exact-enumeration")
     assert v.exact == F(16, 1000) and v.bound > v.spec  # H's release to L's completion, past one period
+
+
+def test_undecided_cones_share_the_budget_of_the_falsifying_search():
+    """Two independent chains, each undecided (an execution-time range in its cone): the falsifying
+    search of the first cone does not use up the budget of the second."""
+    ts, ls, cs = [], [], []
+    for n, core in ((1, "c0"), (2, "c1")):
+        ts += [task(f"c{n}.H", timer(10), wcet=5 * MS, bcet=4 * MS, prio=2, core=core, produces=["o"]),
+               task(f"m{n}.L", trigger("i"), wcet=MS, prio=1, core=core, reads=["i"])]
+        ls.append(link(f"c{n}.o", f"m{n}.i", ts))
+    for n in (1, 2):
+        cs.append(chain(f"ctl{n}", [f"c{n}.H", f"m{n}.L"], ls, reaction_time=F(18, 1000)))
+    result = prove(system(ts, ls, cs), budget=100)
+    verdicts = [result.verdict(f"ctl{n}", "reaction_time") for n in (1, 2)]
+    assert [v.status for v in verdicts] == ["undecided", "undecided"]
+    assert [v.explored for v in verdicts] == [50, 50] and result.explored == 100

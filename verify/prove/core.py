@@ -70,23 +70,27 @@ def _decide(model: SystemModel, open_: list[tuple[int, Obligation]], budget: Bud
     found there is replayed on the whole system (if one did not carry over, a bug, the group is decided
     again on the whole system)."""
     out: dict[int, Verdict] = {}
-    for sub, targets in slices(model, sorted({ob.target for _, ob in open_})):
+    groups = slices(model, sorted({ob.target for _, ob in open_}))
+    for k, (sub, targets) in enumerate(groups):
         members = set(targets)
         items = [(i, ob) for i, ob in open_ if ob.target in members]
-        decided = _decide_slice(sub, items, budget, rlimit, use_z3, jobs)
+        decided = _decide_slice(sub, items, budget, rlimit, use_z3, jobs, len(groups) - k)
         if sub is not model:
             try:
                 for v in decided.values():
                     if v.counterexample is not None:
                         check_carries_over(model, v.counterexample)
             except SliceMismatch:  # a bug: decide these on the whole system rather than trust the cone
-                decided = _decide_slice(model, items, budget, rlimit, use_z3, jobs)
+                decided = _decide_slice(model, items, budget, rlimit, use_z3, jobs, len(groups) - k)
         out.update(decided)
     return out
 
 
 def _decide_slice(model: SystemModel, open_: list[tuple[int, Obligation]], budget: Budget, rlimit: int,
-                  use_z3: bool, jobs: int | None = None) -> dict[int, Verdict]:
+                  use_z3: bool, jobs: int | None = None, groups_left: int = 1) -> dict[int, Verdict]:
+    """The obligations of one cone. An exact search may use all the budget that is left; a falsifying
+    search, which uses whatever it gets unless it refutes everything, gets an equal share of it with
+    the ``groups_left − 1`` groups after this one."""
     targets = sorted({ob.target for _, ob in open_})
     want_best = frozenset(ob.target for _, ob in open_ if ob.kind == "jitter")
     reason = exact_class(model)
@@ -119,7 +123,7 @@ def _decide_slice(model: SystemModel, open_: list[tuple[int, Obligation]], budge
         else:
             out[i] = v
     if leftover:
-        out.update(_by_search(model, leftover, budget, reason or "", exact))
+        out.update(_by_search(model, leftover, budget, reason or "", exact, groups_left))
     return out
 
 
@@ -166,7 +170,7 @@ def _concrete(model: SystemModel, ob: Obligation, exact: ExactResult, budget: Bu
 
 
 def _by_search(model: SystemModel, items: list[tuple[int, Obligation]], budget: Budget, reason: str,
-               exact: ExactResult | None) -> dict[int, Verdict]:
+               exact: ExactResult | None, groups_left: int = 1) -> dict[int, Verdict]:
     goals = []
     for _, ob in items:
         if ob.kind == "jitter":
@@ -174,7 +178,11 @@ def _by_search(model: SystemModel, items: list[tuple[int, Obligation]], budget: 
         else:
             goals.append(Goal(ob.target, above=ob.spec))
     span = max((ob.bound for _, ob in items if ob.bound is not None), default=None)
-    found = search(model, goals, budget, search_horizon(model, span)) if not budget.expired() else None
+    found = None
+    if not budget.expired():
+        share = budget.share(groups_left)
+        found = search(model, goals, share, search_horizon(model, span))
+        budget.charge(share)
     out: dict[int, Verdict] = {}
     for i, ob in items:
         cex = _search_cex(ob, found) if found is not None else None

@@ -51,6 +51,15 @@ class Budget:
     def expired(self) -> bool:
         return self.deadline is not None and time.monotonic() > self.deadline
 
+    def share(self, parts: int) -> "Budget":
+        """A budget of ``1/parts`` of what is left (at least one scenario if any is left), with the
+        same deadline; ``charge`` its use back to this one."""
+        return Budget(max(1, self.left // parts) if self.left else 0, self.deadline)
+
+    def charge(self, other: "Budget") -> None:
+        self.left -= other.used
+        self.used += other.used
+
 
 # ------------------------------------------------------------------ the exact class
 
