@@ -16,44 +16,58 @@ only look at the cone.
 """
 from __future__ import annotations
 
+from fractions import Fraction
+
 from ..model import DataTriggered, SystemModel
 from .scenario import Target, _chain_samples, _response_samples, replay
 
 
-def cone(model: SystemModel, roots: list[str]) -> frozenset[str]:
+class ConeIndex:
+    """What ``cone`` needs of a system, built once for all of its obligations: per core its tasks by
+    priority, highest first; per instance its cooperative tasks; per task its trigger writers."""
+
+    def __init__(self, model: SystemModel):
+        self.by_core: dict[str, list] = {}
+        self.siblings: dict[str, list[str]] = {}
+        self.writers: dict[str, list[str]] = {}
+        for t in model.tasks:
+            self.by_core.setdefault(t.core, []).append(t)
+            if t.kind == "cooperative":
+                self.siblings.setdefault(t.instance, []).append(t.id)
+            act = t.activation
+            if isinstance(act, DataTriggered):
+                links = (model.link_into(f"{t.instance}.{m}") for m in act.members)
+                self.writers[t.id] = [lk.writer for lk in links if lk is not None]
+        for tasks in self.by_core.values():
+            tasks.sort(key=lambda t: -t.priority)  # (stable: system order among equals)
+        self.tasks = {t.id: t for t in model.tasks}
+
+    def cone(self, roots: list[str]) -> frozenset[str]:
+        found = set(roots)
+        todo = list(roots)
+        reached = dict.fromkeys(self.by_core, 0)  # per core: how many of its tasks (a prefix) are in
+        while todo:
+            task = self.tasks[todo.pop()]
+            depends = list(self.writers.get(task.id, ()))
+            if task.kind == "cooperative":
+                depends += self.siblings[task.instance]
+            # the tasks of equal or higher priority on the core: a prefix of its list, taken once
+            on_core, k = self.by_core[task.core], reached[task.core]
+            while k < len(on_core) and on_core[k].priority >= task.priority:
+                depends.append(on_core[k].id)
+                k += 1
+            reached[task.core] = k
+            for other in depends:
+                if other not in found:
+                    found.add(other)
+                    todo.append(other)
+        return frozenset(found)
+
+
+def cone(model: SystemModel, roots: list[str], index: ConeIndex | None = None) -> frozenset[str]:
     """The least set of task ids holding ``roots`` and closed under trigger writers, same-core tasks
     of equal or higher priority, and cooperative siblings."""
-    by_core: dict[str, list] = {}
-    siblings: dict[str, list[str]] = {}
-    for t in model.tasks:
-        by_core.setdefault(t.core, []).append(t)
-        if t.kind == "cooperative":
-            siblings.setdefault(t.instance, []).append(t.id)
-    found = set(roots)
-    todo = list(roots)
-    while todo:
-        task = model.task(todo.pop())
-        depends = [t.id for t in by_core[task.core] if t.priority >= task.priority]
-        if task.kind == "cooperative":
-            depends += siblings[task.instance]
-        act = task.activation
-        if isinstance(act, DataTriggered):
-            for member in act.members:
-                link = model.link_into(f"{task.instance}.{member}")
-                if link is not None:
-                    depends.append(link.writer)
-        for other in depends:
-            if other not in found:
-                found.add(other)
-                todo.append(other)
-    return frozenset(found)
-
-
-def roots_of(model: SystemModel, target: Target) -> list[str]:
-    """The tasks an obligation measures: a chain's tasks, or the task of a response time."""
-    if target.kind == "response":
-        return [target.name]
-    return list(next(c for c in model.chains if c.name == target.name).tasks)
+    return (index or ConeIndex(model)).cone(roots)
 
 
 def restrict(model: SystemModel, tasks: frozenset[str], chains: set[str]) -> SystemModel:
@@ -79,8 +93,11 @@ def slices(model: SystemModel, targets: list[Target]) -> list[tuple[SystemModel,
     """The targets grouped by cone, each group with its subsystem (groups in the order of their first
     target; the whole model itself when a cone is the whole system)."""
     groups: dict[frozenset[str], list[Target]] = {}
+    index = ConeIndex(model)
+    chains = {c.name: c for c in model.chains}
     for t in targets:
-        groups.setdefault(cone(model, roots_of(model, t)), []).append(t)
+        roots = [t.name] if t.kind == "response" else list(chains[t.name].tasks)
+        groups.setdefault(index.cone(roots), []).append(t)
     out = []
     for tasks, members in groups.items():
         if len(tasks) == len(model.tasks):
@@ -109,6 +126,9 @@ def check_carries_over(model: SystemModel, cex) -> None:
     for scenario, sample in ((cex.scenario, cex.sample), (cex.best_scenario, cex.best_sample)):
         if scenario is None:
             continue
+        end = getattr(sample, "end", None) if cex.target.kind != "response" else sample.finish
+        if end is not None and end < scenario.horizon:  # the run up to the sample's last event will do
+            scenario = scenario.with_horizon(min(scenario.horizon, end + Fraction(1, 10**12)))
         trace = replay(model, scenario)
         if cex.target.kind == "response":
             samples = _response_samples(trace, cex.target, with_open=True)
