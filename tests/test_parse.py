@@ -260,6 +260,20 @@ def test_unterminated_block_comment_points_at_its_opening():
     assert "*/" in d.help and "//" not in d.help
 
 
+def test_nested_block_comment_is_explained():
+    _, diags = _parse("component A {\n  /* outer /* inner */ still comment */\n  out o : T\n}\n")
+    assert [d.code for d in diags][:1] == ["E001"]
+    d = diags[0]
+    assert (d.span.line, d.span.column) == (2, 24)  # `still`
+    assert "comment opened at 2:3 ended at 2:21" in d.primary.message
+    (inner,) = d.secondary
+    assert (inner.span.line, inner.span.column, inner.span.end_column) == (2, 12, 14)
+    assert "do not nest" in d.help
+    # two comments side by side are no nesting: the usual help
+    _, diags = _parse("component A {\n  /* one */ /* two */ foo\n}\n")
+    assert "nest" not in diags[0].help and not diags[0].secondary
+
+
 def test_unterminated_string():
     _, diags = _parse('import "lib.vfy\ncomponent A { }\n')
     assert [d.code for d in diags] == ["E002"]

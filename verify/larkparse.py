@@ -13,7 +13,7 @@ from lark import Lark, Token
 from lark.lark import PostLex
 from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken
 
-from .diagnostics import DiagnosticSink
+from .diagnostics import DiagnosticSink, Label
 from .source import Span
 
 MAX_SYNTAX_ERRORS = 20
@@ -306,6 +306,32 @@ def _unit_in_other_case(token: Token) -> str | None:
     return next((u for u in _UNITS if u.lower() == word.lower() and u != word), None)
 
 
+def _line_col(text: str, offset: int) -> tuple[int, int]:
+    """The 1-based line and column of ``offset`` (lines end at "\\n" only, as the lexer counts)."""
+    return text.count("\n", 0, offset) + 1, offset - text.rfind("\n", 0, offset)
+
+
+def _nested_comment_before(text: str, tok: Token) -> tuple[int, int, int] | None:
+    """(offsets of) the ``/*`` opening a block comment that ends right before ``tok``, a second ``/*``
+    inside it, and the ``*/`` that closed it — when the text before ``tok`` looks like an attempt at
+    nesting block comments; else None."""
+    start = getattr(tok, "start_pos", None)
+    if start is None:
+        return None
+    before = text[:start].rstrip()
+    if not before.endswith("*/"):
+        return None
+    close = len(before) - 2
+    inner = text.rfind("/*", 0, close)
+    outer = text.rfind("/*", 0, inner) if inner > 0 else -1
+    if outer < 0 or text.find("*/", outer + 2, inner) >= 0:
+        return None
+    line_start = text.rfind("\n", 0, outer) + 1
+    if "//" in text[line_start:outer] or text.count('"', line_start, outer) % 2:
+        return None  # (the first `/*` is in a line comment or a string)
+    return outer, inner, close
+
+
 def _report_unexpected(sink: DiagnosticSink, path: str, err: UnexpectedInput, text: str) -> None:
     if isinstance(err, UnexpectedToken):
         expected = getattr(err, "verify_accepted", None)
@@ -331,6 +357,16 @@ def _report_unexpected(sink: DiagnosticSink, path: str, err: UnexpectedInput, te
         if number is not None:  # a missing unit: point at the number that lacks it
             sink.emit("E001", f"expected a unit after the number `{number[0]}`, found {_describe_found(err.token)}",
                       Span(path, *number[1]), "this number needs a unit", help=_syntax_help(expected, err.token))
+            return
+        nested = _nested_comment_before(text, err.token) if err.token.type != "$END" else None
+        if nested is not None:
+            (o_line, o_col), (i_line, i_col), (c_line, c_col) = (_line_col(text, off) for off in nested)
+            sink.emit("E001", f"expected {_describe_expected(expected)}, found {_describe_found(err.token)}",
+                      span, f"unexpected here: the comment opened at {o_line}:{o_col} ended at {c_line}:{c_col}",
+                      secondary=[Label(Span(path, i_line, i_col, i_line, i_col + 2),
+                                       "this `/*` inside the comment opens no nested one")],
+                      help="block comments do not nest: remove the inner `/*` (or close it before the "
+                           "outer one), or use `//` comments")
             return
         sink.emit(
             "E001",
