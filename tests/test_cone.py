@@ -157,3 +157,29 @@ def test_undecided_cones_share_the_budget_of_the_falsifying_search():
     verdicts = [result.verdict(f"ctl{n}", "reaction_time") for n in (1, 2)]
     assert [v.status for v in verdicts] == ["undecided", "undecided"]
     assert [v.explored for v in verdicts] == [50, 50] and result.explored == 100
+
+
+def test_a_counterexample_that_does_not_carry_over_is_decided_on_the_whole_system(monkeypatch):
+    """The fallback for a bug in the cone (it has none we know of): the group is decided again on the
+    whole system, whose verdicts are those without cones."""
+    import verify.prove.core as core
+    from verify.prove.cone import SliceMismatch
+
+    ts = [task("c.H", timer(10), wcet=5 * MS, prio=2, produces=["o"]),
+          task("m.L", trigger("i"), wcet=MS, prio=1, reads=["i"]),
+          task("o.N", timer(3), wcet=2 * MS, bcet=MS / 2, prio=1, core="c1")]
+    ls = [link("c.o", "m.i", ts)]
+    sysm = system(ts, ls, [chain("ctl", ["c.H", "m.L"], ls, reaction_time=F(15, 1000))])
+    calls = []
+
+    def mismatch(model, cex):
+        calls.append(model)
+        raise SliceMismatch("test")
+
+    monkeypatch.setattr(core, "check_carries_over", mismatch)
+    v = prove(sysm, budget=200).verdict("ctl", "reaction_time")
+    assert calls == [sysm]
+    # on the whole system the range keeps the exact search away: a falsifying search refutes it
+    assert (v.status, v.method) == ("violated", "search")
+    trace = replay(sysm, v.counterexample.scenario)
+    assert v.counterexample.sample in chain_latencies(trace, sysm.chains[0]).reaction_time
