@@ -109,11 +109,7 @@ def slices(model: SystemModel, targets: list[Target]) -> list[tuple[SystemModel,
 
 def subsystem(model: SystemModel, subject: str, name: str) -> SystemModel:
     """The subsystem of the cone of a verdict's subject (a chain, or a task)."""
-    roots = [name] if subject == "task" else list(next(c for c in model.chains if c.name == name).tasks)
-    tasks = cone(model, roots)
-    if len(tasks) == len(model.tasks):
-        return model
-    return restrict(model, tasks, set() if subject == "task" else {name})
+    return slices(model, [Target("response" if subject == "task" else "data_age", name)])[0][0]
 
 
 class SliceMismatch(AssertionError):
