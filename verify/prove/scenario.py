@@ -3,11 +3,13 @@
 A ``ConcreteScenario`` fixes every free choice of one run in a form that can be written to JSON and
 replayed: phases, prescaler counter phases, and per task / per connection *patterns* of execution
 times, delays and sporadic inter-arrival times (job or message ``i`` takes ``pattern[i % len]``).
-``to_sim`` turns it into a ``verify.sim.Scenario``; ``verify.sim.simulate`` is the only evaluator.
+``to_sim`` turns it into a ``verify.sim.Scenario``: ``replay`` runs it in the reference simulator,
+which every counterexample is checked against. The searches evaluate scenarios with the integer
+simulator of ``intsim.py`` (and ``rigid.py`` on top of it), which the tests hold to the reference.
 
 Targets name what is measured: a chain latency (``reaction_time``, ``data_age`` — reduced —,
 ``data_age_nonreduced``; the kinds of ``verify.sim.KINDS``) or a task's response time
-(``response``). ``measure`` runs the simulator to a fixed horizon; ``measure_periodic`` (rigid systems
+(``response``). ``measure`` runs a scenario to a fixed horizon; ``measure_periodic`` (rigid systems
 only, §4.3 of the proof spec) runs until the timing state repeats and the samples are provably
 complete, so that its maxima are those of the infinite run.
 """
@@ -412,7 +414,16 @@ def measure_periodic_reference(model: SystemModel, scenario: ConcreteScenario, t
 def measure(model: SystemModel, scenario: ConcreteScenario, targets: Iterable[Target],
             max_events: int = DEFAULT_MAX_EVENTS) -> Measured:
     """The extremes of every target in the run of ``scenario`` up to its horizon (no completeness
-    claim: what a falsifying search uses)."""
+    claim: what a falsifying search uses), by the integer simulator of ``intsim.py`` (the same run,
+    samples and extremes as ``measure_reference``; tests/test_intsim.py compares the two)."""
+    from .intsim import measure_prefix
+
+    return measure_prefix(model, scenario, tuple(targets), max_events)
+
+
+def measure_reference(model: SystemModel, scenario: ConcreteScenario, targets: Iterable[Target],
+                      max_events: int = DEFAULT_MAX_EVENTS) -> Measured:
+    """``measure`` by the reference simulator ``verify.sim``."""
     trace = replay(model, scenario, max_events)
     values = {t: extremes(trace, model, t, with_open=True) for t in targets}
     return Measured(scenario, values, False, scenario.horizon)

@@ -1,7 +1,8 @@
 """Counterexample timelines: text, JSON and an SVG Gantt chart (specs/proof.md §8).
 
-Every view starts from a ``Counterexample`` and replays its scenario in the reference simulator;
-nothing is drawn that the simulator did not produce. The job chain is found by walking back from
+Every view starts from a ``Counterexample`` and runs its scenario (``intsim.run_trace``, the same
+trace as the reference simulator ``verify.sim`` gives — tests/test_intsim.py — at a fraction of the
+cost on large systems); nothing is drawn that the run did not produce. The job chain is found by walking back from
 the last task's job through the values it read (provenance, specs/timing.md §4).
 """
 from __future__ import annotations
@@ -14,7 +15,7 @@ from ..model import SystemModel
 from ..sim import JobRecord, Message, Trace
 from ..timing.report import exact
 from ..units import fmt_time
-from .scenario import replay
+from .intsim import run_trace
 from .verdict import Verdict
 
 
@@ -41,6 +42,14 @@ def job_chain(model: SystemModel, trace: Trace, chain_name: str, sample) -> list
     return steps
 
 
+def _subjects(model: SystemModel, verdict: Verdict) -> list[str]:
+    """The tasks whose jobs the text and JSON views show: the chain's tasks, or the tasks of the
+    core of the task whose response is shown."""
+    if verdict.subject == "chain":
+        return list(next(c for c in model.chains if c.name == verdict.name).tasks)
+    return [t.id for t in model.tasks_on(model.task(verdict.counterexample.target.name).core)]
+
+
 def _t(x: Fraction | None) -> str:
     return "-" if x is None else fmt_time(x)
 
@@ -51,7 +60,7 @@ def _t(x: Fraction | None) -> str:
 def to_text(model: SystemModel, verdict: Verdict) -> str:
     cex = verdict.counterexample
     assert cex is not None
-    trace = replay(model, cex.scenario)
+    trace = run_trace(model, cex.scenario, tasks=_subjects(model, verdict))
     lines = [f"counterexample: {verdict.label} {fmt_time(cex.latency)} > spec {fmt_time(verdict.spec)} "
              f"(by {verdict.method})",
              f"  scenario: {cex.scenario.summary(model)}; the run lasts {fmt_time(cex.scenario.horizon)}"]
@@ -119,7 +128,7 @@ def to_json(model: SystemModel, verdict: Verdict) -> dict:
     assert cex is not None
     doc = {"target": {"kind": cex.target.kind, "name": cex.target.name}, "latency": exact(cex.latency),
            "spec": exact(verdict.spec), "scenario": cex.scenario.to_json(), "sample": _sample_json(cex.sample)}
-    trace = replay(model, cex.scenario)
+    trace = run_trace(model, cex.scenario, tasks=_subjects(model, verdict))
     if verdict.subject == "chain":
         doc["job_chain"] = [dict(_job_json(st.job), message=None if st.message is None else {
             "source": st.message.source, "target": st.message.target, "index": st.message.index,
@@ -172,21 +181,22 @@ def _chart(model: SystemModel, verdict: Verdict, marker: str = "arrow",
     (without ``xmlns`` when it is to be nested: ``position``)."""
     cex = verdict.counterexample
     assert cex is not None
-    trace = replay(model, cex.scenario)
     s = cex.sample
     if verdict.subject == "chain":
         chain = next(c for c in model.chains if c.name == verdict.name)
-        steps = job_chain(model, trace, verdict.name, s)
-        lo, hi = s.begin, s.end
         cores = {model.task(t).core for t in chain.tasks}
         rows = list(dict.fromkeys(list(chain.tasks) + [t.id for c in sorted(cores) for t in sorted(
             model.tasks_on(c), key=lambda t: -t.priority)]))
+        trace = run_trace(model, cex.scenario, tasks=rows)
+        steps = job_chain(model, trace, verdict.name, s)
+        lo, hi = s.begin, s.end
         highlighted = {(st.job.task, st.job.index) for st in steps}
     else:
+        rows = [t.id for t in sorted(model.tasks_on(model.task(s.task).core), key=lambda t: -t.priority)]
+        trace = run_trace(model, cex.scenario, tasks=rows)
         steps = []
         lo = s.release
         hi = s.finish if s.finish is not None else trace.horizon
-        rows = [t.id for t in sorted(model.tasks_on(model.task(s.task).core), key=lambda t: -t.priority)]
         highlighted = {(s.task, s.index)}
     pad = max((hi - lo) / 10, Fraction(1, 10**6))
     t0, t1 = max(Fraction(0), lo - pad), hi + pad

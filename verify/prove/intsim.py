@@ -1,0 +1,618 @@
+"""Job-level simulation of one concrete scenario in exact integer time (specs/proof.md §4.3, §6).
+
+The searches of ``prove`` run the system many times: the exact enumeration once per representative,
+the falsifying search once per scenario, on systems of up to thousands of tasks. This module runs the
+same job-level semantics as the reference simulator ``verify.sim`` — the same rounds (completions,
+arrivals, releases, dispatch), the same dispatch ranks, cooperative tokens, FIFO back-pressure,
+prescalers, AND freshness, registers and read-at-start, the same event count — but on integers:
+every time is a multiple of one *unit* (the gcd of the model's times and the scenario's choices), so
+no ``Fraction`` is built in the event loop, and each core's ready jobs are a heap by rank, so a
+dispatch costs a few heap operations however many jobs are pending. Every choice of a
+``scenario.ConcreteScenario`` is supported: phases, counter phases, and per-job patterns of
+execution times, delays and sporadic inter-arrival times.
+
+Chain samples and response samples are derived from the integer job records by the rules of
+``verify.sim.chain_latencies`` and converted back to exact ``Fraction`` seconds only for the extremes
+returned. ``verify.sim`` stays the independent oracle: ``tests/test_intsim.py`` compares the two on
+random systems and scenarios (ranges, sporadic sources, compounds, prescalers, cooperative tasks),
+``tests/test_prove.py`` the periodic evaluation of ``rigid.py`` built on this simulator.
+"""
+from __future__ import annotations
+
+import heapq
+from bisect import bisect_left
+from fractions import Fraction
+
+from ..model import DataTriggered, Periodic, SporadicSource, SystemModel
+from ..sim import (DEFAULT_MAX_EVENTS, JobRecord, Message, Sample, ScenarioError, SimulationError,
+                   Trace)
+
+_ARRIVAL, _RELEASE = 1, 2  # heap phases, as in verify.sim
+
+
+def _unit_of(values) -> Fraction:
+    """The greatest d > 0 with every value an integer multiple of d (1 if all are 0)."""
+    from .scenario import frac_gcd
+
+    return frac_gcd(values) or Fraction(1)
+
+
+class _Job:
+    __slots__ = ("task", "index", "release", "remaining", "start", "finish", "reads", "key", "cost")
+
+    def __init__(self, task: int, index: int, release: int, exec_time: int, key: tuple):
+        self.task, self.index, self.release, self.remaining = task, index, release, exec_time
+        self.cost = exec_time
+        self.start = self.finish = None
+        self.reads: tuple | None = None
+        self.key = key
+
+
+
+class IntSimulator:
+    """``verify.sim._Simulator`` in integer multiples of ``unit`` seconds, for one concrete scenario.
+
+    The scenario's choices come as in ``scenario.ConcreteScenario``: ``phases`` (timers without a fixed
+    phase, first releases of sporadic sources), prescaler ``counters``, and per-job patterns —
+    ``exec_times[task]``, ``delays[(source, target)]``, ``interarrivals[task]`` (entry ``i mod len``
+    for job, message or release ``i``); anything left out takes the simulator's default (``wcet``,
+    ``d⁻``, the least inter-arrival time). A choice outside its range raises ``ScenarioError`` when
+    the run first uses it, with the reference simulator's message.
+
+    Messages are tuples ``(connection, index, writer task, writer job)``; a job's ``reads`` are the
+    messages (or None) of its task's read ports in ``read_ports`` order, taken at its start. The ready
+    jobs of a core are a heap by dispatch rank; a completed job leaves it when it reaches the top."""
+
+    def __init__(self, model: SystemModel, phases: dict, counters: dict, max_events: int,
+                 extra_times=(), *, exec_times: dict | None = None, delays: dict | None = None,
+                 interarrivals: dict | None = None):
+        if model.holes:
+            raise ScenarioError(f"cannot simulate unresolved holes: {[t.id for t in model.holes]}")
+        tasks = model.tasks
+        exec_times, delays, interarrivals = exec_times or {}, delays or {}, interarrivals or {}
+        times = [t.wcet for t in tasks] + [lk.delay_min for lk in model.links] + list(phases.values())
+        times += list(extra_times)
+        for t in tasks:
+            act = t.activation
+            if isinstance(act, Periodic):
+                times += [act.period, act.phase or Fraction(0)]
+            elif isinstance(act, SporadicSource):
+                times.append(act.min_interarrival)
+        legal_exec = {t.id: (t.bcet, t.wcet) for t in tasks}
+        legal_delay = {(lk.source, lk.target): (lk.delay_min, lk.delay_max) for lk in model.links}
+        legal_gap = {t.id: (t.activation.min_interarrival, t.activation.max_interarrival) for t in tasks
+                     if isinstance(t.activation, SporadicSource)}
+        for patterns, legal in ((exec_times, legal_exec), (delays, legal_delay), (interarrivals, legal_gap)):
+            for key, pattern in patterns.items():
+                if key in legal:
+                    lo, hi = legal[key]
+                    times += [v for v in pattern if lo <= v <= hi]
+        self.unit = unit = _unit_of(times)
+        self.model, self.max_events = model, max_events
+        self.ids = [t.id for t in tasks]
+        self.index_of = {t.id: i for i, t in enumerate(tasks)}
+        cores = list(dict.fromkeys(t.core for t in tasks))
+        self.core = [cores.index(t.core) for t in tasks]
+        self.ncores = len(cores)
+        self.coop = [t.kind == "cooperative" for t in tasks]
+        self.instance = [t.instance for t in tasks]
+        self.prio = [t.priority for t in tasks]
+        self.exec = [_ticks(t.wcet, unit) for t in tasks]
+        self.exec_pattern = [_pattern(exec_times.get(t.id), legal_exec[t.id], unit) for t in tasks]
+        self.read_ports = [tuple(f"{t.instance}.{r.port}" for r in t.reads) for t in tasks]
+        self.links = list(model.links)
+        self.conn_of = {(lk.source, lk.target): c for c, lk in enumerate(self.links)}
+        self.delay = [_ticks(lk.delay_min, unit) for lk in self.links]
+        self.delay_pattern = [_pattern(delays.get((lk.source, lk.target)), (lk.delay_min, lk.delay_max), unit)
+                              for lk in self.links]
+        self.target = [lk.target for lk in self.links]
+        links_from: dict[str, list[int]] = {}
+        for c, lk in enumerate(self.links):
+            links_from.setdefault(lk.source, []).append(c)
+        self.sends = [tuple(c for port in t.produces for c in links_from.get(f"{t.instance}.{port}", ()))
+                      for t in tasks]
+        self.period: list[int | None] = [None] * len(tasks)
+        self.gap: list[int | None] = [None] * len(tasks)  # a sporadic source's default gap
+        self.gap_pattern: list = [None] * len(tasks)
+        self.triggered: dict[str, list[tuple[int, str]]] = {}
+        self.counter: dict[int, int] = {}
+        self.fresh: dict[int, set] = {}
+        self.prescaler: dict[int, int] = {}
+        self.and_members: dict[int, frozenset] = {}
+        self.now = self.events = self.seq = 0
+        self.heap: list = []
+        self.jobs: list[list[_Job]] = [[] for _ in tasks]
+        self.ready: list[list[tuple[tuple, _Job]]] = [[] for _ in cores]  # heaps of (rank, job)
+        self.running: list[_Job | None] = [None] * len(cores)
+        self.holder: dict[str, _Job] = {}
+        self.registers: dict[str, tuple] = {}
+        self.sent = [0] * len(self.links)
+        self.last_arrival: dict[int, int] = {}
+        self.arrivals: list[tuple[tuple, int]] = []  # (message, arrival time) in arrival order
+        for i, t in enumerate(tasks):
+            self._init_activation(i, t, phases, counters, interarrivals, unit)
+
+    @classmethod
+    def of(cls, model: SystemModel, scenario, max_events: int, extra_times=()) -> "IntSimulator":
+        """The simulator of a ``scenario.ConcreteScenario`` (its horizon is not used here)."""
+        return cls(model, dict(scenario.phases), dict(scenario.counters), max_events, extra_times,
+                   exec_times=dict(scenario.exec_times), delays=dict(scenario.delays),
+                   interarrivals=dict(scenario.interarrivals))
+
+    def _init_activation(self, i: int, t, phases: dict, counters: dict, interarrivals: dict,
+                         unit: Fraction) -> None:
+        act = t.activation
+        if isinstance(act, Periodic):
+            phase = phases.get(t.id)
+            if act.phase is not None:
+                if phase is not None and phase != act.phase:
+                    raise ScenarioError(f"{t.id}: phase is fixed to {act.phase}")
+                phase = act.phase
+            else:
+                phase = Fraction(0) if phase is None else phase
+                if not 0 <= phase < act.period:
+                    raise ScenarioError(f"{t.id}: phase {phase} outside [0, {act.period})")
+            self.period[i] = _ticks(act.period, unit)
+            self._push(_ticks(phase, unit), _RELEASE, i)
+        elif isinstance(act, SporadicSource):
+            phase = phases.get(t.id)
+            phase = Fraction(0) if phase is None else phase
+            if not (0 <= phase < act.max_interarrival or phase == 0):
+                raise ScenarioError(f"{t.id}: first release {phase} outside [0, {act.max_interarrival})")
+            self.gap[i] = _ticks(act.min_interarrival, unit)
+            self.gap_pattern[i] = _pattern(interarrivals.get(t.id),
+                                           (act.min_interarrival, act.max_interarrival), unit)
+            self._push(_ticks(phase, unit), _RELEASE, i)
+        elif isinstance(act, DataTriggered):
+            c = counters.get(t.id, 0)
+            if not 0 <= c < act.prescaler:
+                raise ScenarioError(f"{t.id}: counter phase {c} outside 0..{act.prescaler - 1}")
+            self.counter[i], self.fresh[i], self.prescaler[i] = c, set(), act.prescaler
+            if act.mode == "and":
+                self.and_members[i] = frozenset(act.members)
+            for member in act.members:
+                self.triggered.setdefault(f"{t.instance}.{member}", []).append((i, member))
+
+    # -------------------------------------------------------------- the event loop
+
+    def _push(self, time: int, phase: int, payload) -> None:
+        self.seq += 1
+        heapq.heappush(self.heap, (time, phase, self.seq, payload))
+
+    def _count(self) -> None:
+        self.events += 1
+        if self.events > self.max_events:
+            raise SimulationError(f"more than {self.max_events} events by t={self.now * self.unit} "
+                                  "(a zero-time activation loop, or raise max_events)")
+
+    def run_to(self, until: int) -> None:
+        """Process every event strictly before ``until`` (verify.sim's rounds: completions, arrivals,
+        releases, dispatch), then let time pass up to ``until``."""
+        heap, running, pop = self.heap, self.running, heapq.heappop
+        while True:
+            nxt = heap[0][0] if heap else None
+            now = self.now
+            for job in running:
+                if job is not None:
+                    t = now + job.remaining
+                    if nxt is None or t < nxt:
+                        nxt = t
+            if nxt is None or nxt >= until:
+                break
+            # advance, then complete every running job that is done (in task order)
+            d = nxt - now
+            due = None
+            for job in running:
+                if job is not None:
+                    job.remaining -= d
+                    if job.remaining == 0:
+                        due = [job] if due is None else due + [job]
+            self.now = nxt
+            if due is not None:
+                if len(due) > 1:
+                    due.sort(key=lambda j: j.task)
+                for job in due:
+                    self._count()
+                    self._complete(job)
+            while heap and heap[0][0] == nxt and heap[0][1] == _ARRIVAL:
+                self._count()
+                self._arrive(pop(heap)[3])
+            while heap and heap[0][0] == nxt and heap[0][1] == _RELEASE:
+                self._count()
+                self._timed_release(pop(heap)[3])
+            self._dispatch()
+        if self.now < until:
+            self._advance(until)
+
+    def _advance(self, t: int) -> None:
+        d = t - self.now
+        for job in self.running:
+            if job is not None:
+                job.remaining -= d
+        self.now = t
+
+    def _complete(self, job: _Job) -> None:
+        t = job.task
+        job.finish = self.now  # (it leaves its core's heap once it reaches the top)
+        self.running[self.core[t]] = None
+        inst = self.instance[t]
+        if self.holder.get(inst) is job:
+            del self.holder[inst]
+        for c in self.sends[t]:
+            index = self.sent[c]
+            self.sent[c] = index + 1
+            pattern = self.delay_pattern[c]
+            if pattern is None:
+                delay = self.delay[c]
+            else:
+                delay = pattern[index % len(pattern)]
+                if delay is None:
+                    lk = self.links[c]
+                    raise ScenarioError(f"{lk.source}->{lk.target}#{index}: delay "
+                                        f"{self._illegal(pattern, index)} outside [{lk.delay_min}, {lk.delay_max}]")
+            arrival = self.now + delay
+            last = self.last_arrival.get(c)
+            if last is not None and last > arrival:
+                arrival = last
+            self.last_arrival[c] = arrival
+            self._push(arrival, _ARRIVAL, (c, index, t, job.index))
+
+    def _arrive(self, msg: tuple) -> None:
+        port = self.target[msg[0]]
+        self.registers[port] = msg
+        self.arrivals.append((msg, self.now))
+        for task, member in self.triggered.get(port, ()):
+            members = self.and_members.get(task)
+            if members is not None:
+                fresh = self.fresh[task]
+                fresh.add(member)
+                if not fresh.issuperset(members):
+                    continue
+                fresh.clear()
+            self.counter[task] += 1
+            if self.counter[task] >= self.prescaler[task]:
+                self.counter[task] = 0
+                self._release(task)
+
+    def _timed_release(self, t: int) -> None:
+        job = self._release(t)
+        period = self.period[t]
+        if period is not None:
+            self._push(self.now + period, _RELEASE, t)
+            return
+        pattern, index = self.gap_pattern[t], job.index
+        if pattern is None:
+            gap = self.gap[t]
+        else:
+            gap = pattern[index % len(pattern)]
+            if gap is None:
+                act = self.model.tasks[t].activation
+                raise ScenarioError(f"{self.ids[t]}#{index}: inter-arrival {self._illegal(pattern, index)} outside "
+                                    f"[{act.min_interarrival}, {act.max_interarrival}]")
+        self._push(self.now + gap, _RELEASE, t)
+
+    def _release(self, t: int) -> _Job:
+        jobs = self.jobs[t]
+        index = len(jobs)
+        pattern = self.exec_pattern[t]
+        if pattern is None:
+            cost = self.exec[t]
+        else:
+            cost = pattern[index % len(pattern)]
+            if cost is None:
+                task = self.model.tasks[t]
+                raise ScenarioError(f"{task.id}#{index}: execution time {self._illegal(pattern, index)} outside "
+                                    f"[{task.bcet}, {task.wcet}]")
+        key = (-self.prio[t], self.now, t, index)
+        job = _Job(t, index, self.now, cost, key)
+        jobs.append(job)
+        heapq.heappush(self.ready[self.core[t]], (key, job))
+        return job
+
+    @staticmethod
+    def _illegal(pattern, index: int) -> Fraction:
+        return pattern.values[index % len(pattern)]
+
+    def _best(self, core: int) -> _Job | None:
+        """The best-ranked eligible job of ``core`` (a cooperative job that has not started is not
+        eligible while another job of its instance holds the token)."""
+        heap = self.ready[core]
+        while heap and heap[0][1].finish is not None:
+            heapq.heappop(heap)
+        if not heap:
+            return None
+        job = heap[0][1]
+        if not self.coop[job.task] or job.start is not None or self.instance[job.task] not in self.holder:
+            return job
+        skipped, best = [], None  # rare: ineligible jobs on top
+        while heap:
+            entry = heapq.heappop(heap)
+            job = entry[1]
+            if job.finish is not None:
+                continue
+            skipped.append(entry)
+            if not self.coop[job.task] or job.start is not None or self.instance[job.task] not in self.holder:
+                best = job
+                break
+        for entry in skipped:
+            heapq.heappush(heap, entry)
+        return best
+
+    def _dispatch(self) -> None:
+        """Every core runs its best eligible job (rank ``key``); jobs about to start are started one
+        at a time in rank order (verify.sim ``_dispatch``)."""
+        running, best_of = self.running, self._best
+        while True:
+            starting = None
+            for core in range(self.ncores):
+                best = running[core] = best_of(core)
+                if best is not None and best.start is None and (starting is None or best.key < starting.key):
+                    starting = best
+            if starting is None:
+                return
+            self._start(starting)
+
+    def _start(self, job: _Job) -> None:
+        t = job.task
+        job.start = self.now
+        regs = self.registers
+        job.reads = tuple(map(regs.get, self.read_ports[t]))
+        if self.coop[t]:
+            self.holder[self.instance[t]] = job
+
+    def pending(self, core: int) -> list[_Job]:
+        """The released, uncompleted jobs of ``core``."""
+        return [job for _key, job in self.ready[core] if job.finish is None]
+
+    def trace(self, horizon: Fraction, tasks=None) -> Trace:
+        """The run so far as the reference simulator's ``Trace`` of a run over ``[0, horizon)``
+        (jobs with their reads, arrived messages in arrival order), in ``Fraction`` seconds. With
+        ``tasks`` (task ids), only the jobs of those tasks and the messages they read."""
+        unit, ids, links, jobs = self.unit, self.ids, self.links, self.jobs
+        chosen = range(len(jobs)) if tasks is None else sorted(self.index_of[t] for t in set(tasks))
+        if tasks is None:
+            wanted = None
+        else:
+            wanted = {(m[0], m[1]) for i in chosen for j in jobs[i] if j.reads for m in j.reads if m is not None}
+        messages: dict[tuple[int, int], Message] = {}
+        for (c, index, writer, job), at in self.arrivals:
+            if wanted is None or (c, index) in wanted:
+                lk = links[c]
+                messages[(c, index)] = Message(lk.source, lk.target, index, ids[writer], job,
+                                               jobs[writer][job].finish * unit, at * unit)
+        records = {}
+        for i in chosen:
+            ports = self.read_ports[i]
+            rows = []
+            for j in jobs[i]:
+                reads = () if j.start is None else tuple(dict(zip(ports, (
+                    None if m is None else messages[(m[0], m[1])] for m in j.reads))).items())
+                rows.append(JobRecord(ids[i], j.index, j.release * unit, j.cost * unit,
+                                      None if j.start is None else j.start * unit,
+                                      None if j.finish is None else j.finish * unit, reads))
+            records[ids[i]] = tuple(rows)
+        return Trace(Fraction(horizon), records, tuple(messages.values()))
+
+    # -------------------------------------------------------------- timing state (§4.3)
+
+    def timing_state(self, at: int) -> tuple:
+        """What ``scenario.timing_state`` records, relative to ``at``, with tasks and connections by
+        index (a bijection with their names, so equality of states is the same)."""
+        ready = tuple(sorted((core, tuple(sorted((j.task, j.release - at, j.remaining, j.start is not None)
+                                                 for j in self.pending(core)))) for core in range(self.ncores)))
+        holders = tuple(sorted((inst, j.task, j.release - at) for inst, j in self.holder.items()))
+        heap = tuple(sorted((time - at, phase, payload if phase == _RELEASE else payload[0])
+                            for time, phase, _seq, payload in self.heap))
+        back = tuple(sorted((k, v - at) for k, v in self.last_arrival.items() if v > at))
+        counters = tuple(sorted(self.counter.items()))
+        fresh = tuple(sorted((k, tuple(sorted(v))) for k, v in self.fresh.items()))
+        return ready, holders, heap, back, counters, fresh
+
+
+class _Pattern(tuple):
+    """A per-job pattern in ticks; an entry outside the legal range is None (``values``: as given)."""
+
+    values: tuple
+
+
+def _pattern(values, legal: tuple[Fraction, Fraction], unit: Fraction) -> _Pattern | None:
+    if not values:
+        return None
+    lo, hi = legal
+    pattern = _Pattern(_ticks(v, unit) if lo <= v <= hi else None for v in values)
+    pattern.values = tuple(values)
+    return pattern
+
+
+def _ticks(value: Fraction, unit: Fraction) -> int:
+    q = Fraction(value) / unit
+    assert q.denominator == 1, (value, unit)
+    return q.numerator
+
+
+# ------------------------------------------------------------------ samples (specs/timing.md §4)
+
+
+class ChainSamples:
+    """The samples of one chain in the run so far, as integer tuples ``(value, begin, end, origin,
+    stamp, last)`` in the order ``verify.sim.chain_latencies`` lists them."""
+
+    def __init__(self, sim: IntSimulator, chain):
+        first = sim.index_of[chain.tasks[0]]
+        last = sim.index_of[chain.tasks[-1]]
+        n = len(chain.tasks)
+        # the read-port index, per chain position ≥ 1, of the hop's in-port in that position's task
+        hop_port = {}
+        for pos in range(1, n):
+            port = chain.hops[pos - 1].link.target
+            hop_port[pos] = port
+        jobs = sim.jobs
+        reads = {j.index: j.start for j in jobs[first] if j.start is not None}
+        memo: dict = {}
+        port_index: dict = {}
+
+        def message(pos: int, job: _Job):
+            """What ``job`` (at chain position ``pos`` ≥ 1) read on the hop's in-port, or None."""
+            pk = (job.task, hop_port[pos])
+            idx = port_index.get(pk)
+            if idx is None:
+                ports = sim.read_ports[job.task]
+                idx = port_index[pk] = ports.index(hop_port[pos]) if hop_port[pos] in ports else -1
+            return None if idx < 0 else job.reads[idx]
+
+        def stamp(pos: int, job: _Job):
+            if pos == 0:
+                assert job.start is not None
+                return job.index, job.start
+            key = (pos, job.task, job.index)
+            if key in memo:
+                return memo[key]
+            msg = message(pos, job)
+            value = None if msg is None else stamp(pos - 1, jobs[msg[2]][msg[3]])
+            memo[key] = value
+            return value
+
+        holders = []
+        for job in jobs[last]:
+            if job.finish is None:
+                continue
+            # deep chains: resolve from the first position up so the recursion stays shallow
+            st = _stamp_iterative(stamp, message, job, n - 1, jobs, memo)
+            if st is not None:
+                holders.append((st[1], st[0], job))
+        self.holders = holders
+        self.reads = reads
+
+    def data_age(self) -> list[tuple]:
+        return [(job.finish - s, s, job.finish, k, k, job.index) for s, k, job in self.holders]
+
+    def data_age_nonreduced(self) -> list[tuple]:
+        reads = self.reads
+        return [(job.finish - reads[k - 1], reads[k - 1], job.finish, k - 1, k, job.index)
+                for s, k, job in self.holders if k >= 1]
+
+    def reactions(self) -> tuple[list[tuple], list[tuple]]:
+        holders = sorted(self.holders, key=lambda h: h[0])
+        stamps = [h[0] for h in holders]
+        best_from: list = [None] * len(holders)
+        running = None
+        for i in range(len(holders) - 1, -1, -1):
+            cand = (holders[i][2].finish, holders[i][2].index, holders[i][1])
+            running = cand if running is None or cand < running else running
+            best_from[i] = running
+        react, react_r = [], []
+        reads = self.reads
+        for j in sorted(reads):
+            pos = bisect_left(stamps, reads[j])
+            if j == 0 or pos == len(holders):
+                continue
+            f, last, k = best_from[pos]
+            react.append((f - reads[j - 1], reads[j - 1], f, j - 1, k, last))
+            react_r.append((f - reads[j], reads[j], f, j, k, last))
+        return react, react_r
+
+    def of_kind(self, kind: str) -> list[tuple]:
+        if kind == "data_age":
+            return self.data_age()
+        if kind == "data_age_nonreduced":
+            return self.data_age_nonreduced()
+        react, react_r = self.reactions()
+        return react if kind == "reaction_time" else react_r
+
+
+def _stamp_iterative(stamp, message, job, pos, jobs, memo):
+    """``stamp(pos, job)``, first filling the memo along the chain of writers from the back so
+    that the recursion in ``stamp`` is at most one level deep per call."""
+    path = []
+    cur, p = job, pos
+    while p > 0:
+        if (p, cur.task, cur.index) in memo:
+            break
+        path.append((p, cur))
+        msg = message(p, cur)
+        if msg is None:
+            break
+        cur, p = jobs[msg[2]][msg[3]], p - 1
+    for p, j in reversed(path):
+        stamp(p, j)
+    return stamp(pos, job)
+
+
+def to_sample(t: tuple, unit: Fraction) -> Sample:
+    value, begin, end, origin, stamp, last = t
+    return Sample(value * unit, begin * unit, end * unit, origin, stamp, last)
+
+
+# ------------------------------------------------------------------ one scenario up to its horizon
+
+
+def run_trace(model: SystemModel, scenario, max_events: int = DEFAULT_MAX_EVENTS, tasks=None) -> Trace:
+    """The ``Trace`` of ``scenario`` (a ``scenario.ConcreteScenario``) over ``[0, horizon)``: what
+    ``scenario.replay`` gives by the reference simulator (tests/test_intsim.py compares the two); with
+    ``tasks``, only their jobs and the messages they read (``IntSimulator.trace``)."""
+    sim = IntSimulator.of(model, scenario, max_events, (scenario.horizon,))
+    sim.run_to(_ticks(scenario.horizon, sim.unit))
+    return sim.trace(scenario.horizon, tasks)
+
+
+def target_samples(model: SystemModel, scenario, targets, max_events: int = DEFAULT_MAX_EVENTS) -> dict:
+    """Every sample of each target in the run of ``scenario`` over ``[0, horizon)``, as the reference
+    path lists them (``scenario._chain_samples`` of the trace; for a task ``_response_samples`` with
+    the jobs still open at the horizon, their value ``horizon − release``)."""
+    from .scenario import ResponseSample
+
+    sim = IntSimulator.of(model, scenario, max_events, (scenario.horizon,))
+    unit = sim.unit
+    horizon = _ticks(scenario.horizon, unit)
+    sim.run_to(horizon)
+    chains = {c.name: c for c in model.chains}
+    samples: dict[str, ChainSamples] = {}
+    out = {}
+    for t in targets:
+        if t.kind == "response":
+            out[t] = [ResponseSample((horizon if j.finish is None else j.finish) * unit - j.release * unit, t.name,
+                                     j.index, j.release * unit, None if j.finish is None else j.finish * unit)
+                      for j in sim.jobs[sim.index_of[t.name]]]
+            continue
+        if t.name not in samples:
+            samples[t.name] = ChainSamples(sim, chains[t.name])
+        out[t] = [to_sample(s, unit) for s in samples[t.name].of_kind(t.kind)]
+    return out
+
+
+def measure_prefix(model: SystemModel, scenario, targets, max_events: int):
+    """``scenario.measure`` on integers: the run of ``scenario`` over ``[0, horizon)`` and the
+    extremes of every target in it, jobs still open at the horizon counted with ``horizon − release``
+    (a lower bound on their response). The same run, samples and extremes as the reference path
+    ``scenario.measure_reference`` (tests/test_intsim.py compares the two)."""
+    from .scenario import Extremes, Measured, ResponseSample
+
+    sim = IntSimulator.of(model, scenario, max_events, (scenario.horizon,))
+    unit = sim.unit
+    horizon = _ticks(scenario.horizon, unit)
+    sim.run_to(horizon)
+    chains = {c.name: c for c in model.chains}
+    samples: dict[str, ChainSamples] = {}
+    values = {}
+    for t in targets:
+        if t.kind == "response":
+            found = [(horizon - j.release if j.finish is None else j.finish - j.release, j.index, j.release, j.finish)
+                     for j in sim.jobs[sim.index_of[t.name]]]
+            if not found:
+                values[t] = Extremes(None, None)
+                continue
+            worst = max(found, key=lambda s: (s[0], -s[2]))
+            best = min(found, key=lambda s: (s[0], s[2]))
+            values[t] = Extremes(*(ResponseSample(v * unit, t.name, i, r * unit, None if f is None else f * unit)
+                                   for v, i, r, f in (worst, best)))
+            continue
+        if t.name not in samples:
+            samples[t.name] = ChainSamples(sim, chains[t.name])
+        found = samples[t.name].of_kind(t.kind)
+        if not found:
+            values[t] = Extremes(None, None)
+            continue
+        worst = max(found, key=lambda s: (s[0], -s[1]))
+        best = min(found, key=lambda s: (s[0], s[1]))
+        values[t] = Extremes(to_sample(worst, unit), to_sample(best, unit))
+    return Measured(scenario, values, False, scenario.horizon)
