@@ -26,6 +26,9 @@ took). It may return a dict of result fields (status, evaluations, ...), shown i
 - ``prove-exact``: ``prove`` of one chain (``generate.generate_chain_system``; the size is the number of
   tasks of the chain, its hyperperiod holds up to 1,000 jobs per task) whose specs are below the
   analysis' bound, so the exact search must decide them (target: 10 tasks, up to 10,000 jobs, < 2 s).
+- ``prove-search``: ``prove`` (``--budget`` 50) of a system whose specs are half their reference bound
+  (``tightness`` 1/2), so that many are open after the bound and outside the exact class: the
+  falsifying search over their cones. Some verdict must have been decided by the search.
 - ``synth-feasibility``: ``verify.synth.driver.synthesize(..., objective="none")`` on systems with holes
   (``hole_share`` 1/5, one chain per five tasks); status must be ``sat`` (target: 1,000 tasks < 2 s).
 - ``synth-optimum``: ``synthesize`` with the default objective (utilisation); ``sat`` and proven optimal
@@ -286,6 +289,21 @@ def _register_prove() -> None:
         if inexact:
             raise BenchmarkError(f"chain {inexact[0].kind} was decided by {inexact[0].method}, not by the exact "
                                  "search", result)
+        return result
+
+
+    @stage("prove-search", "verify.prove.prove of a system whose specs are half their reference bound: the "
+           "bound leaves many open, outside the exact class, so the falsifying search runs on their cones",
+           needs=("model",), options={"tightness": Fraction(1, 2)}, params={"budget": 50},
+           quick_params={"budget": 4}, sizes=(100, 1000), quick_sizes=(30,), chains_per_task=ONE_PER_FIVE)
+    def prove_search(inst: Instance, budget: int) -> dict:
+        proof = prove(inst.model, budget=budget)
+        statuses = Counter(v.status for v in proof.verdicts)
+        searched = [v for v in proof.verdicts if v.method == "search"]
+        result = {"verdicts": len(proof.verdicts), "by search": len(searched), "violated": statuses["violated"],
+                  "undecided": statuses["undecided"], "scenarios": proof.explored}
+        if not searched:
+            raise BenchmarkError("the bound or an exact method decided everything: no search ran", result)
         return result
 
 
