@@ -108,11 +108,6 @@ def slices(model: SystemModel, targets: list[Target]) -> list[tuple[SystemModel,
     return out
 
 
-def subsystem(model: SystemModel, subject: str, name: str) -> SystemModel:
-    """The subsystem of the cone of a verdict's subject (a chain, or a task)."""
-    return slices(model, [Target("response" if subject == "task" else "data_age", name)])[0][0]
-
-
 class SliceMismatch(AssertionError):
     """A run of a cone's subsystem whose sample the whole system does not reproduce (a bug)."""
 

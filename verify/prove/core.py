@@ -19,10 +19,10 @@ from ..timing import response_and_chain_bounds
 from ..units import fmt_time
 from . import bound as bound_mod
 from .bound import Obligation
-from .cone import SliceMismatch, check_carries_over, slices, subsystem
+from .cone import SliceMismatch, check_carries_over, slices
 from .exact import (Budget, ExactResult, Goal, approach, count_representatives, enumerate_exact, exact_class,
                     grid_of, search, search_horizon)
-from .scenario import Measured
+from .scenario import Measured, Target
 from .verdict import Counterexample, ProofResult, Verdict
 
 DEFAULT_BUDGET = 1000  # simulated scenarios
@@ -229,6 +229,9 @@ def _method_text(method: str) -> str:
 def diagnostics(model: SystemModel, verdicts) -> list:
     """E501 (violated spec), E503 (deadline miss), E502 (undecided), in verdict order."""
     sink = DiagnosticSink()
+    undecided = sorted({_subject_target(v) for v in verdicts if v.status == "undecided"})
+    # whether an exact search applies to the cone of each undecided subject (§4.0), all cones at once
+    exact_applies = {t: exact_class(sub) is None for sub, members in slices(model, undecided) for t in members}
     for v in verdicts:
         if v.status == "proved":
             continue
@@ -265,8 +268,7 @@ def diagnostics(model: SystemModel, verdicts) -> list:
             notes.append(f"searched {v.explored} scenario{'s' * (v.explored != 1)} without a violation; "
                          f"not exact because {v.note}")
             what = f"chain `{v.name}`: {_spec_text(v)}" if v.subject == "chain" else f"`{v.name}`: {_spec_text(v)}"
-            # an exact search applies to the obligation's cone (§4.0), it did not finish:
-            if exact_class(subsystem(model, v.subject, v.name)) is None:
+            if exact_applies[_subject_target(v)]:  # an exact search applies to the cone, it did not finish
                 sink.emit("E502", f"cannot decide {what} within the budget", v.span,
                           "neither proved nor refuted", notes=notes,
                           help="raise `--budget` (or `--timeout`), or tighten the model (constant execution "
@@ -279,6 +281,11 @@ def diagnostics(model: SystemModel, verdicts) -> list:
                                "cores, cooperative siblings: proof spec §4.0), and the exact search decides "
                                "it; or shorten periods and response times until the bound proves it")
     return sink.items
+
+
+def _subject_target(v: Verdict):
+    """A target with the cone of the verdict's subject (any chain kind stands for its chain)."""
+    return Target("response" if v.subject == "task" else "data_age", v.name)
 
 
 def _sample_text(model: SystemModel, v: Verdict, cex: Counterexample) -> str:
