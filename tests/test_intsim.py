@@ -15,8 +15,8 @@ import verify
 from verify.model import DataTriggered, Periodic, SporadicSource
 from verify.prove import Target
 from verify.prove.intsim import run_trace, target_samples
-from verify.prove.scenario import (ConcreteScenario, _chain_samples, _response_samples, measure, measure_reference,
-                                   replay)
+from verify.prove.scenario import (ConcreteScenario, _chain_samples, _response_samples, extremes, measure,
+                                   measure_reference, replay)
 from verify.sim import ScenarioError, SimulationError
 
 from .test_bounds_vs_simulation import systems
@@ -76,8 +76,10 @@ def test_the_integer_run_is_the_reference_run(text, seed):
     try:
         trace = replay(model, scenario, 20_000)
     except (ScenarioError, SimulationError) as err:
-        with pytest.raises(type(err)):
+        with pytest.raises(type(err)) as fast:
             measure(model, scenario, _targets(model), 20_000)
+        assert str(fast.value).split(" by t=")[0] == str(err).split(" by t=")[0]
+        assert getattr(fast.value, "at", None) == getattr(err, "at", None)
         return
     assert run_trace(model, scenario, 20_000) == trace, text
     some = [tk.id for tk in model.tasks if rng.random() < 0.5]
@@ -138,3 +140,30 @@ def test_many_pending_jobs_on_one_core():
     scenario = ConcreteScenario(horizon=F(40, 1000))
     targets = [Target("response", t.id) for t in model.tasks]
     assert measure(model, scenario, targets) == measure_reference(model, scenario, targets)
+
+
+def test_the_event_cap_stops_both_simulators_at_the_same_instant():
+    model = _pair()
+    scenario = ConcreteScenario(horizon=F(1))
+    with pytest.raises(SimulationError) as ref:
+        replay(model, scenario, 50)
+    with pytest.raises(SimulationError) as fast:
+        measure(model, scenario, [Target("data_age", "ch")], 50)
+    assert fast.value.at == ref.value.at and 0 < ref.value.at < 1
+    shorter = scenario.with_horizon(ref.value.at)  # every event before the cap's instant fits
+    assert measure(model, shorter, [Target("data_age", "ch")], 50) == \
+        measure_reference(model, shorter, [Target("data_age", "ch")], 50)
+
+
+def test_a_search_run_past_the_event_cap_counts_up_to_where_it_stopped():
+    """A falsifying search run with more events than its cap is measured over the prefix the cap
+    allows (a shorter run, hence a real one), instead of being thrown away."""
+    from verify.prove.exact import Budget, Goal, search
+
+    model = _pair()
+    found = search(model, [Goal(Target("data_age", "ch"), above=F(1))], Budget(3), F(1), max_events=50)
+    assert found.explored == 3
+    run = found.worst[Target("data_age", "ch")]
+    assert run.horizon < 1 and run.scenario.horizon == run.horizon
+    trace = replay(model, run.scenario, 50)  # the shorter run replays within the cap
+    assert extremes(trace, model, Target("data_age", "ch")).worst == run.values[Target("data_age", "ch")].worst

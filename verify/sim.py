@@ -58,7 +58,12 @@ class ScenarioError(ValueError):
 
 
 class SimulationError(RuntimeError):
-    """The simulation exceeded its event budget (e.g. a zero-time activation loop)."""
+    """The simulation exceeded its event budget (e.g. a zero-time activation loop); ``at`` is the
+    instant at which it did (every event before it was processed)."""
+
+    def __init__(self, message: str, at: Fraction | None = None):
+        super().__init__(message)
+        self.at = at
 
 
 # ------------------------------------------------------------------ scenarios
@@ -289,7 +294,7 @@ class _Simulator:
         self.events += 1
         if self.events > self.max_events:
             raise SimulationError(f"more than {self.max_events} events by t={self.now} "
-                                  "(a zero-time activation loop, or raise max_events)")
+                                  "(a zero-time activation loop, or raise max_events)", self.now)
 
     def _next_time(self) -> Fraction | None:
         times = [self.now + j.remaining for j in self.running.values() if j is not None]

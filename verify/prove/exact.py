@@ -496,8 +496,15 @@ def search(model: SystemModel, goals: list[Goal], budget: Budget, horizon: Fract
     def run(sc: ConcreteScenario) -> Measured | None:
         try:
             m = measure(model, sc, targets, max_events)
-        except (ScenarioError, SimulationError):
+        except ScenarioError:
             return None
+        except SimulationError as err:  # too many events for the horizon: the run up to where it stopped
+            if not err.at:
+                return None
+            try:
+                m = measure(model, sc.with_horizon(err.at), targets, max_events)
+            except (ScenarioError, SimulationError):
+                return None
         result.explored += 1
         return m
 

@@ -183,7 +183,7 @@ class IntSimulator:
         self.events += 1
         if self.events > self.max_events:
             raise SimulationError(f"more than {self.max_events} events by t={self.now * self.unit} "
-                                  "(a zero-time activation loop, or raise max_events)")
+                                  "(a zero-time activation loop, or raise max_events)", self.now * self.unit)
 
     def run_to(self, until: int) -> None:
         """Process every event strictly before ``until`` (verify.sim's rounds: completions, arrivals,
