@@ -61,11 +61,12 @@ class IntSimulator:
 
     Messages are tuples ``(connection, index, writer task, writer job)``; a job's ``reads`` are the
     messages (or None) of its task's read ports in ``read_ports`` order, taken at its start. The ready
-    jobs of a core are a heap by dispatch rank; a completed job leaves it when it reaches the top."""
+    jobs of a core are a heap by dispatch rank; a completed job leaves it when it reaches the top.
+    With ``log`` the arrivals are recorded too, for ``trace``."""
 
     def __init__(self, model: SystemModel, phases: dict, counters: dict, max_events: int,
                  extra_times=(), *, exec_times: dict | None = None, delays: dict | None = None,
-                 interarrivals: dict | None = None):
+                 interarrivals: dict | None = None, log: bool = False):
         if model.holes:
             raise ScenarioError(f"cannot simulate unresolved holes: {[t.id for t in model.holes]}")
         tasks = model.tasks
@@ -128,16 +129,17 @@ class IntSimulator:
         self.registers: dict[str, tuple] = {}
         self.sent = [0] * len(self.links)
         self.last_arrival: dict[int, int] = {}
-        self.arrivals: list[tuple[tuple, int]] = []  # (message, arrival time) in arrival order
+        self.arrivals: list[tuple[tuple, int]] | None = [] if log else None  # (message, arrival) for ``trace``
         for i, t in enumerate(tasks):
             self._init_activation(i, t, phases, counters, interarrivals, unit)
 
     @classmethod
-    def of(cls, model: SystemModel, scenario, max_events: int, extra_times=()) -> "IntSimulator":
-        """The simulator of a ``scenario.ConcreteScenario`` (its horizon is not used here)."""
+    def of(cls, model: SystemModel, scenario, max_events: int, extra_times=(), log: bool = False) -> "IntSimulator":
+        """The simulator of a ``scenario.ConcreteScenario`` (its horizon is not used here); with
+        ``log`` it records the arrivals that ``trace`` needs."""
         return cls(model, dict(scenario.phases), dict(scenario.counters), max_events, extra_times,
                    exec_times=dict(scenario.exec_times), delays=dict(scenario.delays),
-                   interarrivals=dict(scenario.interarrivals))
+                   interarrivals=dict(scenario.interarrivals), log=log)
 
     def _init_activation(self, i: int, t, phases: dict, counters: dict, interarrivals: dict,
                          unit: Fraction) -> None:
@@ -260,7 +262,8 @@ class IntSimulator:
     def _arrive(self, msg: tuple) -> None:
         port = self.target[msg[0]]
         self.registers[port] = msg
-        self.arrivals.append((msg, self.now))
+        if self.arrivals is not None:
+            self.arrivals.append((msg, self.now))
         for task, member in self.triggered.get(port, ()):
             members = self.and_members.get(task)
             if members is not None:
@@ -341,11 +344,21 @@ class IntSimulator:
     def _dispatch(self) -> None:
         """Every core runs its best eligible job (rank ``key``); jobs about to start are started one
         at a time in rank order (verify.sim ``_dispatch``)."""
-        running, best_of = self.running, self._best
+        running, ready, coop, instance, holder = self.running, self.ready, self.coop, self.instance, self.holder
+        pop = heapq.heappop
         while True:
             starting = None
             for core in range(self.ncores):
-                best = running[core] = best_of(core)
+                heap = ready[core]  # (``_best``, its common case inlined: the top is eligible)
+                while heap and heap[0][1].finish is not None:
+                    pop(heap)
+                if not heap:
+                    running[core] = None
+                    continue
+                best = heap[0][1]
+                if coop[best.task] and best.start is None and instance[best.task] in holder:
+                    best = self._best(core)
+                running[core] = best
                 if best is not None and best.start is None and (starting is None or best.key < starting.key):
                     starting = best
             if starting is None:
@@ -367,7 +380,9 @@ class IntSimulator:
     def trace(self, horizon: Fraction, tasks=None) -> Trace:
         """The run so far as the reference simulator's ``Trace`` of a run over ``[0, horizon)``
         (jobs with their reads, arrived messages in arrival order), in ``Fraction`` seconds. With
-        ``tasks`` (task ids), only the jobs of those tasks and the messages they read."""
+        ``tasks`` (task ids), only the jobs of those tasks and the messages they read. Needs a
+        simulator built with ``log``."""
+        assert self.arrivals is not None, "the simulator was built without log=True"
         unit, ids, links, jobs = self.unit, self.ids, self.links, self.jobs
         chosen = range(len(jobs)) if tasks is None else sorted(self.index_of[t] for t in set(tasks))
         if tasks is None:
@@ -550,7 +565,7 @@ def run_trace(model: SystemModel, scenario, max_events: int = DEFAULT_MAX_EVENTS
     """The ``Trace`` of ``scenario`` (a ``scenario.ConcreteScenario``) over ``[0, horizon)``: what
     ``scenario.replay`` gives by the reference simulator (tests/test_intsim.py compares the two); with
     ``tasks``, only their jobs and the messages they read (``IntSimulator.trace``)."""
-    sim = IntSimulator.of(model, scenario, max_events, (scenario.horizon,))
+    sim = IntSimulator.of(model, scenario, max_events, (scenario.horizon,), log=True)
     sim.run_to(_ticks(scenario.horizon, sim.unit))
     return sim.trace(scenario.horizon, tasks)
 
