@@ -172,14 +172,37 @@ def test_a_counterexample_that_does_not_carry_over_is_decided_on_the_whole_syste
     sysm = system(ts, ls, [chain("ctl", ["c.H", "m.L"], ls, reaction_time=F(15, 1000))])
     calls = []
 
-    def mismatch(model, cex):
+    def mismatch(model, cexs):
         calls.append(model)
         raise SliceMismatch("test")
 
-    monkeypatch.setattr(core, "check_carries_over", mismatch)
+    monkeypatch.setattr(core, "check_all_carry_over", mismatch)
     v = prove(sysm, budget=200).verdict("ctl", "reaction_time")
     assert calls == [sysm]
     # on the whole system the range keeps the exact search away: a falsifying search refutes it
     assert (v.status, v.method) == ("violated", "search")
     trace = replay(sysm, v.counterexample.scenario)
     assert v.counterexample.sample in chain_latencies(trace, sysm.chains[0]).reaction_time
+
+
+def test_the_searches_of_the_cones_give_the_same_verdicts_side_by_side(monkeypatch):
+    """A generated system whose specs are half their reference bound leaves many cones to the
+    falsifying search; run in one process or spread over two (the batches forced parallel), every
+    verdict — status, explored scenarios, counterexample — is the same, and each counterexample
+    replays on the whole system in the reference simulator."""
+    import verify.prove.core as core
+    from benchmarks.generate import generate_system
+
+    model = verify.load_text(generate_system(40, seed=3, chains=8, tightness=F(1, 2)), "w.vfy").system()
+    one = prove(model, budget=30, jobs=1)
+    monkeypatch.setattr(core, "PARALLEL_TASK_SCENARIOS", 0)
+    two = prove(model, budget=30, jobs=2)
+    assert one == two
+    searched = [v for v in one.verdicts if v.method == "search"]
+    assert len({v.name for v in searched}) > core.SEARCH_BATCH  # more cones than one batch
+    assert any(v.status == "violated" for v in searched) and one.explored <= 30
+    for v in searched:
+        if v.counterexample is not None and v.subject == "chain":
+            trace = replay(model, v.counterexample.scenario)
+            c = next(c for c in model.chains if c.name == v.name)
+            assert v.counterexample.sample in getattr(chain_latencies(trace, c), v.kind)

@@ -92,6 +92,8 @@ def test_the_integer_run_is_the_reference_run(text, seed):
         t: _response_samples(trace, t, with_open=True) if t.kind == "response" else list(_chain_samples(trace, model, t))
         for t in targets}, text
     assert measure(model, scenario, targets, 20_000) == measure_reference(model, scenario, targets, 20_000), text
+    cut = measure(model, scenario, targets, 20_000, event_budget=rng.randrange(1, 300))
+    assert cut == measure_reference(model, cut.scenario, targets, 20_000), text
 
 
 def _pair():
@@ -155,9 +157,20 @@ def test_the_event_cap_stops_both_simulators_at_the_same_instant():
         measure_reference(model, shorter, [Target("data_age", "ch")], 50)
 
 
-def test_a_search_run_past_the_event_cap_counts_up_to_where_it_stopped():
-    """A falsifying search run with more events than its cap is measured over the prefix the cap
-    allows (a shorter run, hence a real one), instead of being thrown away."""
+def test_an_event_budget_ends_the_run_at_an_instant():
+    """``measure`` with an event budget: the run ends at the first instant reached with that many
+    events processed, before any event of it, and is the reference run with that horizon."""
+    model = _pair()
+    targets = [Target("data_age", "ch"), Target("response", "a.A"), Target("response", "b.B")]
+    m = measure(model, ConcreteScenario(horizon=F(1)), targets, event_budget=50)
+    assert 0 < m.horizon < 1 and m.scenario.horizon == m.horizon
+    assert m == measure_reference(model, m.scenario, targets)
+    assert m.horizon > measure(model, ConcreteScenario(horizon=F(1)), targets, event_budget=40).horizon
+
+
+def test_a_search_run_past_its_event_budget_counts_up_to_where_it_stopped():
+    """A falsifying search run with more events than its budget is measured over the prefix the
+    budget allows (a shorter run, hence a real one) instead of being thrown away."""
     from verify.prove.exact import Budget, Goal, search
 
     model = _pair()
@@ -165,5 +178,5 @@ def test_a_search_run_past_the_event_cap_counts_up_to_where_it_stopped():
     assert found.explored == 3
     run = found.worst[Target("data_age", "ch")]
     assert run.horizon < 1 and run.scenario.horizon == run.horizon
-    trace = replay(model, run.scenario, 50)  # the shorter run replays within the cap
+    trace = replay(model, run.scenario)  # the shorter run replays in the reference simulator
     assert extremes(trace, model, Target("data_age", "ch")).worst == run.values[Target("data_age", "ch")].worst

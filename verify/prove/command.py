@@ -37,8 +37,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--timeout", metavar="S", type=float, default=None,
                    help="wall-clock limit in seconds for the searches (default: none, fully deterministic)")
     p.add_argument("--jobs", metavar="N", type=int, default=0,
-                   help="processes a large exact enumeration may use (default 0: every available CPU; "
-                        "the result is the same for any N)")
+                   help="processes a large exact enumeration or large falsifying searches may use (default 0: "
+                        "every available CPU; the result is the same for any N)")
     p.add_argument("--data-age", choices=("reduced", "non-reduced"), default="reduced",
                    help="data-age variant checked by data_age and jitter specs")
     p.add_argument("-o", "--output", metavar="OUT", help="write the report to OUT instead of standard output")

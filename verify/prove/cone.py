@@ -112,16 +112,22 @@ class SliceMismatch(AssertionError):
     """A run of a cone's subsystem whose sample the whole system does not reproduce (a bug)."""
 
 
-def check_carries_over(model: SystemModel, cex) -> None:
-    """Replay a counterexample found on a subsystem on the whole ``model``: the same scenario (tasks
-    outside the cone take the simulator's defaults) must hold the same sample(s). The run is the
-    integer simulator's (``intsim.target_samples``: the samples the reference simulator's trace
-    gives, at a fraction of its cost on a large system)."""
-    for scenario, sample in ((cex.scenario, cex.sample), (cex.best_scenario, cex.best_sample)):
-        if scenario is None:
-            continue
-        end = getattr(sample, "end", None) if cex.target.kind != "response" else sample.finish
-        if end is not None and end < scenario.horizon:  # the run up to the sample's last event will do
-            scenario = scenario.with_horizon(min(scenario.horizon, end + Fraction(1, 10**12)))
-        if sample not in target_samples(model, scenario, [cex.target])[cex.target]:
-            raise SliceMismatch(f"the run of the cone of {cex.target} does not carry over to `{model.name}`")
+def check_all_carry_over(model: SystemModel, cexs) -> None:
+    """Replay counterexamples found on a subsystem on the whole ``model``: the same scenario (tasks
+    outside the cone take the simulator's defaults) must hold the same sample(s). One run of the
+    whole system per distinct scenario, up to the last sample it must hold, by the integer simulator
+    (``intsim.target_samples``: the samples the reference simulator's trace gives, at a fraction of
+    its cost on a large system); ``SliceMismatch`` if a sample is missing."""
+    wanted: dict = {}  # scenario -> [(target, sample)]
+    for cex in cexs:
+        for scenario, sample in ((cex.scenario, cex.sample), (cex.best_scenario, cex.best_sample)):
+            if scenario is not None:
+                wanted.setdefault(scenario, []).append((cex.target, sample))
+    for scenario, pairs in wanted.items():
+        ends = [getattr(s, "end", None) if t.kind != "response" else s.finish for t, s in pairs]
+        if all(end is not None for end in ends):  # the run up to the last sample's last event will do
+            scenario = scenario.with_horizon(min(scenario.horizon, max(ends) + Fraction(1, 10**12)))
+        samples = target_samples(model, scenario, sorted({t for t, _ in pairs}))
+        for target, sample in pairs:
+            if sample not in samples[target]:
+                raise SliceMismatch(f"the run of the cone of {target} does not carry over to `{model.name}`")

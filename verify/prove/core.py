@@ -10,6 +10,7 @@ violation but never proves.
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
 from fractions import Fraction
 
 from ..diagnostics import DiagnosticSink, Label
@@ -19,9 +20,10 @@ from ..timing import response_and_chain_bounds
 from ..units import fmt_time
 from . import bound as bound_mod
 from .bound import Obligation
-from .cone import SliceMismatch, check_carries_over, slices
+from .cone import SliceMismatch, check_all_carry_over, slices
 from .exact import (Budget, ExactResult, Goal, approach, count_representatives, enumerate_exact, exact_class,
                     grid_of, search, search_horizon)
+from .parallel import ordered_map, resolve_workers
 from .scenario import Measured, Target
 from .verdict import Counterexample, ProofResult, Verdict
 
@@ -37,8 +39,8 @@ def prove(model: SystemModel, *, budget: int = DEFAULT_BUDGET, rlimit: int = DEF
     ``budget`` bounds the number of simulated scenarios, ``rlimit`` the resources of the Z3 search (all
     its queries together);
     ``timeout`` (seconds, wall clock) is off unless given; ``jobs`` processes may share a large
-    exact enumeration (None: every available CPU). Deterministic for fixed arguments other than
-    ``jobs``, which never changes the result."""
+    exact enumeration or a batch of large falsifying searches (None: every available CPU).
+    Deterministic for fixed arguments other than ``jobs``, which never changes the result."""
     if model.holes:
         raise ValueError("prove needs a configured system: use verify.api.require_configured first")
     with paused_gc():  # (the searches below run with the collector as the caller has it)
@@ -63,34 +65,116 @@ def prove(model: SystemModel, *, budget: int = DEFAULT_BUDGET, rlimit: int = DEF
 # ------------------------------------------------------------------ deciding what the bound left open
 
 
+#: the falsifying searches of this many cones get their shares of the budget together (and may run
+#: side by side): what one of them leaves goes to the cones after the batch; the batch is fixed, so
+#: verdicts do not depend on ``jobs``
+SEARCH_BATCH = 4
+#: a batch whose shares times cone sizes reach this many task-scenarios is spread over ``jobs``
+#: processes (below it, forking would cost more than it saves)
+PARALLEL_TASK_SCENARIOS = 5000
+
+
 def _decide(model: SystemModel, open_: list[tuple[int, Obligation]], budget: Budget, rlimit: int,
             use_z3: bool, jobs: int | None = None) -> dict[int, Verdict]:
-    """Decide the obligations the bound left open, cone by cone (proof spec §4.0): each group of
-    obligations with the same cone is searched on the subsystem of its cone, and every counterexample
-    found there is replayed on the whole system (if one did not carry over, a bug, the group is decided
-    again on the whole system)."""
+    """Decide the obligations the bound left open, cone by cone (proof spec §3, §4.0): first the
+    exact methods, each group of obligations with the same cone on the subsystem of its cone; then
+    the falsifying searches of what they left (``_search_all``). Every counterexample found on a
+    subsystem is replayed on the whole system; if one did not carry over (a bug), its obligations are
+    decided again on the whole system."""
     out: dict[int, Verdict] = {}
-    groups = slices(model, sorted({ob.target for _, ob in open_}))
-    for k, (sub, targets) in enumerate(groups):
+    pending: list[tuple[SystemModel, list[_Left]]] = []
+    for sub, targets in slices(model, sorted({ob.target for _, ob in open_})):
         members = set(targets)
         items = [(i, ob) for i, ob in open_ if ob.target in members]
-        decided = _decide_slice(sub, items, budget, rlimit, use_z3, jobs, len(groups) - k)
-        if sub is not model:
-            try:
-                for v in decided.values():
-                    if v.counterexample is not None:
-                        check_carries_over(model, v.counterexample)
-            except SliceMismatch:  # a bug: decide these on the whole system rather than trust the cone
-                decided = _decide_slice(model, items, budget, rlimit, use_z3, jobs, len(groups) - k)
+        decided, rest = _decide_exactly(sub, items, budget, rlimit, use_z3, jobs)
+        if sub is not model and not _carries_over(model, decided):
+            decided, rest = _decide_exactly(model, items, budget, rlimit, use_z3, jobs)
+            sub = model
         out.update(decided)
+        if rest:
+            pending.append((sub, rest))
+    out.update(_search_all(model, pending, budget, jobs))
     return out
 
 
-def _decide_slice(model: SystemModel, open_: list[tuple[int, Obligation]], budget: Budget, rlimit: int,
-                  use_z3: bool, jobs: int | None = None, groups_left: int = 1) -> dict[int, Verdict]:
-    """The obligations of one cone. An exact search may use all the budget that is left; a falsifying
-    search, which uses whatever it gets unless it refutes everything, gets an equal share of it with
-    the ``groups_left − 1`` groups after this one."""
+@dataclass(frozen=True)
+class _Left:
+    """An obligation the exact methods of its cone left to the falsifying search, and why."""
+
+    i: int
+    ob: Obligation
+    reason: str
+    explored: int  # scenarios the exact search of its cone simulated
+
+
+def _carries_over(model: SystemModel, decided: dict[int, Verdict]) -> bool:
+    """Every counterexample of ``decided`` (found on a subsystem) holds on the whole ``model``."""
+    try:
+        check_all_carry_over(model, [v.counterexample for v in decided.values() if v.counterexample is not None])
+    except SliceMismatch:
+        return False
+    return True
+
+
+def _search_all(model: SystemModel, pending: list[tuple[SystemModel, list[_Left]]], budget: Budget,
+                jobs: int | None) -> dict[int, Verdict]:
+    """One falsifying search per cone, in batches of ``SEARCH_BATCH``: each search of a batch gets
+    an equal share of the budget left with the cones from the batch on (what it does not use, because
+    it refuted everything, goes to the cones after the batch)."""
+    out: dict[int, Verdict] = {}
+    for start in range(0, len(pending), SEARCH_BATCH):
+        batch = pending[start:start + SEARCH_BATCH]
+        parts = len(pending) - start
+        shares = [budget.left // parts + (k < budget.left % parts) for k in range(len(batch))]
+        size = sum(share * len(sub.tasks) for share, (sub, _) in zip(shares, batch))
+        workers = resolve_workers(jobs) if size >= PARALLEL_TASK_SCENARIOS else 1
+        runs = ordered_map(lambda k: _search_cone(batch[k][0], batch[k][1], shares[k], budget.deadline),
+                           range(len(batch)), workers)
+        for (sub, rest), (found, used) in zip(batch, runs):
+            budget.spend(used)
+            verdicts = _search_verdicts(rest, found, budget)
+            if sub is not model and not _carries_over(model, verdicts):
+                found, used = _search_cone(model, rest, budget.left // parts, budget.deadline)
+                budget.spend(used)
+                verdicts = _search_verdicts(rest, found, budget)
+            out.update(verdicts)
+    return out
+
+
+def _search_cone(model: SystemModel, items: list[_Left], share: int, deadline: float | None):
+    """The falsifying search for ``items`` on ``model`` within ``share`` scenarios: (its result or
+    None, the scenarios it used)."""
+    goals = []
+    for r in items:
+        ob = r.ob
+        goals.append(Goal(ob.target, spread=ob.spec) if ob.kind == "jitter" else Goal(ob.target, above=ob.spec))
+    span = max((r.ob.bound for r in items if r.ob.bound is not None), default=None)
+    own = Budget(share, deadline)
+    if own.expired():
+        return None, 0
+    return search(model, goals, own, search_horizon(model, span)), own.used
+
+
+def _search_verdicts(items: list[_Left], found, budget: Budget) -> dict[int, Verdict]:
+    out: dict[int, Verdict] = {}
+    for r in items:
+        ob = r.ob
+        cex = _search_cex(ob, found) if found is not None else None
+        explored = (found.explored if found else 0) + r.explored
+        if cex is not None:
+            out[r.i] = ob.verdict("violated", "search", counterexample=cex, explored=explored)
+        else:
+            why = r.reason or "no exact method applies"
+            if budget.expired():
+                why += "; the time limit was reached"
+            out[r.i] = ob.verdict("undecided", "search", explored=explored, note=why)
+    return out
+
+
+def _decide_exactly(model: SystemModel, open_: list[tuple[int, Obligation]], budget: Budget, rlimit: int,
+                    use_z3: bool, jobs: int | None = None) -> tuple[dict[int, Verdict], list[_Left]]:
+    """The obligations of one cone that an exact method decides (it may use all the budget that is
+    left), and the others with the reason they are not decided exactly."""
     targets = sorted({ob.target for _, ob in open_})
     want_best = frozenset(ob.target for _, ob in open_ if ob.kind == "jitter")
     reason = exact_class(model)
@@ -115,16 +199,14 @@ def _decide_slice(model: SystemModel, open_: list[tuple[int, Obligation]], budge
         elif not exact.complete:
             reason = exact.reason
     out: dict[int, Verdict] = {}
-    leftover: list[tuple[int, Obligation]] = []
+    leftover: list[_Left] = []
     for i, ob in open_:
         v = _from_exact(model, ob, exact, budget) if exact is not None else None
         if v is None:
-            leftover.append((i, ob))
+            leftover.append(_Left(i, ob, reason or "", exact.explored if exact else 0))
         else:
             out[i] = v
-    if leftover:
-        out.update(_by_search(model, leftover, budget, reason or "", exact, groups_left))
-    return out
+    return out, leftover
 
 
 def _from_exact(model: SystemModel, ob: Obligation, exact: ExactResult, budget: Budget) -> Verdict | None:
@@ -167,34 +249,6 @@ def _concrete(model: SystemModel, ob: Obligation, exact: ExactResult, budget: Bu
     if mw is None or mb is None:
         return None
     return Counterexample.of(t, mw, mb)
-
-
-def _by_search(model: SystemModel, items: list[tuple[int, Obligation]], budget: Budget, reason: str,
-               exact: ExactResult | None, groups_left: int = 1) -> dict[int, Verdict]:
-    goals = []
-    for _, ob in items:
-        if ob.kind == "jitter":
-            goals.append(Goal(ob.target, spread=ob.spec))
-        else:
-            goals.append(Goal(ob.target, above=ob.spec))
-    span = max((ob.bound for _, ob in items if ob.bound is not None), default=None)
-    found = None
-    if not budget.expired():
-        share = budget.share(groups_left)
-        found = search(model, goals, share, search_horizon(model, span))
-        budget.charge(share)
-    out: dict[int, Verdict] = {}
-    for i, ob in items:
-        cex = _search_cex(ob, found) if found is not None else None
-        explored = (found.explored if found else 0) + (exact.explored if exact else 0)
-        if cex is not None:
-            out[i] = ob.verdict("violated", "search", counterexample=cex, explored=explored)
-        else:
-            why = reason or "no exact method applies"
-            if budget.expired():
-                why += "; the time limit was reached"
-            out[i] = ob.verdict("undecided", "search", explored=explored, note=why)
-    return out
 
 
 def _search_cex(ob: Obligation, found) -> Counterexample | None:

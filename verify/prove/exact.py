@@ -51,14 +51,10 @@ class Budget:
     def expired(self) -> bool:
         return self.deadline is not None and time.monotonic() > self.deadline
 
-    def share(self, parts: int) -> "Budget":
-        """A budget of ``1/parts`` of what is left (at least one scenario if any is left), with the
-        same deadline; ``charge`` its use back to this one."""
-        return Budget(max(1, self.left // parts) if self.left else 0, self.deadline)
-
-    def charge(self, other: "Budget") -> None:
-        self.left -= other.used
-        self.used += other.used
+    def spend(self, n: int) -> None:
+        """Record ``n`` scenarios used elsewhere (a search on its own share of this budget)."""
+        self.left -= n
+        self.used += n
 
 
 # ------------------------------------------------------------------ the exact class
@@ -494,17 +490,10 @@ def search(model: SystemModel, goals: list[Goal], budget: Budget, horizon: Fract
     from ..sim import ScenarioError, SimulationError
 
     def run(sc: ConcreteScenario) -> Measured | None:
-        try:
-            m = measure(model, sc, targets, max_events)
-        except ScenarioError:
+        try:  # a run with max_events events ends at the next instant (a shorter run, as real as any)
+            m = measure(model, sc, targets, 2 * max_events, event_budget=max_events)
+        except (ScenarioError, SimulationError):  # (past twice that within one instant: a zero-time loop)
             return None
-        except SimulationError as err:  # too many events for the horizon: the run up to where it stopped
-            if not err.at:
-                return None
-            try:
-                m = measure(model, sc.with_horizon(err.at), targets, max_events)
-            except (ScenarioError, SimulationError):
-                return None
         result.explored += 1
         return m
 

@@ -187,9 +187,12 @@ class IntSimulator:
             raise SimulationError(f"more than {self.max_events} events by t={self.now * self.unit} "
                                   "(a zero-time activation loop, or raise max_events)", self.now * self.unit)
 
-    def run_to(self, until: int) -> None:
+    def run_to(self, until: int, event_budget: int | None = None) -> int:
         """Process every event strictly before ``until`` (verify.sim's rounds: completions, arrivals,
-        releases, dispatch), then let time pass up to ``until``."""
+        releases, dispatch), then let time pass up to ``until``; return ``until``. With
+        ``event_budget``, stop instead at the first instant reached with at least that many events
+        processed, before any event of it, and return that instant: the run is then the run over
+        ``[0, instant)``."""
         heap, running, pop = self.heap, self.running, heapq.heappop
         while True:
             nxt = heap[0][0] if heap else None
@@ -200,6 +203,9 @@ class IntSimulator:
                     if nxt is None or t < nxt:
                         nxt = t
             if nxt is None or nxt >= until:
+                break
+            if event_budget is not None and self.events >= event_budget:
+                until = nxt
                 break
             # advance, then complete every running job that is done (in task order)
             d = nxt - now
@@ -225,6 +231,7 @@ class IntSimulator:
             self._dispatch()
         if self.now < until:
             self._advance(until)
+        return until
 
     def _advance(self, t: int) -> None:
         d = t - self.now
@@ -595,17 +602,20 @@ def target_samples(model: SystemModel, scenario, targets, max_events: int = DEFA
     return out
 
 
-def measure_prefix(model: SystemModel, scenario, targets, max_events: int):
+def measure_prefix(model: SystemModel, scenario, targets, max_events: int, event_budget: int | None = None):
     """``scenario.measure`` on integers: the run of ``scenario`` over ``[0, horizon)`` and the
     extremes of every target in it, jobs still open at the horizon counted with ``horizon − release``
     (a lower bound on their response). The same run, samples and extremes as the reference path
-    ``scenario.measure_reference`` (tests/test_intsim.py compares the two)."""
+    ``scenario.measure_reference`` (tests/test_intsim.py compares the two). With ``event_budget``
+    the run may end earlier (``IntSimulator.run_to``); the result then holds the scenario with that
+    shorter horizon."""
     from .scenario import Extremes, Measured, ResponseSample
 
     sim = IntSimulator.of(model, scenario, max_events, (scenario.horizon,))
     unit = sim.unit
-    horizon = _ticks(scenario.horizon, unit)
-    sim.run_to(horizon)
+    horizon = sim.run_to(_ticks(scenario.horizon, unit), event_budget)
+    if horizon * unit != scenario.horizon:
+        scenario = scenario.with_horizon(horizon * unit)
     chains = {c.name: c for c in model.chains}
     samples: dict[str, ChainSamples] = {}
     values = {}

@@ -412,13 +412,15 @@ def measure_periodic_reference(model: SystemModel, scenario: ConcreteScenario, t
 
 
 def measure(model: SystemModel, scenario: ConcreteScenario, targets: Iterable[Target],
-            max_events: int = DEFAULT_MAX_EVENTS) -> Measured:
+            max_events: int = DEFAULT_MAX_EVENTS, event_budget: int | None = None) -> Measured:
     """The extremes of every target in the run of ``scenario`` up to its horizon (no completeness
     claim: what a falsifying search uses), by the integer simulator of ``intsim.py`` (the same run,
-    samples and extremes as ``measure_reference``; tests/test_intsim.py compares the two)."""
+    samples and extremes as ``measure_reference``; tests/test_intsim.py compares the two). With
+    ``event_budget`` the run ends at the first instant reached with that many events processed, if
+    that comes before the horizon (the result holds the scenario with the shorter horizon)."""
     from .intsim import measure_prefix
 
-    return measure_prefix(model, scenario, tuple(targets), max_events)
+    return measure_prefix(model, scenario, tuple(targets), max_events, event_budget)
 
 
 def measure_reference(model: SystemModel, scenario: ConcreteScenario, targets: Iterable[Target],

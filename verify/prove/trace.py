@@ -42,12 +42,16 @@ def job_chain(model: SystemModel, trace: Trace, chain_name: str, sample) -> list
     return steps
 
 
-def _subjects(model: SystemModel, verdict: Verdict) -> list[str]:
-    """The tasks whose jobs the text and JSON views show: the chain's tasks, or the tasks of the
-    core of the task whose response is shown."""
+def _run(model: SystemModel, verdict: Verdict) -> Trace:
+    """The run the text and JSON views show: the jobs of the chain's tasks up to the sample's end
+    (every job and message of the job chain is there by then), or the jobs of the core of the task
+    whose response is shown, over the whole run."""
+    cex = verdict.counterexample
     if verdict.subject == "chain":
-        return list(next(c for c in model.chains if c.name == verdict.name).tasks)
-    return [t.id for t in model.tasks_on(model.task(verdict.counterexample.target.name).core)]
+        tasks = next(c for c in model.chains if c.name == verdict.name).tasks
+        scenario = cex.scenario.with_horizon(min(cex.scenario.horizon, cex.sample.end + Fraction(1, 10**12)))
+        return run_trace(model, scenario, tasks=tasks)
+    return run_trace(model, cex.scenario, tasks=[t.id for t in model.tasks_on(model.task(cex.target.name).core)])
 
 
 def _t(x: Fraction | None) -> str:
@@ -60,7 +64,7 @@ def _t(x: Fraction | None) -> str:
 def to_text(model: SystemModel, verdict: Verdict) -> str:
     cex = verdict.counterexample
     assert cex is not None
-    trace = run_trace(model, cex.scenario, tasks=_subjects(model, verdict))
+    trace = _run(model, verdict)
     lines = [f"counterexample: {verdict.label} {fmt_time(cex.latency)} > spec {fmt_time(verdict.spec)} "
              f"(by {verdict.method})",
              f"  scenario: {cex.scenario.summary(model)}; the run lasts {fmt_time(cex.scenario.horizon)}"]
@@ -128,7 +132,7 @@ def to_json(model: SystemModel, verdict: Verdict) -> dict:
     assert cex is not None
     doc = {"target": {"kind": cex.target.kind, "name": cex.target.name}, "latency": exact(cex.latency),
            "spec": exact(verdict.spec), "scenario": cex.scenario.to_json(), "sample": _sample_json(cex.sample)}
-    trace = run_trace(model, cex.scenario, tasks=_subjects(model, verdict))
+    trace = _run(model, verdict)
     if verdict.subject == "chain":
         doc["job_chain"] = [dict(_job_json(st.job), message=None if st.message is None else {
             "source": st.message.source, "target": st.message.target, "index": st.message.index,
