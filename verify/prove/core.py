@@ -10,6 +10,7 @@ violation but never proves.
 from __future__ import annotations
 
 import time
+from contextlib import closing
 from dataclasses import dataclass
 from fractions import Fraction
 
@@ -128,16 +129,16 @@ def _search_all(model: SystemModel, pending: list[tuple[SystemModel, list[_Left]
         shares = [budget.left // parts + (k < budget.left % parts) for k in range(len(batch))]
         size = sum(share * len(sub.tasks) for share, (sub, _) in zip(shares, batch))
         workers = resolve_workers(jobs) if size >= PARALLEL_TASK_SCENARIOS else 1
-        runs = ordered_map(lambda k: _search_cone(batch[k][0], batch[k][1], shares[k], budget.deadline),
-                           range(len(batch)), workers)
-        for (sub, rest), (found, used) in zip(batch, runs):
-            budget.spend(used)
-            verdicts = _search_verdicts(rest, found, budget)
-            if sub is not model and not _carries_over(model, verdicts):
-                found, used = _search_cone(model, rest, budget.left // parts, budget.deadline)
+        with closing(ordered_map(lambda k: _search_cone(batch[k][0], batch[k][1], shares[k], budget.deadline),
+                                 range(len(batch)), workers)) as runs:  # (closing it stops the workers)
+            for (sub, rest), (found, used) in zip(batch, runs):
                 budget.spend(used)
                 verdicts = _search_verdicts(rest, found, budget)
-            out.update(verdicts)
+                if sub is not model and not _carries_over(model, verdicts):
+                    found, used = _search_cone(model, rest, budget.left // parts, budget.deadline)
+                    budget.spend(used)
+                    verdicts = _search_verdicts(rest, found, budget)
+                out.update(verdicts)
     return out
 
 
