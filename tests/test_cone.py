@@ -145,7 +145,8 @@ def test_a_range_outside_the_cone_no_longer_leaves_a_spec_undecided():
 
 def test_undecided_cones_share_the_budget_of_the_falsifying_search():
     """Two independent chains, each undecided (an execution-time range in its cone): the falsifying
-    search of the first cone does not use up the budget of the second."""
+    search of the first cone does not use up the budget of the second. The two first scenarios run
+    once for both (on the union of the cones); each search then has half of the 98 left."""
     ts, ls, cs = [], [], []
     for n, core in ((1, "c0"), (2, "c1")):
         ts += [task(f"c{n}.H", timer(10), wcet=5 * MS, bcet=4 * MS, prio=2, core=core, produces=["o"]),
@@ -156,7 +157,7 @@ def test_undecided_cones_share_the_budget_of_the_falsifying_search():
     result = prove(system(ts, ls, cs), budget=100)
     verdicts = [result.verdict(f"ctl{n}", "reaction_time") for n in (1, 2)]
     assert [v.status for v in verdicts] == ["undecided", "undecided"]
-    assert [v.explored for v in verdicts] == [50, 50] and result.explored == 100
+    assert [v.explored for v in verdicts] == [2 + 49, 2 + 49] and result.explored == 100
 
 
 def test_a_counterexample_that_does_not_carry_over_is_decided_on_the_whole_system(monkeypatch):
@@ -201,6 +202,26 @@ def test_the_searches_of_the_cones_give_the_same_verdicts_side_by_side(monkeypat
     searched = [v for v in one.verdicts if v.method == "search"]
     assert len({v.name for v in searched}) > core.SEARCH_BATCH  # more cones than one batch
     assert any(v.status == "violated" for v in searched) and one.explored <= 30
+    for v in searched:
+        if v.counterexample is not None and v.subject == "chain":
+            trace = replay(model, v.counterexample.scenario)
+            c = next(c for c in model.chains if c.name == v.name)
+            assert v.counterexample.sample in getattr(chain_latencies(trace, c), v.kind)
+
+
+def test_every_cone_starts_from_the_shared_first_runs():
+    """The first two scenarios of every search (all phases 0 with wcet and d⁺, then with bcet and d⁻)
+    run once on the union of the cones: with a budget of 4 scenarios and more than four cones to
+    search, every searched obligation was still measured on those two runs, and what they refute
+    replays on the whole system."""
+    from benchmarks.generate import generate_system
+
+    model = verify.load_text(generate_system(40, seed=3, chains=8, tightness=F(1, 2)), "w.vfy").system()
+    result = prove(model, budget=4)
+    searched = [v for v in result.verdicts if v.method == "search"]
+    assert len({v.name for v in searched}) > 4 and result.explored <= 4
+    assert all(v.explored >= 2 for v in searched)
+    assert any(v.status == "violated" for v in searched)
     for v in searched:
         if v.counterexample is not None and v.subject == "chain":
             trace = replay(model, v.counterexample.scenario)

@@ -89,8 +89,8 @@ def test_the_integer_run_is_the_reference_run(text, seed):
     assert part.messages == tuple(m for m in trace.messages if m in read), text
     targets = _targets(model)
     assert target_samples(model, scenario, targets, 20_000) == {
-        t: _response_samples(trace, t, with_open=True) if t.kind == "response" else list(_chain_samples(trace, model, t))
-        for t in targets}, text
+        t: _response_samples(trace, t, with_open=True) if t.kind == "response"
+        else list(_chain_samples(trace, model, t)) for t in targets}, text
     assert measure(model, scenario, targets, 20_000) == measure_reference(model, scenario, targets, 20_000), text
     cut = measure(model, scenario, targets, 20_000, event_budget=rng.randrange(1, 300))
     assert cut == measure_reference(model, cut.scenario, targets, 20_000), text

@@ -148,7 +148,7 @@ def _task_proved_by_bound(v: Verdict) -> bool:
 
 
 def to_text(model, proof: ProofResult) -> str:
-    from .trace import to_text as timeline
+    from .trace import Runs, to_text as timeline
 
     counts = {s: sum(v.status == s for v in proof.verdicts) for s in ("proved", "violated", "undecided")}
     lines = [f"system {proof.system}  (proof verify.proof/1; data age {proof.data_age_variant}; "
@@ -173,9 +173,10 @@ def to_text(model, proof: ProofResult) -> str:
         lines.append("  " + "  ".join(c.ljust(w) for c, w in zip(r, widths)).rstrip())
     if collapse:
         lines.append(f"  ... and {tasks_by_bound} task deadlines proved by bound")
+    runs = Runs(model, proof.verdicts)  # (each counterexample scenario run once)
     for v in proof.verdicts:
         if v.counterexample is not None:
-            lines += ["", timeline(model, v)]
+            lines += ["", timeline(model, v, runs)]
     return "\n".join(lines) + "\n"
 
 
@@ -186,20 +187,23 @@ def _location(v: Verdict) -> dict | None:
     return {"file": s.file, "line": s.line, "column": s.column, "end_line": s.end_line, "end_column": s.end_column}
 
 
-def verdict_json(model, v: Verdict) -> dict:
+def verdict_json(model, v: Verdict, runs=None) -> dict:
     from .trace import to_json as cex_json
 
     return {"subject": v.subject, "name": v.name, "kind": v.kind, "variant": v.variant, "spec": exact(v.spec),
             "status": v.status, "method": v.method, "bound": exact(v.bound), "exact": exact(v.exact),
             "exact_best": exact(v.exact_best), "margin": exact(v.margin), "explored": v.explored,
             "note": v.note or None, "location": _location(v),
-            "counterexample": None if v.counterexample is None else cex_json(model, v)}
+            "counterexample": None if v.counterexample is None else cex_json(model, v, runs)}
 
 
 def to_json(model, proof: ProofResult) -> dict:
+    from .trace import Runs
+
+    runs = Runs(model, proof.verdicts)  # (each counterexample scenario run once)
     doc = {"schema": SCHEMA, "system": proof.system, "data_age_variant": proof.data_age_variant,
            "budget": {"scenarios": proof.budget, "simulated": proof.explored},
-           "verdicts": [verdict_json(model, v) for v in proof.verdicts]}
+           "verdicts": [verdict_json(model, v, runs) for v in proof.verdicts]}
     doc["diagnostics"] = diagnostics_json(list(proof.diagnostics))["diagnostics"]
     doc["summary"] = {s: sum(v.status == s for v in proof.verdicts) for s in ("proved", "violated", "undecided")}
     doc["exit_code"] = proof.exit_code

@@ -17,15 +17,16 @@ from fractions import Fraction
 from ..diagnostics import DiagnosticSink, Label
 from ..gcpause import paused_gc
 from ..model import SystemModel
+from ..sim import ScenarioError, SimulationError
 from ..timing import response_and_chain_bounds
 from ..units import fmt_time
 from . import bound as bound_mod
 from .bound import Obligation
-from .cone import SliceMismatch, check_all_carry_over, slices
-from .exact import (Budget, ExactResult, Goal, approach, count_representatives, enumerate_exact, exact_class,
-                    grid_of, search, search_horizon)
+from .cone import SliceMismatch, check_all_carry_over, restrict, slices
+from .exact import (SEARCH_EVENTS, Budget, ExactResult, Goal, approach, count_representatives, enumerate_exact,
+                    exact_class, first_scenarios, grid_of, search, search_horizon)
 from .parallel import ordered_map, resolve_workers
-from .scenario import Measured, Target
+from .scenario import Measured, Target, measure
 from .verdict import Counterexample, ProofResult, Verdict
 
 DEFAULT_BUDGET = 1000  # simulated scenarios
@@ -70,9 +71,12 @@ def prove(model: SystemModel, *, budget: int = DEFAULT_BUDGET, rlimit: int = DEF
 #: side by side): what one of them leaves goes to the cones after the batch; the batch is fixed, so
 #: verdicts do not depend on ``jobs``
 SEARCH_BATCH = 4
-#: a batch whose shares times cone sizes reach this many task-scenarios is spread over ``jobs``
-#: processes (below it, forking would cost more than it saves)
-PARALLEL_TASK_SCENARIOS = 5000
+#: a batch whose shares (plus one) times cone sizes reach this many task-scenarios is spread over
+#: ``jobs`` processes (below it, forking would cost more than it saves)
+PARALLEL_TASK_SCENARIOS = 2000
+#: events after which a run of the first scenarios shared by all searches ends (the union of the
+#: cones can be the whole system, and its runs go to the longest horizon)
+SHARED_EVENTS = 4 * SEARCH_EVENTS
 
 
 def _decide(model: SystemModel, open_: list[tuple[int, Obligation]], budget: Budget, rlimit: int,
@@ -108,13 +112,29 @@ class _Left:
     explored: int  # scenarios the exact search of its cone simulated
 
 
-def _carries_over(model: SystemModel, decided: dict[int, Verdict]) -> bool:
-    """Every counterexample of ``decided`` (found on a subsystem) holds on the whole ``model``."""
+def _carries_over(model: SystemModel, decided: dict[int, Verdict], known: dict | None = None) -> bool:
+    """Every counterexample of ``decided`` (found on a subsystem) holds on the whole ``model``; one
+    whose samples come from ``known`` runs (scenario -> ``Measured``, made on the whole ``model``
+    itself) needs no replay."""
+    cexs = [v.counterexample for v in decided.values()
+            if v.counterexample is not None and not _measured_on(v.counterexample, known or {})]
     try:
-        check_all_carry_over(model, [v.counterexample for v in decided.values() if v.counterexample is not None])
+        check_all_carry_over(model, cexs)
     except SliceMismatch:
         return False
     return True
+
+
+def _measured_on(cex: Counterexample, known: dict) -> bool:
+    """The counterexample's samples are those of runs in ``known``."""
+    worst = known.get(cex.scenario)
+    if worst is None or worst.values.get(cex.target) is None or worst.values[cex.target].worst != cex.sample:
+        return False
+    if cex.best_scenario is None:
+        return True
+    best = known.get(cex.best_scenario)
+    return (best is not None and best.values.get(cex.target) is not None
+            and best.values[cex.target].best == cex.best_sample)
 
 
 def _search_all(model: SystemModel, pending: list[tuple[SystemModel, list[_Left]]], budget: Budget,
@@ -123,37 +143,80 @@ def _search_all(model: SystemModel, pending: list[tuple[SystemModel, list[_Left]
     an equal share of the budget left with the cones from the batch on (what it does not use, because
     it refuted everything, goes to the cones after the batch)."""
     out: dict[int, Verdict] = {}
+    horizons = [search_horizon(sub, max((r.ob.bound for r in rest if r.ob.bound is not None), default=None))
+                for sub, rest in pending]
+    firsts, on_model = ((), False) if len(pending) < 2 else _shared_firsts(model, pending, max(horizons), budget,
+                                                                            jobs)
+    given = [firsts if all(m.horizon >= h for m in firsts) else () for h in horizons]
+    known = {m.scenario: m for m in firsts} if on_model else {}  # runs made on the whole system
     for start in range(0, len(pending), SEARCH_BATCH):
-        batch = pending[start:start + SEARCH_BATCH]
+        batch = range(start, min(start + SEARCH_BATCH, len(pending)))
         parts = len(pending) - start
-        shares = [budget.left // parts + (k < budget.left % parts) for k in range(len(batch))]
-        size = sum(share * len(sub.tasks) for share, (sub, _) in zip(shares, batch))
+        shares = {k: budget.left // parts + (k - start < budget.left % parts) for k in batch}
+        size = sum((shares[k] + 1) * len(pending[k][0].tasks) for k in batch)  # (+1: the carry-over replays)
         workers = resolve_workers(jobs) if size >= PARALLEL_TASK_SCENARIOS else 1
-        with closing(ordered_map(lambda k: _search_cone(batch[k][0], batch[k][1], shares[k], budget.deadline),
-                                 range(len(batch)), workers)) as runs:  # (closing it stops the workers)
-            for (sub, rest), (found, used) in zip(batch, runs):
+
+        def one(k: int):
+            """Cone k's search and the replay of its counterexamples on the whole system (both
+            in a worker when the batch is spread): (verdicts, scenarios used, carried over)."""
+            sub, rest = pending[k]
+            found, used = _search_cone(sub, rest, shares[k], budget.deadline, horizons[k], given[k])
+            verdicts = _search_verdicts(rest, found, budget)
+            return verdicts, used, sub is model or _carries_over(model, verdicts, known)
+
+        with closing(ordered_map(lambda j: one(start + j), range(len(batch)), workers)) as runs:
+            for k, (verdicts, used, carried) in zip(batch, runs):  # (closing the runs stops the workers)
                 budget.spend(used)
-                verdicts = _search_verdicts(rest, found, budget)
-                if sub is not model and not _carries_over(model, verdicts):
-                    found, used = _search_cone(model, rest, budget.left // parts, budget.deadline)
+                if not carried:  # a bug in the cone: search the whole system instead
+                    found, used = _search_cone(model, pending[k][1], budget.left // parts, budget.deadline,
+                                               horizons[k])
                     budget.spend(used)
-                    verdicts = _search_verdicts(rest, found, budget)
+                    verdicts = _search_verdicts(pending[k][1], found, budget)
                 out.update(verdicts)
     return out
 
 
-def _search_cone(model: SystemModel, items: list[_Left], share: int, deadline: float | None):
-    """The falsifying search for ``items`` on ``model`` within ``share`` scenarios: (its result or
-    None, the scenarios it used)."""
+def _shared_firsts(model: SystemModel, pending: list[tuple[SystemModel, list[_Left]]], horizon: Fraction,
+                   budget: Budget, jobs: int | None) -> tuple[tuple[Measured, ...], bool]:
+    """The two scenarios every search starts with (``first_scenarios``: all phases 0, all wcet and
+    d⁺, or all bcet and d⁻) run once, on the union of the cones and up to the longest horizon, for all
+    of them: a run of the union is a run of each cone (§4.0), so two scenarios of the budget stand for
+    two per cone. (The runs, and whether the union is the whole ``model``; no runs when the budget
+    has less than two left or a run fails.)"""
+    tasks = frozenset(t.id for sub, _ in pending for t in sub.tasks)
+    targets = sorted({r.ob.target for _, rest in pending for r in rest})
+    union = model if len(tasks) == len(model.tasks) else restrict(
+        model, tasks, {t.name for t in targets if t.kind != "response"})
+    if budget.left < 2 or budget.expired():
+        return (), False
+    scenarios = first_scenarios(union, horizon)
+    budget.take(len(scenarios))
+
+    def run(k: int) -> Measured | None:
+        try:
+            return measure(union, scenarios[k], targets, 2 * SHARED_EVENTS, event_budget=SHARED_EVENTS)
+        except (ScenarioError, SimulationError):
+            return None
+
+    workers = resolve_workers(jobs) if len(union.tasks) * len(scenarios) >= PARALLEL_TASK_SCENARIOS else 1
+    runs = tuple(ordered_map(run, range(len(scenarios)), workers))
+    if any(m is None for m in runs):
+        return (), False
+    return runs, union is model
+
+
+def _search_cone(model: SystemModel, items: list[_Left], share: int, deadline: float | None, horizon: Fraction,
+                 given: tuple[Measured, ...] = ()):
+    """The falsifying search for ``items`` on ``model`` within ``share`` scenarios (``given``: its
+    first runs, made on the union of the cones): (its result or None, the scenarios it used)."""
     goals = []
     for r in items:
         ob = r.ob
         goals.append(Goal(ob.target, spread=ob.spec) if ob.kind == "jitter" else Goal(ob.target, above=ob.spec))
-    span = max((r.ob.bound for r in items if r.ob.bound is not None), default=None)
     own = Budget(share, deadline)
     if own.expired():
         return None, 0
-    return search(model, goals, own, search_horizon(model, span)), own.used
+    return search(model, goals, own, horizon, given=given), own.used
 
 
 def _search_verdicts(items: list[_Left], found, budget: Budget) -> dict[int, Verdict]:

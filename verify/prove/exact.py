@@ -452,10 +452,23 @@ def _mutate(model: SystemModel, sc: ConcreteScenario, rng: random.Random) -> Con
                             sc.delays, sc.interarrivals)
 
 
+#: events after which a search run ends (at the next instant: the shorter run)
+SEARCH_EVENTS = 400_000
+
+
+def first_scenarios(model: SystemModel, horizon: Fraction) -> list[ConcreteScenario]:
+    """The extremes every search starts with: every phase 0 with wcet and d⁺, then with bcet and d⁻."""
+    return [ConcreteScenario(horizon, (), (), (), tuple(((lk.source, lk.target), (lk.delay_max,))
+                                                        for lk in model.links if lk.delay_min != lk.delay_max)),
+            ConcreteScenario(horizon, (), (), tuple((t.id, (t.bcet,)) for t in model.tasks if t.bcet != t.wcet))]
+
+
 def search(model: SystemModel, goals: list[Goal], budget: Budget, horizon: Fraction, seed: str = "verify-prove",
-           max_events: int = 400_000) -> SearchResult:
+           max_events: int = SEARCH_EVENTS, given: tuple[Measured, ...] = ()) -> SearchResult:
     """Random scenarios, then hill climbing from the best one per goal, until every goal has a
-    violating scenario or the budget is used. Deterministic for a given seed and budget."""
+    violating scenario or the budget is used. Deterministic for a given seed and budget. ``given``:
+    the runs of ``first_scenarios`` made elsewhere — on a system of which this one's tasks are a cone,
+    at least ``horizon`` long — taken instead of simulating them here."""
     rng = random.Random(seed)
     targets = sorted({g.target for g in goals})
     result = SearchResult()
@@ -497,11 +510,10 @@ def search(model: SystemModel, goals: list[Goal], budget: Budget, horizon: Fract
         result.explored += 1
         return m
 
-    # the extremes first: every phase 0 with wcet and d⁺, then with bcet and d⁻
-    firsts = [ConcreteScenario(horizon, (), (), (), tuple(((lk.source, lk.target), (lk.delay_max,))
-                                                           for lk in model.links if lk.delay_min != lk.delay_max)),
-              ConcreteScenario(horizon, (), (), tuple((t.id, (t.bcet,)) for t in model.tasks if t.bcet != t.wcet))]
-    for sc in firsts:
+    for m in given:
+        result.explored += 1
+        consider(m)
+    for sc in () if given else first_scenarios(model, horizon):
         if done() or not budget.take():
             return result
         m = run(sc)
@@ -518,7 +530,8 @@ def search(model: SystemModel, goals: list[Goal], budget: Budget, horizon: Fract
         g = goals[rng.randrange(len(goals))]
         side = "worst" if g.above is not None else "best" if g.below is not None else rng.choice(["worst", "best"])
         base = (result.worst if side == "worst" else result.best).get(g.target)
-        sc = _random_scenario(model, rng, horizon) if base is None else _mutate(model, base.scenario, rng)
+        sc = (_random_scenario(model, rng, horizon) if base is None
+              else _mutate(model, base.scenario.with_horizon(horizon), rng))
         m = run(sc)
         if m is not None:
             consider(m)

@@ -190,9 +190,9 @@ class IntSimulator:
     def run_to(self, until: int, event_budget: int | None = None) -> int:
         """Process every event strictly before ``until`` (verify.sim's rounds: completions, arrivals,
         releases, dispatch), then let time pass up to ``until``; return ``until``. With
-        ``event_budget``, stop instead at the first instant reached with at least that many events
-        processed, before any event of it, and return that instant: the run is then the run over
-        ``[0, instant)``."""
+        ``event_budget``, stop instead at the first new instant reached with at least that many
+        events processed, before any event of it (an instant already begun, e.g. by zero-time jobs,
+        is finished first), and return that instant: the run is then the run over ``[0, instant)``."""
         heap, running, pop = self.heap, self.running, heapq.heappop
         while True:
             nxt = heap[0][0] if heap else None
@@ -204,7 +204,7 @@ class IntSimulator:
                         nxt = t
             if nxt is None or nxt >= until:
                 break
-            if event_budget is not None and self.events >= event_budget:
+            if event_budget is not None and self.events >= event_budget and nxt > now:  # (not within an instant)
                 until = nxt
                 break
             # advance, then complete every running job that is done (in task order)

@@ -42,16 +42,38 @@ def job_chain(model: SystemModel, trace: Trace, chain_name: str, sample) -> list
     return steps
 
 
-def _run(model: SystemModel, verdict: Verdict) -> Trace:
-    """The run the text and JSON views show: the jobs of the chain's tasks up to the sample's end
-    (every job and message of the job chain is there by then), or the jobs of the core of the task
-    whose response is shown, over the whole run."""
-    cex = verdict.counterexample
-    if verdict.subject == "chain":
-        tasks = next(c for c in model.chains if c.name == verdict.name).tasks
-        scenario = cex.scenario.with_horizon(min(cex.scenario.horizon, cex.sample.end + Fraction(1, 10**12)))
-        return run_trace(model, scenario, tasks=tasks)
-    return run_trace(model, cex.scenario, tasks=[t.id for t in model.tasks_on(model.task(cex.target.name).core)])
+class Runs:
+    """The runs the text and JSON views of several counterexamples show, each scenario run once: for
+    chain verdicts up to the last sample's end among those of the scenario (every job and message of
+    a job chain is there by then, and a longer run holds the same records for them), with the jobs
+    of their chains' tasks; for a task's response, the whole run with the jobs of its core."""
+
+    def __init__(self, model: SystemModel, verdicts=()):
+        self.model = model
+        self.chains: dict = {}  # scenario -> (last sample end, tasks)
+        for v in verdicts:
+            if v.counterexample is not None and v.subject == "chain":
+                self._want(v)
+        self.traces: dict = {}
+
+    def _want(self, v: Verdict) -> None:
+        cex = v.counterexample
+        end, tasks = self.chains.get(cex.scenario, (cex.sample.end, ()))
+        chain = next(c for c in self.model.chains if c.name == v.name)
+        self.chains[cex.scenario] = (max(end, cex.sample.end), tuple(dict.fromkeys(tasks + tuple(chain.tasks))))
+
+    def of(self, verdict: Verdict) -> Trace:
+        cex, model = verdict.counterexample, self.model
+        if verdict.subject != "chain":
+            core = model.task(cex.target.name).core
+            return run_trace(model, cex.scenario, tasks=[t.id for t in model.tasks_on(core)])
+        if cex.scenario not in self.chains:
+            self._want(verdict)
+        if cex.scenario not in self.traces:
+            end, tasks = self.chains[cex.scenario]
+            cut = cex.scenario.with_horizon(min(cex.scenario.horizon, end + Fraction(1, 10**12)))
+            self.traces[cex.scenario] = run_trace(model, cut, tasks=tasks)
+        return self.traces[cex.scenario]
 
 
 def _t(x: Fraction | None) -> str:
@@ -61,10 +83,10 @@ def _t(x: Fraction | None) -> str:
 # ------------------------------------------------------------------ text
 
 
-def to_text(model: SystemModel, verdict: Verdict) -> str:
+def to_text(model: SystemModel, verdict: Verdict, runs: Runs | None = None) -> str:
     cex = verdict.counterexample
     assert cex is not None
-    trace = _run(model, verdict)
+    trace = (runs or Runs(model)).of(verdict)
     lines = [f"counterexample: {verdict.label} {fmt_time(cex.latency)} > spec {fmt_time(verdict.spec)} "
              f"(by {verdict.method})",
              f"  scenario: {cex.scenario.summary(model)}; the run lasts {fmt_time(cex.scenario.horizon)}"]
@@ -127,12 +149,12 @@ def _sample_json(s) -> dict:
             "finish": exact(s.finish)}
 
 
-def to_json(model: SystemModel, verdict: Verdict) -> dict:
+def to_json(model: SystemModel, verdict: Verdict, runs: Runs | None = None) -> dict:
     cex = verdict.counterexample
     assert cex is not None
     doc = {"target": {"kind": cex.target.kind, "name": cex.target.name}, "latency": exact(cex.latency),
            "spec": exact(verdict.spec), "scenario": cex.scenario.to_json(), "sample": _sample_json(cex.sample)}
-    trace = _run(model, verdict)
+    trace = (runs or Runs(model)).of(verdict)
     if verdict.subject == "chain":
         doc["job_chain"] = [dict(_job_json(st.job), message=None if st.message is None else {
             "source": st.message.source, "target": st.message.target, "index": st.message.index,
