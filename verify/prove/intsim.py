@@ -587,19 +587,59 @@ def target_samples(model: SystemModel, scenario, targets, max_events: int = DEFA
     unit = sim.unit
     horizon = _ticks(scenario.horizon, unit)
     sim.run_to(horizon)
-    chains = {c.name: c for c in model.chains}
-    samples: dict[str, ChainSamples] = {}
+    chain_samples = _chain_samples_of(sim, model)
     out = {}
     for t in targets:
         if t.kind == "response":
             out[t] = [ResponseSample((horizon if j.finish is None else j.finish) * unit - j.release * unit, t.name,
                                      j.index, j.release * unit, None if j.finish is None else j.finish * unit)
                       for j in sim.jobs[sim.index_of[t.name]]]
-            continue
-        if t.name not in samples:
-            samples[t.name] = ChainSamples(sim, chains[t.name])
-        out[t] = [to_sample(s, unit) for s in samples[t.name].of_kind(t.kind)]
+        else:
+            out[t] = [to_sample(s, unit) for s in chain_samples(t.name).of_kind(t.kind)]
     return out
+
+
+def _chain_samples_of(sim: IntSimulator, model: SystemModel):
+    """``ChainSamples`` of a chain of ``model`` (by name) in the run of ``sim``, each made once."""
+    chains = {c.name: c for c in model.chains}
+    made: dict[str, ChainSamples] = {}
+
+    def chain_samples(name: str) -> ChainSamples:
+        if name not in made:
+            made[name] = ChainSamples(sim, chains[name])
+        return made[name]
+
+    return chain_samples
+
+
+def extremes_of(targets, unit: Fraction, jobs_of, chain_samples, open_until: int | None = None) -> dict:
+    """The ``scenario.Extremes`` of each target from integer job records, in seconds: ``jobs_of(task
+    id)`` gives a task's jobs, ``chain_samples(chain name)`` a chain's ``ChainSamples``. A job not
+    finished is left out, or, with ``open_until`` (ticks), counted with ``open_until − release`` (as
+    ``scenario.extremes`` with ``with_open``). Ties go to the earliest sample, as there."""
+    from .scenario import Extremes, ResponseSample
+
+    values = {}
+    for t in targets:
+        if t.kind == "response":
+            found = [(open_until - j.release if j.finish is None else j.finish - j.release, j.index, j.release,
+                      j.finish) for j in jobs_of(t.name) if j.finish is not None or open_until is not None]
+            if not found:
+                values[t] = Extremes(None, None)
+                continue
+            worst = max(found, key=lambda s: (s[0], -s[2]))
+            best = min(found, key=lambda s: (s[0], s[2]))
+            values[t] = Extremes(*(ResponseSample(v * unit, t.name, i, r * unit, None if f is None else f * unit)
+                                   for v, i, r, f in (worst, best)))
+            continue
+        found = chain_samples(t.name).of_kind(t.kind)
+        if not found:
+            values[t] = Extremes(None, None)
+            continue
+        worst = max(found, key=lambda s: (s[0], -s[1]))
+        best = min(found, key=lambda s: (s[0], s[1]))
+        values[t] = Extremes(to_sample(worst, unit), to_sample(best, unit))
+    return values
 
 
 def measure_prefix(model: SystemModel, scenario, targets, max_events: int, event_budget: int | None = None):
@@ -609,35 +649,13 @@ def measure_prefix(model: SystemModel, scenario, targets, max_events: int, event
     ``scenario.measure_reference`` (tests/test_intsim.py compares the two). With ``event_budget``
     the run may end earlier (``IntSimulator.run_to``); the result then holds the scenario with that
     shorter horizon."""
-    from .scenario import Extremes, Measured, ResponseSample
+    from .scenario import Measured
 
     sim = IntSimulator.of(model, scenario, max_events, (scenario.horizon,))
     unit = sim.unit
     horizon = sim.run_to(_ticks(scenario.horizon, unit), event_budget)
     if horizon * unit != scenario.horizon:
         scenario = scenario.with_horizon(horizon * unit)
-    chains = {c.name: c for c in model.chains}
-    samples: dict[str, ChainSamples] = {}
-    values = {}
-    for t in targets:
-        if t.kind == "response":
-            found = [(horizon - j.release if j.finish is None else j.finish - j.release, j.index, j.release, j.finish)
-                     for j in sim.jobs[sim.index_of[t.name]]]
-            if not found:
-                values[t] = Extremes(None, None)
-                continue
-            worst = max(found, key=lambda s: (s[0], -s[2]))
-            best = min(found, key=lambda s: (s[0], s[2]))
-            values[t] = Extremes(*(ResponseSample(v * unit, t.name, i, r * unit, None if f is None else f * unit)
-                                   for v, i, r, f in (worst, best)))
-            continue
-        if t.name not in samples:
-            samples[t.name] = ChainSamples(sim, chains[t.name])
-        found = samples[t.name].of_kind(t.kind)
-        if not found:
-            values[t] = Extremes(None, None)
-            continue
-        worst = max(found, key=lambda s: (s[0], -s[1]))
-        best = min(found, key=lambda s: (s[0], s[1]))
-        values[t] = Extremes(to_sample(worst, unit), to_sample(best, unit))
+    values = extremes_of(targets, unit, lambda tid: sim.jobs[sim.index_of[tid]], _chain_samples_of(sim, model),
+                         horizon)
     return Measured(scenario, values, False, scenario.horizon)

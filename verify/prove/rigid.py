@@ -15,7 +15,7 @@ from __future__ import annotations
 from fractions import Fraction
 
 from ..model import SporadicSource, SystemModel
-from .intsim import _ARRIVAL, ChainSamples, IntSimulator, _Job, _ticks, to_sample
+from .intsim import _ARRIVAL, ChainSamples, IntSimulator, _Job, _ticks, extremes_of
 
 
 def rigid_scenario(model: SystemModel, scenario) -> bool:
@@ -166,7 +166,7 @@ def measure_rigid(model: SystemModel, scenario, targets, hyper: Fraction, max_pe
     of the periodic timing state at multiples of ``hyper``, the same coverage steps and the same
     extremes, computed on integers. Past the first repetition the run is not simulated again but
     shifted (``PeriodicShift``), which gives the same job records."""
-    from .scenario import Extremes, Measured, ResponseSample
+    from .scenario import Measured
 
     targets = tuple(targets)
     sim = IntSimulator(model, dict(scenario.phases), dict(scenario.counters), max_events, (hyper,))
@@ -213,26 +213,7 @@ def measure_rigid(model: SystemModel, scenario, targets, hyper: Fraction, max_pe
             if horizon >= limit:
                 break
             horizon += period
-    values = {}
-    for t in targets:
-        if t.kind == "response":
-            found = [(j.finish - j.release, j.index, j.release, j.finish)
-                     for j in run.jobs[sim.index_of[t.name]] if j.finish is not None]
-            if not found:
-                values[t] = Extremes(None, None)
-                continue
-            worst = max(found, key=lambda s: (s[0], -s[2]))
-            best = min(found, key=lambda s: (s[0], s[2]))
-            values[t] = Extremes(*(ResponseSample(v * unit, t.name, i, r * unit, f * unit)
-                                   for v, i, r, f in (worst, best)))
-        else:
-            found = chain_samples(t.name).of_kind(t.kind)
-            if not found:
-                values[t] = Extremes(None, None)
-                continue
-            worst = max(found, key=lambda s: (s[0], -s[1]))
-            best = min(found, key=lambda s: (s[0], s[1]))
-            values[t] = Extremes(to_sample(worst, unit), to_sample(best, unit))
+    values = extremes_of(targets, unit, lambda tid: run.jobs[sim.index_of[tid]], chain_samples)
     h = horizon * unit
     return Measured(scenario.with_horizon(h), values, complete, h, None if t0 is None else t0 * unit,
                     None if period is None else period * unit, run.events)
