@@ -17,24 +17,15 @@ from verify.prove import Target
 from verify.prove.intsim import run_trace, target_samples
 from verify.prove.scenario import (ConcreteScenario, _chain_samples, _response_samples, extremes, measure,
                                    measure_reference, replay)
-from verify.sim import ScenarioError, SimulationError
+from verify.sim import ScenarioError, SimulationError, pick_in
 
 from .test_bounds_vs_simulation import systems
 from .test_prove import KINDS
 from .test_timing import MS, chain, link, system, task, timer
 
 
-def _within(rng: random.Random, lo: F, hi: F) -> F:
-    roll = rng.randrange(4)
-    if roll == 0:
-        return F(lo)
-    if roll == 1:
-        return F(hi)
-    return lo + (hi - lo) * F(rng.randrange(7), 6 + rng.randrange(3))
-
-
 def _pattern(rng: random.Random, lo: F, hi: F) -> tuple[F, ...]:
-    return tuple(_within(rng, lo, hi) for _ in range(rng.randrange(1, 5)))
+    return tuple(pick_in(rng, lo, hi) for _ in range(rng.randrange(1, 5)))
 
 
 def concrete_scenario(model, rng: random.Random, horizon: F) -> ConcreteScenario:
