@@ -183,12 +183,12 @@ def _shared_firsts(model: SystemModel, pending: list[tuple[SystemModel, list[_Le
     of them: a run of the union is a run of each cone (§4.0), so two scenarios of the budget stand for
     two per cone. (The runs, and whether the union is the whole ``model``; no runs when the budget
     has less than two left or a run fails.)"""
+    if budget.left < 2 or budget.expired():
+        return (), False
     tasks = frozenset(t.id for sub, _ in pending for t in sub.tasks)
     targets = sorted({r.ob.target for _, rest in pending for r in rest})
     union = model if len(tasks) == len(model.tasks) else restrict(
         model, tasks, {t.name for t in targets if t.kind != "response"})
-    if budget.left < 2 or budget.expired():
-        return (), False
     scenarios = first_scenarios(union, horizon)
     budget.take(len(scenarios))
 
