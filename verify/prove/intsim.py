@@ -254,11 +254,9 @@ class IntSimulator:
             if pattern is None:
                 delay = self.delay[c]
             else:
-                delay = pattern[index % len(pattern)]
-                if delay is None:
-                    lk = self.links[c]
-                    raise ScenarioError(f"{lk.source}->{lk.target}#{index}: delay "
-                                        f"{self._illegal(pattern, index)} outside [{lk.delay_min}, {lk.delay_max}]")
+                lk = self.links[c]
+                delay = pattern.at(index, lambda v: f"{lk.source}->{lk.target}#{index}: delay {v} outside "
+                                                    f"[{lk.delay_min}, {lk.delay_max}]")
             arrival = self.now + delay
             last = self.last_arrival.get(c)
             if last is not None and last > arrival:
@@ -294,11 +292,9 @@ class IntSimulator:
         if pattern is None:
             gap = self.gap[t]
         else:
-            gap = pattern[index % len(pattern)]
-            if gap is None:
-                act = self.model.tasks[t].activation
-                raise ScenarioError(f"{self.ids[t]}#{index}: inter-arrival {self._illegal(pattern, index)} outside "
-                                    f"[{act.min_interarrival}, {act.max_interarrival}]")
+            act = self.model.tasks[t].activation
+            gap = pattern.at(index, lambda v: f"{self.ids[t]}#{index}: inter-arrival {v} outside "
+                                              f"[{act.min_interarrival}, {act.max_interarrival}]")
         self._push(self.now + gap, _RELEASE, t)
 
     def _release(self, t: int) -> _Job:
@@ -308,20 +304,14 @@ class IntSimulator:
         if pattern is None:
             cost = self.exec[t]
         else:
-            cost = pattern[index % len(pattern)]
-            if cost is None:
-                task = self.model.tasks[t]
-                raise ScenarioError(f"{task.id}#{index}: execution time {self._illegal(pattern, index)} outside "
-                                    f"[{task.bcet}, {task.wcet}]")
+            task = self.model.tasks[t]
+            cost = pattern.at(index, lambda v: f"{task.id}#{index}: execution time {v} outside "
+                                               f"[{task.bcet}, {task.wcet}]")
         key = (-self.prio[t], self.now, t, index)
         job = _Job(t, index, self.now, cost, key)
         jobs.append(job)
         heapq.heappush(self.ready[self.core[t]], (key, job))
         return job
-
-    @staticmethod
-    def _illegal(pattern, index: int) -> Fraction:
-        return pattern.values[index % len(pattern)]
 
     def _best(self, core: int) -> _Job | None:
         """The best-ranked eligible job of ``core`` (a cooperative job that has not started is not
@@ -435,6 +425,13 @@ class _Pattern(tuple):
     """A per-job pattern in ticks; an entry outside the legal range is None (``values``: as given)."""
 
     values: tuple
+
+    def at(self, index: int, refusal) -> int:
+        """Entry ``index mod len``, or ``ScenarioError(refusal(value as given))`` if it is out of range."""
+        value = self[index % len(self)]
+        if value is None:
+            raise ScenarioError(refusal(self.values[index % len(self)]))
+        return value
 
 
 def _pattern(values, legal: tuple[Fraction, Fraction], unit: Fraction) -> _Pattern | None:
