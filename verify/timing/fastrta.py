@@ -37,7 +37,7 @@ from typing import Mapping
 from ..construct import direct_constructor
 from ..model import DataTriggered, Hole, SystemModel
 from .rates import EventModel
-from .rta import (MAX_JOBS, MAX_STEPS, ZERO, TaskResponse, carry_in, deadline_of, ratio)
+from .rta import (MAX_JOBS, MAX_STEPS, ZERO, TaskResponse, bcrt, deadline_of, ratio)
 
 _new_response = direct_constructor(TaskResponse)  # (``verify.construct``: one per task)
 
@@ -201,8 +201,10 @@ class Round:
         D would do as well; after the first round D grows only by what tasks with new event models
         bring (last round's D covers the others, and the execution times)."""
         dens = {1 if previous is None else previous.scale}
-        if previous is None:
+        if previous is None:  # what no round changes: execution times and the delays of trigger links
             dens.update(t.wcet.denominator for t in self.tasks)
+            dens.update(t.bcet.denominator for t in self.tasks)
+            dens.update(trigger[1].denominator for trigger in self.static.trigger if trigger is not None)
         for n, e in enumerate(self.events):
             if not kept[n]:
                 for v in (e.period_min, e.jitter_min, self.deadlines[n][0]):
@@ -229,28 +231,34 @@ class Round:
         load = 0 if events.silent else None if period is None else cost * (self.unit // period)
         return _Stream(n, cost, period, self.ticks(jitter), events.silent, load)
 
-    def _causal_paths(self) -> dict[int, list[tuple[int, int, Fraction]]]:
-        """target -> [(source, Π prescalers, L⁺)] for every ``rta.causal_path(source, target)`` that
-        ``_capped_into`` can use: source on target's core at no lower priority. The prescalers enter
-        only as nested ceiling divisions (``rta.Interferer.causal_cap``), and ⌈⌈n/a⌉/b⌉ = ⌈n/(ab)⌉
+    def _causal_paths(self) -> dict[int, list[tuple[int, int, int]]]:
+        """target -> [(source, Π prescalers, L⁺ in ticks)] for every ``rta.causal_path(source, target)``
+        that ``_capped_into`` can use: source on target's core at no lower priority. The prescalers
+        enter only as nested ceiling divisions (``rta.Interferer.causal_cap``), and ⌈⌈n/a⌉/b⌉ = ⌈n/(ab)⌉
         for positive integers, so their product stands for them (a long trigger chain would
-        otherwise hold a tuple per pair of its tasks)."""
+        otherwise hold a tuple per pair of its tasks). L⁺ is a sum of delays and WCRT estimates, all
+        multiples of the tick (``_time_base``), so it is summed in ticks: a trigger chain of n tasks
+        has n²/2 paths, each sum a Python int addition rather than a ``Fraction`` one."""
         capped: dict[int, list] = {}
-        trigger, estimates, tasks = self.static.trigger, self.estimates, self.tasks
+        tasks = self.tasks
+        trigger = [None if t is None else (t[0], self.ticks(t[1]), t[2]) for t in self.static.trigger]
+        estimates = [self.ticks(e) for e in self.estimates]
+        seen = [-1] * len(tasks)  # seen[x] == source: x is on the path walked from source
         for source in range(len(tasks)):
-            product, latency, seen, current, found = 1, ZERO, {source}, source, set()
+            product, latency, current = 1, 0, source
+            seen[source] = source
             core, priority = tasks[source].core, tasks[source].priority
             while trigger[current] is not None:
                 k, delay, writer = trigger[current]
                 product *= k
                 latency += delay
-                if writer not in found:
-                    found.add(writer)
-                    if writer != source and tasks[writer].core == core and priority >= tasks[writer].priority:
-                        capped.setdefault(writer, []).append((source, product, latency))
-                if writer in seen or estimates[writer] is None:
+                if seen[writer] == source:  # a trigger cycle: the path ends (the writer has its tuple)
                     break
-                seen.add(writer)
+                if tasks[writer].core == core and priority >= tasks[writer].priority:
+                    capped.setdefault(writer, []).append((source, product, latency))
+                if estimates[writer] is None:
+                    break
+                seen[writer] = source
                 latency += estimates[writer]
                 current = writer
         return capped
@@ -303,29 +311,46 @@ class Round:
                 and self.estimates[n] == previous.estimates[n] and self.capped.get(n) == previous.capped.get(n))
 
     def _interference(self, n: int, core: _Core, with_self: bool, capped=(), remote=()):
-        """n's interfering streams for ``_lfp``: the core's period groups, the demand (for w > 0, in
-        ticks) to add to theirs (None: nothing), the first stream whose demand is not bounded, and the
-        utilisation of the uncapped ones (None: not bounded). ``core`` holds hp(n) (and n itself if
-        ``with_self``); ``capped``: (stream, cap) for the streams of hp(n) with a causal cap;
+        """n's interfering streams for ``_lfp``: the core's period groups, ``extra_at`` (``extra_at(q)``
+        is the demand, for w > 0 in ticks, to add to theirs in the busy window of q jobs; None:
+        nothing), the first stream whose demand is not bounded, and the utilisation of the uncapped
+        ones (None: not bounded). ``core`` holds hp(n) (and n itself if ``with_self``); ``capped``:
+        (stream, Π prescalers, carry-in) for the streams of hp(n) with a causal cap (``_cap``);
         ``remote``: the remote siblings' token streams."""
         if not with_self and not capped and not remote:  # the common case: hp(n) is what the core holds
             return core.groups, None, core.first_unbounded, None if core.unrated else core.load
-        exclude = [s for s, _ in capped]  # in the core's sums, but not (or not so) among n's streams
+        exclude = [s for s, _, _ in capped]  # in the core's sums, but not (or not so) among n's streams
         if with_self:
             exclude.append(self.streams[n])
-        corrections = [s for s in exclude if not s.silent and s.period is not None and s.jitter is not None]
-        caps = [(s, cap) for s, cap in capped if not s.silent]
+        # a capped stream counted in the core's sums demands min(count, cap)·C instead of count·C: it
+        # takes away max(0, count − cap)·C; an unbounded one is not in the sums and adds cap·C
+        over = [(s.jitter, s.period, s.cost, product, carry) for s, product, carry in capped
+                if not s.silent and s.period is not None and s.jitter is not None]
+        fixed = [(s.cost, product, carry) for s, product, carry in capped
+                 if not s.silent and (s.period is None or s.jitter is None)]
+        own = self.streams[n]
+        minus = ((own.jitter, own.period, own.cost),) if (with_self and not own.silent and own.period is not None
+                                                          and own.jitter is not None) else ()
         tokens = [s for s in remote if not s.silent]
+        plus = [(s.jitter, s.period, s.cost) for s in tokens]  # (only evaluated when all are bounded)
 
-        def extra(w: int) -> int:
-            total = 0
-            for s in corrections:
-                total -= s.count(w) * s.cost
-            for s, cap in caps:
-                total += (cap if s.period is None or s.jitter is None else min(s.count(w), cap)) * s.cost
-            for s in tokens:
-                total += s.count(w) * s.cost
-            return total
+        def extra_at(q: int):
+            caps = [(jitter, period, cost, _cap(product, carry, q)) for jitter, period, cost, product, carry in over]
+            base = sum(_cap(product, carry, q) * cost for cost, product, carry in fixed)
+
+            def extra(w: int) -> int:
+                total = base
+                for jitter, period, cost, cap in caps:
+                    count = -((-w - jitter) // period)
+                    if count > cap:
+                        total -= (count - cap) * cost
+                for jitter, period, cost in minus:
+                    total += ((-w - jitter) // period) * cost
+                for jitter, period, cost in plus:
+                    total -= ((-w - jitter) // period) * cost
+                return total
+
+            return extra
 
         excluded = {s.task for s in exclude}
         bad = [m for m in core.unbounded if m not in excluded]
@@ -342,7 +367,7 @@ class Round:
                 unrated.append(s.task)
             else:
                 load += s.load
-        return core.groups, extra, first_bad, None if unrated else load
+        return core.groups, extra_at, first_bad, None if unrated else load
 
     def _lfp(self, base: int, start: int, groups: list[_Period], extra, first_bad: int | None, load: int | None,
              limit: int | None, left: int) -> tuple[int | None, str | None, int]:
@@ -385,7 +410,9 @@ class Round:
         """``rta.hold_time``: the busy window of one job of n, no blocking, no caps (§6.3)."""
         cost = self.streams[n].cost
         limit = self._hold_limit[n] = self.ticks(self.deadlines[n][0])
-        self._hold_run[n] = self._lfp(cost, cost, *self._interference(n, core, with_self), limit, MAX_STEPS)
+        groups, extra_at, first_bad, load = self._interference(n, core, with_self)
+        self._hold_run[n] = self._lfp(cost, cost, groups, extra_at and extra_at(1), first_bad, load, limit,
+                                      MAX_STEPS)
 
     def hold(self, n: int) -> Fraction | None:
         """Eᵢ, the hold time of task n."""
@@ -395,22 +422,35 @@ class Round:
     def _response(self, n: int, core: _Core, with_self: bool) -> tuple:
         """``rta.response_time`` less what ``responses`` assembles: (R, Q, critical q, failure,
         blocking, remote sibling streams)."""
-        task, events = self.tasks[n], self.events[n]
         blocking, remote = self._blocking(n)
         if blocking is None:
             return None, None, None, "a cooperative sibling's hold time is not bounded", None, remote
         capped = []
-        for source, product, latency in self._capped_into(n):
-            carry = carry_in(task, events, self.estimates[n], latency)
-            if carry is not None:
-                capped.append((self.streams[source], product, carry))
+        paths = self._capped_into(n)
+        if paths:
+            reach = self._carry_reach(n)
+            if reach is not None:
+                base, period = reach
+                streams = self.streams
+                capped = [(streams[source], product, 0 if period is None else (latency + base) // period + 1)
+                          for source, product, latency in paths]
         return self._wcrt(n, core, with_self, blocking, capped, remote) + (blocking, remote)
 
-    def _capped_into(self, n: int):
-        """The causal paths into n from streams of hp(n)."""
-        task = self.tasks[n]
-        return [(m, p, lat) for m, p, lat in self.capped.get(n, ())
-                if m != n and self.tasks[m].core == task.core and self.tasks[m].priority >= task.priority]
+    def _carry_reach(self, n: int) -> tuple[int, int | None] | None:
+        """``rta.carry_in`` of task n in ticks, less the path latency: (J⁻ + R − B, P⁻), so that the
+        carry-in over a path of latency L⁺ is ``(L⁺ + J⁻ + R − B) // P⁻ + 1``; (0, None) for a silent
+        task (carry-in 0); None where ``carry_in`` is None (no cap)."""
+        events, response = self.events[n], self.estimates[n]
+        if events.silent:
+            return 0, None
+        if events.period_min is None or events.jitter_min is None or response is None:
+            return None
+        return (self.ticks(events.jitter_min) + self.ticks(response) - self.ticks(bcrt(self.tasks[n])),
+                self.ticks(events.period_min))
+
+    def _capped_into(self, n: int) -> list[tuple[int, int, int]]:
+        """The causal paths into n from streams of hp(n) (``_causal_paths`` keeps no others)."""
+        return self.capped.get(n, [])
 
     def _blocking(self, n: int) -> tuple[Fraction | None, list[_Stream]]:
         """``rta.cooperative_blocking``: β (seconds) and the remote siblings' token streams."""
@@ -455,14 +495,14 @@ class Round:
         limit_base = self._hold_limit[n]
         best, best_q = None, None
         w, left = 0, MAX_STEPS
+        groups, extra_at, first_bad, load = self._interference(n, core, with_self, capped, remote)
         for q in range(1, MAX_JOBS + 1):
             offset = 0 if q == 1 else max(0, (q - 1) * period - jitter)
             limit = None if limit_base is None else limit_base + offset
             if q == 1 and reuse:  # the same iteration as the hold time's
                 w, why, left = self._hold_run[n]
             else:
-                caps = [(s, _cap(product, carry, q)) for s, product, carry in capped]
-                w, why, left = self._lfp(q * cost, w + cost, *self._interference(n, core, with_self, caps, remote),
+                w, why, left = self._lfp(q * cost, w + cost, groups, extra_at and extra_at(q), first_bad, load,
                                          limit, left)
             if w is None:
                 return None, q, None, why
