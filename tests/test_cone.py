@@ -160,6 +160,28 @@ def test_undecided_cones_share_the_budget_of_the_falsifying_search():
     assert [v.explored for v in verdicts] == [2 + 49, 2 + 49] and result.explored == 100
 
 
+def test_budget_a_batch_leaves_goes_to_the_cones_still_undecided(monkeypatch):
+    """Two independent chains in one batch: the first is refuted by the shared first runs and uses
+    nothing of its half of the budget; the second's search, undecided after its half, resumes in a
+    second round with what the first left, so the whole budget is used — the same in one process
+    and spread over two."""
+    import verify.prove.core as core
+
+    ts, ls = [], []
+    for n, core_name in ((1, "c0"), (2, "c1")):
+        ts += [task(f"c{n}.H", timer(10), wcet=5 * MS, bcet=4 * MS, prio=2, core=core_name, produces=["o"]),
+               task(f"m{n}.L", trigger("i"), wcet=MS, prio=1, core=core_name, reads=["i"])]
+        ls.append(link(f"c{n}.o", f"m{n}.i", ts))
+    cs = [chain("ctl1", ["c1.H", "m1.L"], ls, reaction_time=F(3, 1000)),  # below every run's latency
+          chain("ctl2", ["c2.H", "m2.L"], ls, reaction_time=F(18, 1000))]
+    result = prove(system(ts, ls, cs), budget=100, jobs=1)
+    first, second = (result.verdict(f"ctl{n}", "reaction_time") for n in (1, 2))
+    assert (first.status, first.method, first.explored) == ("violated", "search", 2)
+    assert (second.status, second.explored) == ("undecided", 2 + 98) and result.explored == 100
+    monkeypatch.setattr(core, "PARALLEL_TASK_SCENARIOS", 0)
+    assert prove(system(ts, ls, cs), budget=100, jobs=2) == result
+
+
 def test_a_counterexample_that_does_not_carry_over_is_decided_on_the_whole_system(monkeypatch):
     """The fallback for a bug in the cone (it has none we know of): the group is decided again on the
     whole system, whose verdicts are those without cones."""

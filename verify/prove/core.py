@@ -9,6 +9,7 @@ violation but never proves.
 """
 from __future__ import annotations
 
+import itertools
 import time
 from contextlib import closing
 from dataclasses import dataclass
@@ -24,7 +25,7 @@ from . import bound as bound_mod
 from .bound import Obligation
 from .cone import SliceMismatch, check_all_carry_over, restrict, slices
 from .exact import (SEARCH_EVENTS, Budget, ExactResult, Goal, approach, count_representatives, enumerate_exact,
-                    exact_class, first_scenarios, grid_of, search, search_horizon)
+                    SearchResult, exact_class, first_scenarios, grid_of, search, search_horizon)
 from .parallel import ordered_map, resolve_workers
 from .scenario import Measured, Target, measure
 from .verdict import Counterexample, ProofResult, Verdict
@@ -141,39 +142,72 @@ def _search_all(model: SystemModel, pending: list[tuple[SystemModel, list[_Left]
                 jobs: int | None) -> dict[int, Verdict]:
     """One falsifying search per cone, in batches of ``SEARCH_BATCH``: each search of a batch gets
     an equal share of the budget left with the cones from the batch on (what it does not use, because
-    it refuted everything, goes to the cones after the batch)."""
+    it refuted everything, goes to the cones after the batch). Budget left after the last batch goes
+    to further rounds over the cones with undecided obligations, each search resuming from its best
+    runs with a new seed, until the budget is used or nothing is undecided."""
     out: dict[int, Verdict] = {}
     horizons = [search_horizon(sub, max((r.ob.bound for r in rest if r.ob.bound is not None), default=None))
                 for sub, rest in pending]
     firsts, on_model = ((), False) if len(pending) < 2 else _shared_firsts(model, pending, max(horizons), budget,
                                                                             jobs)
-    given = [firsts if all(m.horizon >= h for m in firsts) else () for h in horizons]
+    cones = [_Cone(sub, rest, horizon, firsts if all(m.horizon >= horizon for m in firsts) else ())
+             for (sub, rest), horizon in zip(pending, horizons)]
     known = {m.scenario: m for m in firsts} if on_model else {}  # runs made on the whole system
-    for start in range(0, len(pending), SEARCH_BATCH):
-        batch = range(start, min(start + SEARCH_BATCH, len(pending)))
-        parts = len(pending) - start
-        shares = {k: budget.left // parts + (k - start < budget.left % parts) for k in batch}
-        size = sum((shares[k] + 1) * len(pending[k][0].tasks) for k in batch)  # (+1: the carry-over replays)
+    todo = list(range(len(cones)))
+    for round_ in itertools.count():
+        before = budget.used
+        _search_round(model, cones, todo, round_, budget, jobs, known, out)
+        todo = [k for k in todo if any(out[r.i].status == "undecided" for r in cones[k].items)]
+        if not todo or budget.used == before or budget.left <= 0 or budget.expired():
+            return out
+    return out  # pragma: no cover - (the loop returns)
+
+
+@dataclass
+class _Cone:
+    """A cone's falsifying search across rounds: its subsystem, the obligations the exact methods
+    left, its horizon, its first runs made on the union of the cones, and its search so far."""
+
+    sub: SystemModel
+    items: list[_Left]
+    horizon: Fraction
+    given: tuple[Measured, ...]
+    found: SearchResult | None = None
+
+
+def _search_round(model: SystemModel, cones: list[_Cone], todo: list[int], round_: int, budget: Budget,
+                  jobs: int | None, known: dict, out: dict[int, Verdict]) -> None:
+    """One round of the searches of cones ``todo`` (their undecided obligations after round 0), in
+    batches: verdicts into ``out``, each cone's search kept for the next round."""
+    for start in range(0, len(todo), SEARCH_BATCH):
+        batch = todo[start:start + SEARCH_BATCH]
+        parts = len(todo) - start
+        shares = {k: budget.left // parts + (j < budget.left % parts) for j, k in enumerate(batch)}
+        size = sum((shares[k] + 1) * len(cones[k].sub.tasks) for k in batch)  # (+1: the carry-over replays)
         workers = resolve_workers(jobs) if size >= PARALLEL_TASK_SCENARIOS else 1
+        items = {k: [r for r in cones[k].items if round_ == 0 or out[r.i].status == "undecided"] for k in batch}
 
         def one(k: int):
             """Cone k's search and the replay of its counterexamples on the whole system (both
-            in a worker when the batch is spread): (verdicts, scenarios used, carried over)."""
-            sub, rest = pending[k]
-            found, used = _search_cone(sub, rest, shares[k], budget.deadline, horizons[k], given[k])
-            verdicts = _search_verdicts(rest, found, budget)
-            return verdicts, used, sub is model or _carries_over(model, verdicts, known)
+            in a worker when the batch is spread): (verdicts, scenarios used, carried over, search)."""
+            cone = cones[k]
+            found, used = _search_cone(cone.sub, items[k], shares[k], budget.deadline, cone.horizon, cone.given,
+                                       cone.found, round_)
+            verdicts = _search_verdicts(items[k], found, budget)
+            return verdicts, used, cone.sub is model or _carries_over(model, verdicts, known), found
 
-        with closing(ordered_map(lambda j: one(start + j), range(len(batch)), workers)) as runs:
-            for k, (verdicts, used, carried) in zip(batch, runs):  # (closing the runs stops the workers)
+        with closing(ordered_map(lambda j: one(batch[j]), range(len(batch)), workers)) as runs:
+            for k, (verdicts, used, carried, found) in zip(batch, runs):  # (closing stops the workers)
                 budget.spend(used)
+                cones[k].found = found
                 if not carried:  # a bug in the cone: search the whole system instead
-                    found, used = _search_cone(model, pending[k][1], budget.left // parts, budget.deadline,
-                                               horizons[k])
+                    cones[k].sub = model
+                    found, used = _search_cone(model, items[k], budget.left // parts, budget.deadline,
+                                               cones[k].horizon)
                     budget.spend(used)
-                    verdicts = _search_verdicts(pending[k][1], found, budget)
+                    cones[k].found = found
+                    verdicts = _search_verdicts(items[k], found, budget)
                 out.update(verdicts)
-    return out
 
 
 def _shared_firsts(model: SystemModel, pending: list[tuple[SystemModel, list[_Left]]], horizon: Fraction,
@@ -206,9 +240,10 @@ def _shared_firsts(model: SystemModel, pending: list[tuple[SystemModel, list[_Le
 
 
 def _search_cone(model: SystemModel, items: list[_Left], share: int, deadline: float | None, horizon: Fraction,
-                 given: tuple[Measured, ...] = ()):
+                 given: tuple[Measured, ...] = (), resume: SearchResult | None = None, round_: int = 0):
     """The falsifying search for ``items`` on ``model`` within ``share`` scenarios (``given``: its
-    first runs, made on the union of the cones): (its result or None, the scenarios it used)."""
+    first runs, made on the union of the cones; ``resume``: its search of the rounds before, which
+    round ``round_`` continues): (its result or None, the scenarios it used)."""
     goals = []
     for r in items:
         ob = r.ob
@@ -216,7 +251,9 @@ def _search_cone(model: SystemModel, items: list[_Left], share: int, deadline: f
     own = Budget(share, deadline)
     if own.expired():
         return None, 0
-    return search(model, goals, own, horizon, given=given), own.used
+    if round_ == 0:
+        return search(model, goals, own, horizon, given=given), own.used
+    return search(model, goals, own, horizon, seed=f"verify-prove/round {round_}", resume=resume), own.used
 
 
 def _search_verdicts(items: list[_Left], found, budget: Budget) -> dict[int, Verdict]:

@@ -464,14 +464,18 @@ def first_scenarios(model: SystemModel, horizon: Fraction) -> list[ConcreteScena
 
 
 def search(model: SystemModel, goals: list[Goal], budget: Budget, horizon: Fraction, seed: str = "verify-prove",
-           max_events: int = SEARCH_EVENTS, given: tuple[Measured, ...] = ()) -> SearchResult:
+           max_events: int = SEARCH_EVENTS, given: tuple[Measured, ...] = (),
+           resume: SearchResult | None = None) -> SearchResult:
     """Random scenarios, then hill climbing from the best one per goal, until every goal has a
     violating scenario or the budget is used. Deterministic for a given seed and budget. ``given``:
     the runs of ``first_scenarios`` made elsewhere — on a system of which this one's tasks are a cone,
-    at least ``horizon`` long — taken instead of simulating them here."""
+    at least ``horizon`` long — taken instead of simulating them here. ``resume``: an earlier search
+    of this system and horizon (with another seed), continued: its best runs are where the climbing
+    starts, its scenarios count on, and the first scenarios are not run again."""
     rng = random.Random(seed)
     targets = sorted({g.target for g in goals})
-    result = SearchResult()
+    result = SearchResult() if resume is None else SearchResult(dict(resume.worst), dict(resume.best),
+                                                                resume.explored)
 
     def done() -> bool:
         for g in goals:
@@ -513,7 +517,7 @@ def search(model: SystemModel, goals: list[Goal], budget: Budget, horizon: Fract
     for m in given:
         result.explored += 1
         consider(m)
-    for sc in () if given else first_scenarios(model, horizon):
+    for sc in () if given or resume is not None else first_scenarios(model, horizon):
         if done() or not budget.take():
             return result
         m = run(sc)
