@@ -20,6 +20,8 @@ took). It may return a dict of result fields (status, evaluations, ...), shown i
 - ``parse+check``: ``verify.load_text`` on the text (parse, resolve, validate, build the model, chain
   checks). The system must load without a single diagnostic.
 - ``analyze``: ``verify.timing.analyze`` on the loaded model.
+- ``analyze-pipeline``: ``analyze`` of a trigger pipeline at one priority on one core
+  (``generate.generate_pipeline_system``): every task must have a WCRT bound.
 - ``prove-bound``: ``verify.load_text`` + ``verify.prove.prove`` *from the text* (parsing included), on
   systems with one chain per five tasks; every verdict must be *proved* (target: 10,000 tasks / 2,000
   chains < 2 s).
@@ -71,7 +73,7 @@ from typing import Callable
 
 import verify
 
-from .generate import generate_chain_system, generate_system
+from .generate import generate_chain_system, generate_pipeline_system, generate_system
 
 DEFAULT_OUT = Path(__file__).resolve().parent / "out" / "results.json"
 DEFAULT_SIZES = (10, 100, 1000)
@@ -113,7 +115,7 @@ class Instance:
 
     @property
     def name(self) -> str:
-        kind = "chain" if self.generator is generate_chain_system else "waters"
+        kind = {generate_chain_system: "chain", generate_pipeline_system: "pipeline"}.get(self.generator, "waters")
         return f"{kind}-{self.n_tasks}-s{self.seed}.vfy"
 
     @cached_property
@@ -177,7 +179,7 @@ QUICK_PARAMS: dict[str, dict] = {}
 #: stage name -> default sizes and --quick sizes
 SIZES: dict[str, tuple[int, ...]] = {}
 QUICK: dict[str, tuple[int, ...]] = {}
-#: stage name -> the generator of its instances (``generate_system`` or ``generate_chain_system``)
+#: stage name -> the generator of its instances (``generate_system``, ``generate_chain_system``, ...)
 GENERATORS: dict[str, Callable[..., str]] = {}
 #: stage name -> chains per task (None: the WATERS default of 30-60 chains)
 CHAINS_PER_TASK: dict[str, Fraction | None] = {}
@@ -239,6 +241,19 @@ def _register_analyze() -> None:
            needs=("model",))
     def analyze_stage(inst: Instance) -> None:
         analyze(inst.model)
+
+    @stage("analyze-pipeline", "verify.timing.analyze on a trigger pipeline at one priority on one core (the "
+           "worst case of the causal caps: n²/2 of them, many CPA rounds)", needs=("model",), sizes=(100, 300),
+           quick_sizes=(10,), generator=generate_pipeline_system)
+    def analyze_pipeline(inst: Instance) -> dict:
+        result = analyze(inst.model)
+        unbounded = [t.id for t in result.tasks if t.response.wcrt is None]
+        found = {"CPA rounds": result.rounds, "WCRT of the last task": _ms(result.tasks[-1].response.wcrt),
+                 "reaction time": _ms(result.chains[0].reaction_time.worst)}
+        if not result.converged or unbounded:
+            raise BenchmarkError(f"{len(unbounded)} task(s) without a WCRT bound (converged: {result.converged})",
+                                 found)
+        return found
 
 
 def _ms(seconds: Fraction | None) -> str:

@@ -190,6 +190,8 @@ def test_runner_quick_mode_writes_json(tmp_path, capsys):
         assert r["chains"] == max(1, r["tasks"] // 5)
     (search,) = by_stage["prove-search"]
     assert search["result"]["by search"] > 0 and search["result"]["scenarios"] <= run.QUICK_PARAMS["prove-search"]["budget"]
+    (pipeline,) = by_stage["analyze-pipeline"]
+    assert pipeline["chains"] == 1 and pipeline["result"]["CPA rounds"] >= 1
     (exact,) = by_stage["prove-exact"]
     assert exact["chains"] == 1 and exact["result"]["jobs/hyperperiod"] > 0
     assert all(" by exact-" in exact["result"][k] for k in ("reaction_time", "data_age"))

@@ -335,13 +335,14 @@ class Round:
         plus = [(s.jitter, s.period, s.cost) for s in tokens]  # (only evaluated when all are bounded)
 
         def extra_at(q: int):
-            caps = [(jitter, period, cost, _cap(product, carry, q)) for jitter, period, cost, product, carry in over]
             base = sum(_cap(product, carry, q) * cost for cost, product, carry in fixed)
+            before = 1 - q  # the cap of a path is ⌈(q − 1 + carry)/Π⌉ (``_cap``, inlined)
 
             def extra(w: int) -> int:
                 total = base
-                for jitter, period, cost, cap in caps:
+                for jitter, period, cost, product, carry in over:
                     count = -((-w - jitter) // period)
+                    cap = -((before - carry) // product)
                     if count > cap:
                         total -= (count - cap) * cost
                 for jitter, period, cost in minus:
