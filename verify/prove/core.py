@@ -9,7 +9,6 @@ violation but never proves.
 """
 from __future__ import annotations
 
-import itertools
 import time
 from contextlib import closing
 from dataclasses import dataclass
@@ -153,14 +152,15 @@ def _search_all(model: SystemModel, pending: list[tuple[SystemModel, list[_Left]
     cones = [_Cone(sub, rest, horizon, firsts if all(m.horizon >= horizon for m in firsts) else ())
              for (sub, rest), horizon in zip(pending, horizons)]
     known = {m.scenario: m for m in firsts} if on_model else {}  # runs made on the whole system
-    todo = list(range(len(cones)))
-    for round_ in itertools.count():
+    todo, round_ = list(range(len(cones))), 0
+    while todo:
         before = budget.used
         _search_round(model, cones, todo, round_, budget, jobs, known, out)
+        if budget.used == before or budget.left <= 0 or budget.expired():
+            break
         todo = [k for k in todo if any(out[r.i].status == "undecided" for r in cones[k].items)]
-        if not todo or budget.used == before or budget.left <= 0 or budget.expired():
-            return out
-    return out  # pragma: no cover - (the loop returns)
+        round_ += 1
+    return out
 
 
 @dataclass
