@@ -299,3 +299,21 @@ def test_same_input_same_bytes_in_separate_processes(args):
     first, second = _run(args), _run(args)
     assert first == second
     assert first[0] in (0, 1)
+
+
+def test_a_rate_hint_whose_budget_runs_out_is_left_out(write, capsys):
+    """A core of one activation constraint (the robot task triggered at 10 Hz, capped at 0.5 Hz): with a
+    solver budget too small for the repair hint's own search, E401 comes without that hint (it was an
+    internal error, exit 70); with the default budget the hint names the rate the task needs. A core of
+    one statement is worded as one."""
+    components = (EXAMPLES / "navigation" / "components.vfy").read_text()
+    holes = (EXAMPLES / "navigation" / "navigation-holes.vfy").read_text()
+    path = write({"components.vfy": components.replace("activation max 50 Hz", "activation max 0.5 Hz", 1),
+                  "holes.vfy": holes})
+    path = str(Path(path).parent / "holes.vfy")
+    assert main(["synth", path, "--rlimit", "200000"]) == 1
+    small = capsys.readouterr().err
+    assert "error[E401]: no configuration of `NavigationHoles` satisfies this statement" in small
+    assert "this statement cannot hold" in small and "would need to run" not in small
+    assert main(["synth", path]) == 1
+    assert "`base.RobotTask` would need to run at up to 10 Hz (at most 0.5 Hz now)" in capsys.readouterr().err

@@ -256,6 +256,8 @@ def _rate_hint(st: Statement, problem: Problem, budget: Budget) -> str:
     who = ", ".join(f"`{t}`" for t in st.tasks)
     if found is None:
         return f"widening `{st.text}` of {who} alone is not enough"
+    if found[0].evaluation is None:  # the hint's own budget ran out before any configuration
+        return ""
     rate = real_rate(found[0].evaluation)
     if rate is None:
         return ""
@@ -307,7 +309,8 @@ def unsat_diagnostic(system: SystemModel, expl: Explanation | None, reason: str 
                    + (" together with the statements below" if len(core) > 1 else ""))
         label = "cannot hold"
     elif primary is not None:
-        message = f"no configuration of `{system.name}` satisfies these statements together"
+        message = (f"no configuration of `{system.name}` satisfies these statements together" if len(core) > 1
+                   else f"no configuration of `{system.name}` satisfies this statement")
         label = primary.label
     else:
         message = f"no configuration of `{system.name}` meets every constraint" + (f": {reason}" if reason else "")
@@ -315,10 +318,14 @@ def unsat_diagnostic(system: SystemModel, expl: Explanation | None, reason: str 
     secondary = tuple(Label(st.span, _label(st)) for st in core if st is not primary)
     notes = []
     if core:
-        notes.append(f"these {len(core)} statements cannot hold together"
-                     + (": without any one of them a configuration exists (a minimal unsatisfiable core; every "
-                        "other statement was relaxed)" if expl.minimal else " (the search budget ran out before "
-                        "the core was minimal)"))
+        if len(core) == 1:
+            notes.append("this statement cannot hold: without it a configuration exists (every other statement "
+                         "was relaxed)")
+        else:
+            notes.append(f"these {len(core)} statements cannot hold together"
+                         + (": without any one of them a configuration exists (a minimal unsatisfiable core; "
+                            "every other statement was relaxed)" if expl.minimal else
+                            " (the search budget ran out before the core was minimal)"))
         for st in core:
             if not _real(st.span):
                 notes.append(f"{_who(st)}: {st.text}")
