@@ -14,8 +14,11 @@ iterations (so with the same step budget, the same failures and the same message
   streams are kept per period (``_Period``), where the demand of all of them at a window w takes a few
   integer operations whatever their number; unbounded streams and the utilisation are kept alongside.
 * **Per-task corrections.** What the sweep holds is corrected for i: i itself when it shares its
-  priority (subtracted), the streams with a causal cap on i's busy window (§6.2: the uncapped demand
-  subtracted, the capped one added), the remote siblings' token streams (§6.3).
+  priority (subtracted), the streams with a causal cap on i's busy window (§6.2: what a stream demands
+  beyond its cap, ``max(0, count − cap)·C``, subtracted; one term per causal path, its cap computed in
+  the same loop), the remote siblings' token streams (§6.3). The causal paths and their carry-ins
+  are sums and quotients of ticks too (``_causal_paths``, ``_carry_reach``): a trigger pipeline of n
+  tasks at one priority has n²/2 of them.
 * **Hold time = first busy window.** ``hold_time`` is the busy window of one job without blocking; for a
   task with no causal caps, no blocking and no remote siblings that is the ``q = 1`` step of its WCRT,
   which reuses it (the same iteration from the same start with a fresh budget).
