@@ -586,3 +586,72 @@ def test_jobs_beyond_the_cpus_are_capped():
 
     assert resolve_workers(10**6) == 4 * available_workers() and resolve_workers(0) == available_workers()
     assert resolve_workers(1) == 1
+
+
+# ------------------------------------------------------------------ views of an overloaded core
+
+
+def _overloaded():
+    """A core loaded over 100 %: a 100 us task, a 2 ms task, and two 100 ms tasks whose deadlines the
+    falsifying search refutes in the same run (all phases 0), with thousands of jobs of the fast
+    task in the interval of each late response."""
+    us = MS / 1000
+    return system([task("f.F", timer(F(1, 10)), wcet=60 * us, prio=3),
+                   task("g.G", timer(2), wcet=MS / 2, prio=2),
+                   task("s.S", timer(100), wcet=20 * MS, prio=1, deadline=30 * MS),
+                   task("t.T", timer(100), wcet=MS, prio=0, deadline=50 * MS)])
+
+
+def test_the_timeline_of_a_late_response_is_bounded_and_run_once(monkeypatch):
+    """Fuzzing found a 50-task core with a 20 us timer whose 33 deadline misses took the text view
+    2.5 minutes: it ran the scenario once per verdict and printed every job in each response's
+    interval. Now the views run each scenario once, and a task with more than ``LISTED_JOBS`` jobs
+    in the interval shows its first and last three, and counts the rest — the jobs the reference
+    simulator has there."""
+    import re
+
+    import verify.prove.trace as views
+
+    model = _overloaded()
+    late = [v for v in prove(model, budget=10).verdicts if v.counterexample is not None]
+    assert [(v.name, v.status) for v in late] == [("s.S", "violated"), ("t.T", "violated")]
+    assert late[0].counterexample.scenario == late[1].counterexample.scenario
+    calls, real = [], views.run_trace
+    monkeypatch.setattr(views, "run_trace", lambda *a, **k: calls.append(1) or real(*a, **k))
+    runs = views.Runs(model, late)
+    text = [views.to_text(model, v, runs) for v in late][0]
+    assert len(calls) == 1
+    s = late[0].counterexample.sample
+    full = replay(model, late[0].counterexample.scenario)
+    end = s.finish if s.finish is not None else full.horizon
+    between = [j.index for j in full.jobs["f.F"]
+               if j.start is not None and j.start < end and (j.finish is None or j.finish > s.release)]
+    assert len(between) > 1000
+    assert [int(n) for n in re.findall(r"f\.F#(\d+)  \[", text)] == between[:3] + between[-3:]
+    assert f"… {len(between) - 6} more jobs of f.F (#{between[3]} to #{between[-4]})" in text
+    assert len(text.splitlines()) < 30
+
+
+def test_a_crowded_row_of_a_chart_draws_bars_less_than_a_pixel_apart_as_one():
+    """The fast task of an overloaded core has thousands of jobs in the chart of a late response:
+    bars less than a pixel apart are one bar whose title counts its jobs, and every job the
+    reference simulator ran in the chart's interval is in exactly one bar."""
+    import re
+
+    from verify.prove.trace import to_svg
+
+    model = _overloaded()
+    v = next(v for v in prove(model, budget=10).verdicts if v.counterexample is not None)
+    ns = "{http://www.w3.org/2000/svg}"
+    bars = [r.find(f"{ns}title").text for r in ET.fromstring(to_svg(model, v)).iter(f"{ns}rect")
+            if (r.get("class") or "").startswith("job")]
+    fast = [t for t in bars if t.startswith("f.F#")]
+    merged = [int(m.group(1)) for t in fast if (m := re.search(r"\((\d+) jobs\)", t))]
+    s, full = v.counterexample.sample, replay(model, v.counterexample.scenario)
+    hi = s.finish if s.finish is not None else full.horizon
+    pad = max((hi - s.release) / 10, F(1, 10**6))
+    t0, t1 = max(F(0), s.release - pad), hi + pad
+    drawn = [j for j in full.jobs["f.F"] if j.start is not None and j.start <= t1
+             and (j.finish if j.finish is not None else full.horizon) >= t0]
+    assert merged and len(fast) < 50 < len(drawn)
+    assert sum(merged) + len(fast) - len(merged) == len(drawn)

@@ -43,36 +43,38 @@ def job_chain(model: SystemModel, trace: Trace, chain_name: str, sample) -> list
 
 
 class Runs:
-    """The runs the text and JSON views of several counterexamples show, each scenario run once: for
-    chain verdicts up to the last sample's end among those of the scenario (every job and message of
-    a job chain is there by then, and a longer run holds the same records for them), with the jobs
-    of their chains' tasks; for a task's response, the whole run with the jobs of its core."""
+    """The runs the text and JSON views of several counterexamples show, each scenario run once: with
+    the jobs of the chains' tasks for a chain verdict, up to the last sample's end among them (every
+    job and message of a job chain is there by then, and a longer run holds the same records for
+    them); with the jobs of the task's core for a task's response, to the end of the run."""
 
     def __init__(self, model: SystemModel, verdicts=()):
         self.model = model
-        self.chains: dict = {}  # scenario -> (last sample end, tasks)
+        self.wanted: dict = {}  # scenario -> (last sample end, tasks)
         for v in verdicts:
-            if v.counterexample is not None and v.subject == "chain":
+            if v.counterexample is not None:
                 self._want(v)
         self.traces: dict = {}
 
     def _want(self, v: Verdict) -> None:
-        cex = v.counterexample
-        end, tasks = self.chains.get(cex.scenario, (cex.sample.end, ()))
-        chain = next(c for c in self.model.chains if c.name == v.name)
-        self.chains[cex.scenario] = (max(end, cex.sample.end), tuple(dict.fromkeys(tasks + tuple(chain.tasks))))
+        cex, model = v.counterexample, self.model
+        if v.subject == "chain":
+            end = cex.sample.end
+            shown = next(c for c in model.chains if c.name == v.name).tasks
+        else:  # the whole run: a job running across the response's end shows when it completes
+            end = cex.scenario.horizon
+            shown = [t.id for t in model.tasks_on(model.task(cex.target.name).core)]
+        last, tasks = self.wanted.get(cex.scenario, (end, ()))
+        self.wanted[cex.scenario] = (max(last, end), tuple(dict.fromkeys(tasks + tuple(shown))))
 
     def of(self, verdict: Verdict) -> Trace:
-        cex, model = verdict.counterexample, self.model
-        if verdict.subject != "chain":
-            core = model.task(cex.target.name).core
-            return run_trace(model, cex.scenario, tasks=[t.id for t in model.tasks_on(core)])
-        if cex.scenario not in self.chains:
+        cex = verdict.counterexample
+        if cex.scenario not in self.wanted:
             self._want(verdict)
         if cex.scenario not in self.traces:
-            end, tasks = self.chains[cex.scenario]
+            end, tasks = self.wanted[cex.scenario]
             cut = cex.scenario.with_horizon(min(cex.scenario.horizon, end + Fraction(1, 10**12)))
-            self.traces[cex.scenario] = run_trace(model, cut, tasks=tasks)
+            self.traces[cex.scenario] = run_trace(self.model, cut, tasks=tasks)
         return self.traces[cex.scenario]
 
 
@@ -99,11 +101,9 @@ def to_text(model: SystemModel, verdict: Verdict, runs: Runs | None = None) -> s
         core = model.task(s.task).core
         end = s.finish if s.finish is not None else trace.horizon
         for t in model.tasks_on(core):
-            for j in trace.jobs[t.id]:
-                if j.start is not None and j.start < end and (j.finish is None or j.finish > s.release) \
-                        and (t.id, j.index) != (s.task, s.index):
-                    lines.append(f"    {t.id}#{j.index}  [priority {t.priority}]  released {_t(j.release)}, "
-                                 f"starts {_t(j.start)}, completes {_t(j.finish)}")
+            between = [j for j in trace.jobs[t.id] if j.start is not None and j.start < end
+                       and (j.finish is None or j.finish > s.release) and (t.id, j.index) != (s.task, s.index)]
+            lines += _listed(t, between)
         return "\n".join(lines)
     chain = next(c for c in model.chains if c.name == verdict.name)
     first = chain.tasks[0]
@@ -131,6 +131,27 @@ def to_text(model: SystemModel, verdict: Verdict, runs: Runs | None = None) -> s
         lines.append(f"  a second run ({cex.best_scenario.summary(model)}) has a data age of {fmt_time(b.value)}: "
                      f"jitter {fmt_time(s.value)} − {fmt_time(b.value)} = {fmt_time(cex.latency)}")
     return "\n".join(lines)
+
+
+#: a task with more jobs than this in the interval of a response shows its first and last ones
+LISTED_JOBS = 6
+
+
+def _listed(task, jobs: list[JobRecord]) -> list[str]:
+    """The lines of ``task``'s jobs in a response's interval; past ``LISTED_JOBS`` of them, the first
+    and last few and a line that counts the rest (an overloaded core can hold thousands)."""
+    def line(j: JobRecord) -> str:
+        return (f"    {task.id}#{j.index}  [priority {task.priority}]  released {_t(j.release)}, "
+                f"starts {_t(j.start)}, completes {_t(j.finish)}")
+
+    if len(jobs) <= LISTED_JOBS:
+        return [line(j) for j in jobs]
+    half = LISTED_JOBS // 2
+    hidden = jobs[half:-half]
+    return ([line(j) for j in jobs[:half]]
+            + [f"    … {len(hidden)} more jobs of {task.id} (#{hidden[0].index} to #{hidden[-1].index}), released "
+               f"{_t(hidden[0].release)} to {_t(hidden[-1].release)}"]
+            + [line(j) for j in jobs[-half:]])
 
 
 # ------------------------------------------------------------------ JSON
@@ -175,19 +196,42 @@ def _num(x: float) -> str:
     return f"{x:.2f}".rstrip("0").rstrip(".")
 
 
-def to_svg(model: SystemModel, verdict: Verdict) -> str:
+def to_svg(model: SystemModel, verdict: Verdict, traces: dict | None = None) -> str:
     """A Gantt chart of the counterexample: one row per task (the chain's tasks and the tasks sharing
-    their cores), jobs as bars from start to completion (preemptions are not drawn), releases as
+    their cores), jobs as bars from start to completion (preemptions are not drawn; in a row crowded
+    with more than ``CROWDED`` jobs, bars less than a pixel apart are drawn as one), releases as
     ticks, the chain's jobs highlighted with data-flow arrows, the violating interval shaded."""
-    return "\n".join(_chart(model, verdict)[2]) + "\n"
+    return "\n".join(_chart(model, verdict, traces=traces)[2]) + "\n"
+
+
+def _rows(model: SystemModel, verdict: Verdict) -> list[str]:
+    """The tasks of a chart, top to bottom."""
+    if verdict.subject == "chain":
+        chain = next(c for c in model.chains if c.name == verdict.name)
+        cores = {model.task(t).core for t in chain.tasks}
+        return list(dict.fromkeys(list(chain.tasks) + [t.id for c in sorted(cores) for t in sorted(
+            model.tasks_on(c), key=lambda t: -t.priority)]))
+    core = model.task(verdict.counterexample.sample.task).core
+    return [t.id for t in sorted(model.tasks_on(core), key=lambda t: -t.priority)]
+
+
+def chart_runs(model: SystemModel, verdicts: list[Verdict]) -> dict:
+    """scenario -> its whole run with the jobs of every row of the charts of ``verdicts`` that
+    show it (each scenario run once)."""
+    rows: dict = {}
+    for v in verdicts:
+        sc = v.counterexample.scenario
+        rows[sc] = tuple(dict.fromkeys(rows.get(sc, ()) + tuple(_rows(model, v))))
+    return {sc: run_trace(model, sc, tasks=list(tasks)) for sc, tasks in rows.items()}
 
 
 def to_svg_all(model: SystemModel, verdicts: list[Verdict]) -> str:
     """One SVG document with the chart of every counterexample of ``verdicts``, one below the other
     (each a nested ``svg``; for a single one, ``to_svg``)."""
+    traces = chart_runs(model, verdicts)
     if len(verdicts) == 1:
-        return to_svg(model, verdicts[0])
-    charts = [_chart(model, v, f"arrow{i}", position=True) for i, v in enumerate(verdicts, 1)]
+        return to_svg(model, verdicts[0], traces)
+    charts = [_chart(model, v, f"arrow{i}", position=True, traces=traces) for i, v in enumerate(verdicts, 1)]
     width = max(w for w, _, _ in charts)
     out, y = [], 0
     for w, h, lines in charts:
@@ -201,25 +245,20 @@ def to_svg_all(model: SystemModel, verdicts: list[Verdict]) -> str:
                       "</svg>"]) + "\n"
 
 
-def _chart(model: SystemModel, verdict: Verdict, marker: str = "arrow",
-           position: bool = False) -> tuple[int, int, list[str]]:
+def _chart(model: SystemModel, verdict: Verdict, marker: str = "arrow", position: bool = False,
+           traces: dict | None = None) -> tuple[int, int, list[str]]:
     """(width, height, lines) of one counterexample's chart; its first line opens its ``svg`` element
-    (without ``xmlns`` when it is to be nested: ``position``)."""
+    (without ``xmlns`` when it is to be nested: ``position``). ``traces``: ``chart_runs``."""
     cex = verdict.counterexample
     assert cex is not None
     s = cex.sample
+    rows = _rows(model, verdict)
+    trace = (traces or chart_runs(model, [verdict]))[cex.scenario]
     if verdict.subject == "chain":
-        chain = next(c for c in model.chains if c.name == verdict.name)
-        cores = {model.task(t).core for t in chain.tasks}
-        rows = list(dict.fromkeys(list(chain.tasks) + [t.id for c in sorted(cores) for t in sorted(
-            model.tasks_on(c), key=lambda t: -t.priority)]))
-        trace = run_trace(model, cex.scenario, tasks=rows)
         steps = job_chain(model, trace, verdict.name, s)
         lo, hi = s.begin, s.end
         highlighted = {(st.job.task, st.job.index) for st in steps}
     else:
-        rows = [t.id for t in sorted(model.tasks_on(model.task(s.task).core), key=lambda t: -t.priority)]
-        trace = run_trace(model, cex.scenario, tasks=rows)
         steps = []
         lo = s.release
         hi = s.finish if s.finish is not None else trace.horizon
@@ -229,8 +268,10 @@ def _chart(model: SystemModel, verdict: Verdict, marker: str = "arrow",
     left, width, row_h, top = 230, 900, 30, 60
     height = top + row_h * len(rows) + 50
 
+    lo_f, span_f = float(t0), float(t1 - t0)  # (pixels are drawn in floats; the times stay exact)
+
     def x(t: Fraction) -> float:
-        return left + float((min(max(t, t0), t1) - t0) / (t1 - t0)) * width
+        return left + min(max((float(t) - lo_f) / span_f, 0.0), 1.0) * width
 
     def y(task: str) -> float:
         return top + row_h * rows.index(task)
@@ -262,21 +303,9 @@ def _chart(model: SystemModel, verdict: Verdict, marker: str = "arrow",
                    f'priority {model.task(task).priority}]</text>')
         out.append(f'<line x1="{left}" y1="{_num(yy + row_h - 2)}" x2="{left + width}" y2="{_num(yy + row_h - 2)}" '
                    'stroke="#ddd"/>')
-        for j in trace.jobs[task]:
-            if t0 <= j.release <= t1:
-                out.append(f'<line class="release" x1="{_num(x(j.release))}" y1="{_num(yy + 2)}" '
-                           f'x2="{_num(x(j.release))}" y2="{_num(yy + row_h - 4)}" stroke="#333"/>')
-            if j.start is None:
-                continue
-            end = j.finish if j.finish is not None else trace.horizon
-            if end < t0 or j.start > t1:
-                continue
-            on = (j.task, j.index) in highlighted
-            fill = "#e67e22" if on else "#aed6f1"
-            out.append(f'<rect class="job{" chain" if on else ""}" x="{_num(x(j.start))}" y="{_num(yy + 6)}" '
-                       f'width="{_num(max(x(end) - x(j.start), 1.0))}" height="{row_h - 14}" fill="{fill}" '
-                       f'stroke="#2c3e50"><title>{escape(j.task)}#{j.index}: released {escape(_t(j.release))}, '
-                       f'starts {escape(_t(j.start))}, completes {escape(_t(j.finish))}</title></rect>')
+        shown = [j for j in trace.jobs[task] if t0 <= j.release <= t1 or (
+            j.start is not None and j.start <= t1 and (j.finish if j.finish is not None else trace.horizon) >= t0)]
+        out += _row(shown, x, yy, row_h, t0, t1, highlighted, trace.horizon)
     for a, b in zip(steps, steps[1:]):
         m = a.message
         if m is None or b.job.start is None:
@@ -291,3 +320,60 @@ def _chart(model: SystemModel, verdict: Verdict, marker: str = "arrow",
                    f'{escape(fmt_time(t))}</text>')
     out.append("</svg>")
     return left + width + 40, height, out
+
+
+#: a row with more jobs than this in the chart's interval draws bars less than a pixel apart as one
+#: bar, and one release tick per pixel (an overloaded core can run thousands of jobs in the interval)
+CROWDED = 200
+
+
+def _row(jobs: list[JobRecord], x, yy: float, row_h: int, t0: Fraction, t1: Fraction, highlighted: set,
+         horizon: Fraction) -> list[str]:
+    """The release ticks and job bars of one row of a chart, in job order."""
+    out: list[str] = []
+    crowded = len(jobs) > CROWDED
+    ticked: set[str] = set()
+    pending: list = []  # the bar not drawn yet: [x from, x to, first job, last job, jobs merged (0: chain),
+    #                    its place in ``out``]
+
+    def flush() -> None:
+        if not pending:
+            return
+        x0, x1, first, last, count, place = pending
+        on = count == 0
+        if count > 1:
+            title = (f"{escape(first.task)}#{first.index} to #{last.index} ({count} jobs): from "
+                     f"{escape(_t(first.start))} to {escape(_t(last.finish))}")
+        else:
+            title = (f"{escape(first.task)}#{first.index}: released {escape(_t(first.release))}, "
+                     f"starts {escape(_t(first.start))}, completes {escape(_t(first.finish))}")
+        out[place] = (f'<rect class="job{" chain" if on else ""}" x="{_num(x0)}" y="{_num(yy + 6)}" '
+                      f'width="{_num(max(x1 - x0, 1.0))}" height="{row_h - 14}" '
+                      f'fill="{"#e67e22" if on else "#aed6f1"}" stroke="#2c3e50"><title>{title}</title></rect>')
+        pending.clear()
+
+    for j in jobs:
+        if t0 <= j.release <= t1:
+            at = _num(x(j.release))
+            if not crowded or at not in ticked:
+                ticked.add(at)
+                out.append(f'<line class="release" x1="{at}" y1="{_num(yy + 2)}" x2="{at}" '
+                           f'y2="{_num(yy + row_h - 4)}" stroke="#333"/>')
+        if j.start is None:
+            continue
+        end = j.finish if j.finish is not None else horizon
+        if end < t0 or j.start > t1:
+            continue
+        x0, x1 = x(j.start), x(end)
+        on = (j.task, j.index) in highlighted
+        if crowded and not on and pending and pending[4] and x0 <= pending[1] + 1:
+            pending[1], pending[3] = max(pending[1], x1), j
+            pending[4] += 1
+            continue
+        flush()
+        pending.extend([x0, x1, j, j, 0 if on else 1, len(out)])
+        out.append("")  # (its place: the bar comes before the ticks of the jobs merged into it)
+        if not crowded:
+            flush()
+    flush()
+    return out
