@@ -93,9 +93,6 @@ class _Stream:
     silent: bool
     load: int | None  # cost/period in units of 1/U (0 if silent), None: not bounded
 
-    def count(self, w: int) -> int:
-        return -((-w - self.jitter) // self.period)
-
 
 class _Period:
     """The bounded streams of one period P on a core, as far as the sweep has come.
