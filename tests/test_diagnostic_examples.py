@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import os
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import pytest
@@ -20,6 +20,7 @@ from verify import timing
 from verify.api import SelectionError, require_configured
 from verify.cli import main
 from verify.codes import CODES
+from verify.limits import Limits
 from verify.render import render_all_text
 
 from .conftest import ROOT
@@ -39,6 +40,7 @@ class Block:
     encoding: str
     command: str
     rlimit: str | None = None
+    limit: str | None = None
 
 
 @dataclass(frozen=True)
@@ -56,7 +58,7 @@ class Section:
         return "check"
 
 
-_FENCE = re.compile(r"^```vfy([^\n]*)\n(.*?)^```[ \t]*$", re.MULTILINE | re.DOTALL)
+_FENCE = re.compile(r"^```(?:vfy|toml)([^\n]*)\n(.*?)^```[ \t]*$", re.MULTILINE | re.DOTALL)
 
 
 def _blocks(body: str) -> tuple[Block, ...]:
@@ -64,7 +66,7 @@ def _blocks(body: str) -> tuple[Block, ...]:
     for match in _FENCE.finditer(body):
         attrs = dict(item.split("=", 1) for item in match.group(1).split())
         blocks.append(Block(attrs.get("file", "main.vfy"), match.group(2), attrs.get("encoding", "utf-8"),
-                            attrs.get("command", "check"), attrs.get("rlimit")))
+                            attrs.get("command", "check"), attrs.get("rlimit"), attrs.get("limit")))
     return tuple(blocks)
 
 
@@ -91,7 +93,12 @@ def run_example(section: Section, directory: Path):
     """Write the example into ``directory`` and run its command: (diagnostics, sources)."""
     for block in section.blocks:
         (directory / block.name).write_bytes(block.text.encode(block.encoding))
-    result = verify.load(str(directory / section.blocks[0].name))
+    limits = Limits()
+    for block in section.blocks:
+        if block.limit:
+            name, _, value = block.limit.partition(":")
+            limits = replace(limits, **{name: int(value)})
+    result = verify.load(str(directory / section.blocks[0].name), limits=limits)
     if section.command == "check" or not result.ok:
         return list(result.diagnostics), result.sources
     try:

@@ -9,11 +9,15 @@ finds and later stages run only on what the earlier ones accepted.
 """
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, field
+from typing import Mapping
 
 from .diagnostics import Diagnostic, DiagnosticSink, Label, has_errors
 from .gcpause import paused_gc
+from .limits import DEFAULT_LIMITS, Limits
 from .loader import Project, load_project, project_from_text
+from .roots import project_roots
 from .model import SystemModel, build_system
 from .resolve import Resolution, resolve
 from .source import SourceFile, Span
@@ -144,17 +148,33 @@ def _clean(scope, sink: DiagnosticSink) -> bool:
     return True
 
 
-def load(path: str) -> LoadResult:
-    """Load, resolve and validate the project rooted at ``path`` (imports followed)."""
+def load(path: str, *, root: str | None = None, include: tuple[str, ...] | list[str] = (),
+         limits: Limits = DEFAULT_LIMITS, overlay: Mapping[str, str] | None = None,
+         config: bool = True) -> LoadResult:
+    """Load, resolve and validate the project whose root file is ``path`` (imports followed).
+
+    Imports are confined to the project root — ``root``, else the ``root`` of ``[tool.verify]`` in the
+    nearest ``pyproject.toml`` (``config``), else the directory of ``path`` — and the library directories
+    ``include`` (and that table's ``include``); ``verify.roots`` gives the rules. ``limits`` bound what is
+    read (``verify.limits``). ``overlay`` maps paths to text that takes the place of the file on disk (an
+    editor's unsaved buffers)."""
     with paused_gc():
         sink = DiagnosticSink()
-        project = load_project(path, sink)
+        roots, problems = project_roots(path, root, tuple(include), config=config) if path else (None, [])
+        sources = {}
+        for p in problems:
+            sink.emit(p.code, p.message, p.span, p.label, help=p.help)
+            if p.text:
+                sources[p.span.file] = SourceFile(p.span.file, p.text)
+        if problems:
+            return LoadResult(Project(os.path.normpath(path), (), sources), None, {}, tuple(sink.items))
+        project = load_project(path, sink, roots=roots, limits=limits, overlay=overlay)
         return _finish(project, sink)
 
 
-def load_text(text: str, path: str = "<text>") -> LoadResult:
+def load_text(text: str, path: str = "<text>", *, limits: Limits = DEFAULT_LIMITS) -> LoadResult:
     """The same for text in memory (one file; imports are not followed)."""
     with paused_gc():
         sink = DiagnosticSink()
-        project = project_from_text(text, path, sink)
+        project = project_from_text(text, path, sink, limits)
         return _finish(project, sink)

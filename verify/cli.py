@@ -32,8 +32,13 @@ def _emit_diagnostics(result: api.LoadResult, fmt: str, extra: dict | None = Non
         print(render_all_text(result.diagnostics, result.sources), file=sys.stderr)
 
 
+def load_args(args) -> api.LoadResult:
+    """``api.load`` of the command's FILE, with its ``--root`` and ``--include``."""
+    return api.load(args.file, root=args.root, include=tuple(args.include or ()))
+
+
 def _load_or_fail(args) -> api.LoadResult | int:
-    result = api.load(args.file)
+    result = load_args(args)
     if not result.ok:
         _emit_diagnostics(result, args.format)
         return EXIT_INVALID
@@ -41,7 +46,7 @@ def _load_or_fail(args) -> api.LoadResult | int:
 
 
 def cmd_check(args) -> int:
-    result = api.load(args.file)
+    result = load_args(args)
     _emit_diagnostics(result, args.format)
     if not result.ok:
         return EXIT_INVALID
@@ -230,6 +235,10 @@ def _parser() -> argparse.ArgumentParser:
         p = sub.add_parser(name, help=help, description=help)
         p.add_argument("file", metavar="FILE", help="the .vfy file (imports are followed)")
         p.add_argument("--format", choices=("text", "json"), default="text", help="output format")
+        p.add_argument("--root", metavar="DIR", help="the project root: imports must stay inside it (default: "
+                       "the `root` of [tool.verify] in pyproject.toml, else the directory of FILE)")
+        p.add_argument("--include", metavar="DIR", action="append", default=[],
+                       help="a library directory imports may also come from (repeatable)")
         if system:
             p.add_argument("--system", metavar="NAME", help="the system to use when the file holds several")
         p.set_defaults(func=func)

@@ -25,6 +25,10 @@ _ALL = [
     Code("E003", "file is not UTF-8 text"),
     Code("E004", "file cannot be read"),
     Code("E005", "invalid number"),
+    Code("E006", "import leads outside the project"),
+    Code("E007", "import does not name a .vfy file"),
+    Code("E008", "input exceeds a limit"),
+    Code("E009", "invalid [tool.verify] settings"),
     # E1xx: names
     Code("E101", "unknown name"),
     Code("E102", "duplicate name"),

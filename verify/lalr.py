@@ -61,6 +61,14 @@ class Unparsable(Exception):
     """The fast path does not decide this input: run Lark."""
 
 
+class TooManyTokens(Exception):
+    """The text has more tokens than a parse may lex; ``at`` is the position of the first one too many."""
+
+    def __init__(self, at: int):
+        super().__init__(at)
+        self.at = at
+
+
 # rule modes: how a reduction makes its value
 _NODE = 0  # a callback's value
 _INLINE = 1  # a _rule: the list of its children, spliced into its parent's
@@ -204,10 +212,12 @@ class FastParser:
         return {name for name in self.names if name is not None}
 
     def parse(self, text: str, callbacks: Mapping[str, Callable[[int | None, int | None, Any], Any]],
-              tokens: Mapping[str, Callable[[str, int, int], Any]]):
+              tokens: Mapping[str, Callable[[str, int, int], Any]], max_tokens: int | None = None):
         """The value of the start rule, or :class:`Unparsable`. ``callbacks[name](start, end, children)``
         builds the value of a rule from its positions and its children (a list or a tuple);
-        ``tokens[terminal](text, start, end)`` the value of a token (default: its text)."""
+        ``tokens[terminal](text, start, end)`` the value of a token (default: its text). More than
+        ``max_tokens`` tokens raise :class:`TooManyTokens` (counted only when the text is longer than that,
+        since every token has a character)."""
         rows, rules, keywords, punct = self.rows, self.rules, self.keywords, self.punct
         token_value = tokens.get
         build = [None if name is None else callbacks[name] for name in self.names]
@@ -223,6 +233,7 @@ class FastParser:
         # a position is offset + base with base = position(line, 1) - line start, updated at each new line
         line, base = 1, 1 << 32 | 1
         size_text = len(text)
+        left = max_tokens if max_tokens is not None and size_text > max_tokens else -1  # (-1: not counted)
         next_newline = text.find("\n")
         if next_newline < 0:
             next_newline = size_text
@@ -244,6 +255,10 @@ class FastParser:
                     if next_newline < 0:
                         next_newline = size_text
                 start, end = offset + base, pos + base  # (no lexeme spans lines)
+                if left >= 0:
+                    left -= 1
+                    if left < 0:
+                        raise TooManyTokens(start)
                 if kind == _WORD:
                     term = keywords.get(lex)
                     if term is None or term not in row:

@@ -5,6 +5,8 @@ one run reports several errors. ``verify.parse`` runs it when the fast path reje
 """
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import functools
 import re
 from importlib import resources
@@ -14,10 +16,9 @@ from lark.lark import PostLex
 from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken
 
 from .diagnostics import DiagnosticSink, Label
+from .lalr import TooManyTokens, position
 from .source import Span
 
-MAX_SYNTAX_ERRORS = 20
-MAX_NUMBER_LENGTH = 40
 MAX_EXPECTED_SHOWN = 4  # (E002: a longer list says little about a stray character)
 
 #: how terminals are named in messages
@@ -48,7 +49,37 @@ class _WholeWords(PostLex):
     always_accept = ("NAME",)
 
     def process(self, stream):
-        return stream
+        budget = _TOKEN_BUDGET.get()
+        if budget is None:
+            return stream
+        return budget.count(stream)
+
+
+class _TokenBudget:
+    """The tokens one parse may still lex (``Limits.tokens``), across the restarts of error recovery."""
+
+    def __init__(self, limit: int):
+        self.left = limit
+
+    def count(self, stream):
+        for tok in stream:
+            self.left -= 1
+            if self.left < 0:
+                raise TooManyTokens(position(tok.line, tok.column))
+            yield tok
+
+
+_TOKEN_BUDGET: contextvars.ContextVar[_TokenBudget | None] = contextvars.ContextVar("token_budget", default=None)
+
+
+@contextlib.contextmanager
+def counting_tokens(limit: int):
+    """Within the block, a parse by ``_parser()`` raises ``TooManyTokens`` at its ``limit + 1``-th token."""
+    reset = _TOKEN_BUDGET.set(_TokenBudget(limit))
+    try:
+        yield
+    finally:
+        _TOKEN_BUDGET.reset(reset)
 
 
 @functools.lru_cache(maxsize=1)
@@ -81,11 +112,15 @@ def _describe_expected(names) -> str:
     return "one of " + ", ".join(words)
 
 
+def shorten(text: str, width: int = 40) -> str:
+    """``text`` from the user's file for a message: at most ``width`` characters, an ellipsis where cut."""
+    return text if len(text) <= width else text[:width - 3] + "..."
+
+
 def _describe_found(token: Token) -> str:
     if token.type == "$END":
         return "the end of the file"
-    text = str(token)
-    return f"'{text}'" if len(text) <= 40 else f"'{text[:37]}...'"
+    return f"'{shorten(str(token))}'"
 
 
 def token_span(path: str, tok: Token) -> Span:
@@ -233,7 +268,7 @@ def _misspelt_keyword(word: str, accepted: set[str]) -> str | None:
         return None
     best = None
     for kw, name in _keyword_terminals().items():
-        if name not in accepted or kw == word:
+        if name not in accepted or kw == word or abs(len(word) - len(kw)) > 2:  # (the distance is at least that)
             continue
         dist = _edit_distance(word.lower(), kw)
         if dist <= (1 if len(kw) <= 4 else 2) and dist < len(kw) and (best is None or (dist, kw) < best):
@@ -246,7 +281,7 @@ def _syntax_help(expected: set[str], token: Token, glued: tuple | None = None, r
     word = str(token) if token.type != "$END" else ""
     if glued is not None:
         kw, _, tail = glued
-        return f"did you mean `{kw} {tail}`? a keyword is separated from the word after it by a space"
+        return f"did you mean `{kw} {shorten(str(tail))}`? a keyword is separated from the word after it by a space"
     if "UNIT" in expected:
         return "write a unit after the number, e.g. `10 ms` or `40 Hz`"
     if token.type == "RBRACE" and "COMPONENT" in expected:
@@ -267,7 +302,8 @@ def _syntax_help(expected: set[str], token: Token, glued: tuple | None = None, r
         if word in keywords:
             return (f"`{word}` cannot stand here: it belongs to another kind of declaration; "
                     f"specs/language.md gives the syntax of each")
-        return f"`{word}` is not a keyword of the language; specs/language.md gives the syntax of each declaration"
+        return (f"`{shorten(word)}` is not a keyword of the language; specs/language.md gives the syntax of each "
+                "declaration")
     if len(expected) == 1:
         return f"insert {_describe_expected(expected)} before {_describe_found(token)}, or remove {_describe_found(token)}"
     return (f"remove {_describe_found(token)}, or write what the declaration needs before it; "

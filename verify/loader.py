@@ -1,20 +1,24 @@
 """Read a project: the root file and everything it imports, each file once, cycles reported.
 
 Files are read as bytes and decoded as strict UTF-8; unreadable, missing or non-UTF-8 files become
-located diagnostics (E003, E004), never exceptions. Imports are resolved relative to the importing file.
+located diagnostics (E003, E004), never exceptions. An import is confined to the project's allowed
+directories before anything is opened (``verify.roots``: E006, E007), and what one run reads is bounded
+(``verify.limits``: E008). Text held in memory (an editor's unsaved buffers) takes the place of a file
+of the same path (``overlay``).
 """
 from __future__ import annotations
 
 import os
 import stat
 from dataclasses import dataclass, field
+from typing import Mapping
 
 from . import syntax as s
 from .diagnostics import DiagnosticSink
-from .parse import parse_text
+from .limits import DEFAULT_LIMITS, Limits
+from .parse import looks_like_model, parse_source
+from .roots import Refusal, Roots
 from .source import Span, SourceFile
-
-MAX_FILE_BYTES = 16 * 1024 * 1024
 
 
 @dataclass(frozen=True)
@@ -38,10 +42,14 @@ class Project:
         return tuple(sy for m in self.modules for sy in m.systems)
 
 
-def _read(path: str, sink: DiagnosticSink, at: Span | None,
-          sources: dict[str, SourceFile] | None = None) -> str | None:
-    """The text of ``path``, or None after reporting why not. A file that is not UTF-8 is still put in
-    ``sources`` (undecodable bytes replaced) so that the report can show the offending line."""
+def _shown(path: str) -> str:
+    """``path`` for a message: characters that cannot be shown (NUL, control characters) escaped."""
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in path)
+
+
+def read_bytes(path: str, sink: DiagnosticSink, at: Span | None, limit: int = DEFAULT_LIMITS.file_bytes) -> bytes | None:
+    """The bytes of regular file ``path``, at most ``limit`` + 1 of them (more than ``limit``: the file is
+    too large), or None after reporting why it cannot be read."""
     where = at or Span(path, 1, 1, 1, 1)
     shown = _shown(path)
     try:
@@ -56,7 +64,7 @@ def _read(path: str, sink: DiagnosticSink, at: Span | None,
             if not stat.S_ISREG(os.fstat(fd).st_mode):
                 _not_regular(shown, path, where, sink)
                 return None
-            data = fh.read(MAX_FILE_BYTES + 1)
+            data = fh.read(limit + 1)
     except ValueError:  # e.g. a NUL character in the path: no file can have that name
         sink.emit("E004", f"invalid file name {shown}: it contains a NUL character", where, "cannot be read",
                   help="correct the file name")
@@ -73,27 +81,50 @@ def _read(path: str, sink: DiagnosticSink, at: Span | None,
         sink.emit("E004", f"cannot read {shown}: {err.strerror or err}", where, "cannot be read",
                   help="check that the file exists and is readable")
         return None
-    if len(data) > MAX_FILE_BYTES:
-        sink.emit("E004", f"{path} is larger than {MAX_FILE_BYTES // (1024 * 1024)} MiB", where,
-                  "too large", help="split the model into several files joined by `import`")
-        return None
+    return data
+
+
+def _size(limit: int) -> str:
+    mib = 1024 * 1024
+    return f"{limit // mib} MiB" if limit % mib == 0 else f"{limit:,} bytes"
+
+
+def decode(data: bytes, path: str, sink: DiagnosticSink, sources: dict[str, SourceFile] | None = None) -> str | None:
+    """``data`` as strict UTF-8, or None after an E003. The file is still put in ``sources`` (undecodable
+    bytes replaced) so that the report can show where; a file that does not look like a model shows
+    nothing but the offending byte."""
     try:
         return data.decode("utf-8")
     except UnicodeDecodeError as err:
         before = data[: err.start]
         line = before.count(b"\n") + 1
         col = len(before[before.rfind(b"\n") + 1:].decode("utf-8")) + 1  # in characters, as in the snippet
+        span = Span(path, line, col, line, col + 1)
         if sources is not None:
-            sources[path] = SourceFile(path, data.decode("utf-8", errors="replace"))
-        sink.emit("E003", f"{path} is not UTF-8 text: byte 0x{data[err.start]:02x} at offset {err.start}",
-                  Span(path, line, col, line, col + 1), "not UTF-8",
-                  help="save the file as UTF-8 (it may have been saved as Latin-1 or Windows-1252)")
+            text = data.decode("utf-8", errors="replace")
+            prefix = before.decode("utf-8")
+            model_like = looks_like_model(prefix) and prefix.strip() != ""  # (a bad first byte: not a model)
+            sources[path] = SourceFile(path, text, None if model_like else span)
+        sink.emit("E003", f"{_shown(path)} is not UTF-8 text: byte 0x{data[err.start]:02x} at offset {err.start}",
+                  span, "not UTF-8", help="save the file as UTF-8 (it may have been saved as Latin-1 or Windows-1252)")
         return None
 
 
-def _shown(path: str) -> str:
-    """``path`` for a message: characters that cannot be shown (NUL, control characters) escaped."""
-    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in path)
+def _read(path: str, sink: DiagnosticSink, at: Span | None,
+          sources: dict[str, SourceFile] | None = None, limits: Limits = DEFAULT_LIMITS) -> str | None:
+    """The text of one file ``path``, or None after reporting why not (E003, E004, E008)."""
+    data = read_bytes(path, sink, at, limits.file_bytes)
+    if data is None:
+        return None
+    if len(data) > limits.file_bytes:
+        _file_too_large(path, limits, at, sink)
+        return None
+    return decode(data, path, sink, sources)
+
+
+def _file_too_large(path: str, limits: Limits, at: Span | None, sink: DiagnosticSink) -> None:
+    sink.emit("E008", f"{_shown(path)} is larger than {_size(limits.file_bytes)}, the limit for one file",
+              at or Span(path, 1, 1, 1, 1), "too large", help="split the model into several files joined by `import`")
 
 
 def _not_regular(shown: str, path: str, where: Span, sink: DiagnosticSink) -> None:
@@ -104,58 +135,128 @@ def _not_regular(shown: str, path: str, where: Span, sink: DiagnosticSink) -> No
               help="name a regular .vfy file; to check generated text, write it to a file first")
 
 
-def load_project(root: str, sink: DiagnosticSink) -> Project:
-    """Parse ``root`` and its imports. Diagnostics go to ``sink``; the project holds what parsed."""
+class _Loading:
+    """The state of one ``load_project``: what was read, the budget left, the import path."""
+
+    def __init__(self, sink: DiagnosticSink, roots: Roots, limits: Limits,
+                 overlay: Mapping[str, str] | None):
+        self.sink = sink
+        self.roots = roots
+        self.limits = limits
+        self.overlay = {os.path.abspath(p): t for p, t in (overlay or {}).items()}
+        self.modules: list[s.Module] = []
+        self.sources: dict[str, SourceFile] = {}
+        self.seen: dict[str, str] = {}  # realpath -> display path
+        self.stack: list[str] = []  # realpaths on the current import path
+        self.total = 0  # bytes read
+
+    def text(self, path: str, at: Span | None) -> str | None:
+        """The text of ``path``: an overlay's, else the file's (within the size limits)."""
+        held = self.overlay.get(os.path.abspath(path))
+        if held is not None:
+            size = len(held.encode("utf-8", errors="surrogatepass"))
+            if not self._fits(path, size, at):
+                return None
+            self.total += size
+            return held
+        data = read_bytes(path, self.sink, at, min(self.limits.file_bytes, self.limits.project_bytes - self.total))
+        if data is None or not self._fits(path, len(data), at):
+            return None
+        self.total += len(data)
+        return decode(data, path, self.sink, self.sources)
+
+    def _fits(self, path: str, size: int, at: Span | None) -> bool:
+        """``size`` more bytes from ``path`` are within the limits (else an E008)."""
+        if size > self.limits.file_bytes:
+            _file_too_large(path, self.limits, at, self.sink)
+            return False
+        if self.total + size > self.limits.project_bytes:
+            self.sink.emit("E008", f"reading {_shown(path)} would take the project's files over "
+                           f"{_size(self.limits.project_bytes)}, the limit for one project",
+                           at or Span(path, 1, 1, 1, 1), "too much to read",
+                           help="a model of this size is unusual: check the imports for a mistake")
+            return False
+        return True
+
+    def visit(self, path: str, at: Span | None) -> None:
+        try:
+            real = os.path.realpath(path)
+        except ValueError:  # a NUL character in the path: ``read_bytes`` reports it
+            read_bytes(path, self.sink, at)
+            return
+        if real in self.stack:
+            cycle = [self.seen[r] for r in self.stack[self.stack.index(real):]] + [self.seen[real]]
+            self.sink.emit("E103", "import cycle: " + " -> ".join(cycle), at or Span(path, 1, 1, 1, 1),
+                           "closes the cycle", help="move what both files need into a third file that both import")
+            return
+        if real in self.seen:
+            return
+        if not self._within_limits(at):
+            return
+        self.seen[real] = path
+        text = self.text(path, at)
+        if text is None:
+            return
+        parsed = parse_source(text, path, self.limits)
+        self.sources[path] = SourceFile(path, text, parsed.opaque)
+        for d in parsed.diagnostics:
+            self.sink.add(d)
+        module = parsed.module
+        if module is None:
+            return
+        self.modules.append(module)
+        self.stack.append(real)
+        for imp in module.imports:
+            target = self._resolve(path, imp)
+            if target is not None:
+                self.visit(target, imp.span)
+        self.stack.pop()
+
+    def _within_limits(self, at: Span | None) -> bool:
+        if at is None:
+            return True
+        if len(self.stack) > self.limits.import_depth:  # (the root file is at depth 0, what it imports at 1)
+            self.sink.emit("E008", f"imports are nested more than {self.limits.import_depth} deep", at,
+                           "one import too deep", help="import the files a model needs from fewer levels: a file "
+                           "may import several files")
+            return False
+        if len(self.seen) >= self.limits.files:
+            self.sink.emit("E008", f"the project has more than {self.limits.files:,} files", at, "one file too many",
+                           help="a model of this size is unusual: check the imports for a mistake")
+            return False
+        return True
+
+    def _resolve(self, importer: str, imp: s.Import) -> str | None:
+        """The path ``imp`` names, or None after reporting why it is not followed."""
+        found = self.roots.resolve(importer, imp.path)
+        if isinstance(found, Refusal):
+            self.sink.emit(found.code, found.message, imp.path_span, found.label, help=found.help)
+            return None
+        return found
+
+
+def load_project(root: str, sink: DiagnosticSink, *, roots: Roots | None = None, limits: Limits = DEFAULT_LIMITS,
+                 overlay: Mapping[str, str] | None = None) -> Project:
+    """Parse ``root`` and its imports, confined to ``roots`` (default: the directory of ``root``).
+    Diagnostics go to ``sink``; the project holds what parsed."""
     if not root:
         sink.emit("E004", "no file name given", Span("<command line>", 1, 1, 1, 1), "cannot be read",
                   help="name a .vfy file, e.g. `verify check examples/navigation/navigation.vfy`")
         return Project(root, (), {})
     root = os.path.normpath(root)
-    modules: list[s.Module] = []
-    sources: dict[str, SourceFile] = {}
-    seen: dict[str, str] = {}  # realpath -> display path
-    stack: list[str] = []  # realpaths on the current import path
-
-    def visit(path: str, at: Span | None) -> None:
-        try:
-            real = os.path.realpath(path)
-        except ValueError:  # a NUL character in the path: ``_read`` reports it
-            _read(path, sink, at, sources)
-            return
-        if real in stack:
-            cycle = [seen[r] for r in stack[stack.index(real):]] + [seen[real]]
-            sink.emit("E103", "import cycle: " + " -> ".join(cycle), at or Span(path, 1, 1, 1, 1),
-                      "closes the cycle", help="move what both files need into a third file that both import")
-            return
-        if real in seen:
-            return
-        seen[real] = path
-        text = _read(path, sink, at, sources)
-        if text is None:
-            return
-        sources[path] = SourceFile(path, text)
-        module = parse_text(text, path, sink)
-        if module is None:
-            return
-        modules.append(module)
-        stack.append(real)
-        base = os.path.dirname(path)
-        for imp in module.imports:
-            target = os.path.normpath(os.path.join(base, imp.path))
-            visit(target, imp.span)
-        stack.pop()
-
-    visit(root, None)
-    del visit  # (a closure that refers to itself: left alone, the cycle would keep every module alive until the
-    # next full collection, which ``gcpause`` defers)
-    return Project(root, tuple(modules), sources)
+    loading = _Loading(sink, roots if roots is not None else Roots.of_file(root), limits, overlay)
+    loading.visit(root, None)
+    return Project(root, tuple(loading.modules), loading.sources)
 
 
-def project_from_text(text: str, path: str, sink: DiagnosticSink) -> Project:
+def project_from_text(text: str, path: str, sink: DiagnosticSink, limits: Limits = DEFAULT_LIMITS) -> Project:
     """A one-file project from text in memory (imports are not followed)."""
-    module = parse_text(text, path, sink)
+    parsed = parse_source(text, path, limits)
+    for d in parsed.diagnostics:
+        sink.add(d)
+    module = parsed.module
     if module is not None:
         for imp in module.imports:
             sink.emit("E004", f"imports are not followed for in-memory text: {imp.path}", imp.span,
                       "not followed", help="load the file from disk instead")
-    return Project(path, (module,) if module else (), {path: SourceFile(path, text)})
+    return Project(path, (module,) if module else (), {path: SourceFile(path, text, parsed.opaque)})

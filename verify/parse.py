@@ -8,6 +8,7 @@ The transformer only builds nodes.
 from __future__ import annotations
 
 import functools
+from dataclasses import dataclass
 from fractions import Fraction
 
 from lark import Token, Tree
@@ -15,19 +16,53 @@ from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedTok
 
 from . import syntax as s
 from .construct import direct_constructor
-from .diagnostics import DiagnosticSink
-from .lalr import FastParser, Unparsable, position
-from .larkparse import (MAX_NUMBER_LENGTH, MAX_SYNTAX_ERRORS, _accepted, _glued_keyword, _keyword_terminals,
-                        _parser, _repair, _report_unexpected, _skip_unterminated_string, token_span)
+from .diagnostics import Diagnostic, DiagnosticSink
+from .lalr import FastParser, TooManyTokens, Unparsable, position
+from .larkparse import (_SKIP, _WORD_RE, _accepted, _glued_keyword, _keyword_terminals, _parser, _repair,
+                        _report_unexpected, _skip_unterminated_string, counting_tokens, token_span)
+from .limits import DEFAULT_LIMITS, Limits
 from .source import Span
 
+#: the words a model file can start with (``start: item*``, each item opened by one of them)
+_FIRST_WORDS = frozenset({"import", "component", "system"})
 
-def parse_text(text: str, path: str, sink: DiagnosticSink) -> s.Module | None:
-    """Parse ``text``; report syntax errors into ``sink``. Returns None when the text has any.
+
+@dataclass(frozen=True)
+class Parsed:
+    """What parsing one text gave: the tree (None after a syntax error), the diagnostics, and — for a
+    text that is not the language from its first token — the span of that token, the only part of the
+    text a report may show (``SourceFile.only``)."""
+
+    module: s.Module | None
+    diagnostics: tuple[Diagnostic, ...] = ()
+    opaque: Span | None = None
+
+
+def looks_like_model(text: str) -> bool:
+    """The first word of ``text`` (after white space and comments) can start a model, or it has none."""
+    if text.startswith("\ufeff"):
+        text = text[1:]
+    pos = _SKIP.match(text).end()
+    if pos >= len(text):
+        return True
+    word = _WORD_RE.match(text, pos)
+    return word is not None and word.group(0) in _FIRST_WORDS
+
+
+def parse_text(text: str, path: str, sink: DiagnosticSink, limits: Limits = DEFAULT_LIMITS) -> s.Module | None:
+    """Parse ``text``; report syntax errors into ``sink``. Returns None when the text has any."""
+    parsed = parse_source(text, path, limits)
+    sink.items.extend(parsed.diagnostics)
+    return parsed.module
+
+
+def parse_source(text: str, path: str, limits: Limits = DEFAULT_LIMITS) -> Parsed:
+    """Parse ``text`` (the contents of file ``path``).
 
     The fast path (``verify.lalr``) decides valid input; anything it does not accept — every syntax
     error, a number error (E005), or a lexical corner it leaves to Lark — is parsed again by Lark with
-    error recovery, which gives the reports. Both build the tree with the same ``_Builder``.
+    error recovery, which gives the reports. Both build the tree with the same ``_Builder``. A text of
+    more than ``limits.tokens`` tokens is refused at the first one too many (E008).
 
     A byte order mark at the start of the text is skipped (columns on line 1 count from after it)."""
     if text.startswith("\ufeff"):
@@ -35,14 +70,29 @@ def parse_text(text: str, path: str, sink: DiagnosticSink) -> s.Module | None:
     fast = _fast_parser()
     if fast is not None:
         try:
-            builder = _Builder(path, DiagnosticSink())
-            return fast.parse(text, builder.callbacks(), builder.tokens())
+            builder = _Builder(path, DiagnosticSink(), limits)
+            return Parsed(fast.parse(text, builder.callbacks(), builder.tokens(), limits.tokens))
+        except TooManyTokens as err:
+            return Parsed(None, (_too_many_tokens(path, err.at, limits),))
         except (Unparsable, _NumberError):
             pass
-    return _parse_with_lark(text, path, sink)
+    sink = DiagnosticSink()
+    module = _parse_with_lark(text, path, sink, limits)
+    if module is None and sink.items and not looks_like_model(text):
+        first = sink.items[0]  # (at the first token: no model starts otherwise)
+        return Parsed(None, (first,), first.span)
+    return Parsed(module, tuple(sink.items))
 
 
-def _parse_with_lark(text: str, path: str, sink: DiagnosticSink) -> s.Module | None:
+def _too_many_tokens(path: str, at: int, limits: Limits) -> Diagnostic:
+    line, column = at >> 32, at & 0xFFFFFFFF
+    return DiagnosticSink().emit(
+        "E008", f"the file has more than {limits.tokens:,} tokens, the limit for one file",
+        Span(path, line, column, line, column + 1), "one token too many",
+        help="split the model into several files joined by `import`")
+
+
+def _parse_with_lark(text: str, path: str, sink: DiagnosticSink, limits: Limits = DEFAULT_LIMITS) -> s.Module | None:
     errors: list[UnexpectedInput] = []
     last_line = [-1]
 
@@ -70,20 +120,26 @@ def _parse_with_lark(text: str, path: str, sink: DiagnosticSink) -> s.Module | N
                 return False  # an unterminated comment: the rest of the file is its text
             if text.startswith('"', err.pos_in_stream):
                 _skip_unterminated_string(err, text)
-        return len(errors) < MAX_SYNTAX_ERRORS
+        return len(errors) < limits.syntax_errors
 
+    too_many = None
     try:
-        tree = _parser().parse(text, on_error=on_error)
+        with counting_tokens(limits.tokens):
+            tree = _parser().parse(text, on_error=on_error)
     except UnexpectedInput as err:
         if not errors or getattr(err, "line", None) != last_line[0]:
             errors.append(err)
         tree = None
+    except TooManyTokens as err:
+        too_many, tree = err, None
     for err in errors:
         _report_unexpected(sink, path, err, text)
+    if too_many is not None:
+        sink.add(_too_many_tokens(path, too_many.at, limits))
     if errors or tree is None:
         return None
     try:
-        return _Builder(path, sink).transform(tree)
+        return _Builder(path, sink, limits).transform(tree)
     except _NumberError:
         return None
 
@@ -102,17 +158,17 @@ class _NumberError(Exception):
     pass
 
 
-def parse_number(tok: Token, path: str, sink: DiagnosticSink) -> Fraction:
+def parse_number(tok: Token, path: str, sink: DiagnosticSink, limits: Limits = DEFAULT_LIMITS) -> Fraction:
     """The exact value of a NUMBER token (E005 into ``sink`` and ``_NumberError`` if it has none)."""
-    return _exact(str(tok), lambda: token_span(path, tok), sink)
+    return _exact(str(tok), lambda: token_span(path, tok), sink, limits.number_length)
 
 
-def _exact(text: str, where, sink: DiagnosticSink) -> Fraction:
+def _exact(text: str, where, sink: DiagnosticSink, max_length: int) -> Fraction:
     """The value of NUMBER ``text``; ``where()`` gives its span for a report."""
-    if text.isascii() and text.isdigit() and len(text) <= MAX_NUMBER_LENGTH:  # common; no regex (Fraction(str))
+    if text.isascii() and text.isdigit() and len(text) <= max_length:  # common; no regex (Fraction(str))
         return Fraction(int(text))
-    if len(text) > MAX_NUMBER_LENGTH:
-        sink.emit("E005", f"number has {len(text)} characters; at most {MAX_NUMBER_LENGTH} are allowed",
+    if len(text) > max_length:
+        sink.emit("E005", f"number has {len(text)} characters; at most {max_length} are allowed",
                   where(), "too long", help="use a larger unit, e.g. `2 s` instead of `2000000000 ns`")
         raise _NumberError
     if "/" not in text:  # a decimal: its digits over a power of ten (the value of Fraction(text), no regex)
@@ -130,11 +186,12 @@ def _text(text: str, start: int, end: int) -> str:
     return text
 
 
-def _token_builders(path: str, sink: DiagnosticSink):
+def _token_builders(path: str, sink: DiagnosticSink, limits: Limits):
     """The three functions the parser calls most, as closures over the file: ``span(start, end)``, the
     span between two positions (``lalr.position``; the file's first position if empty), and the values of
     a NAME and of a NUMBER token, ``name(text, start, end)`` and ``number(text, start, end)``."""
     new_span, new_name = _new_span, _new_name
+    max_length = limits.number_length
     numbers: dict[str, Fraction] = {}  # a file repeats its numbers: each text is read once
 
     def span(start: int | None, end: int | None) -> Span:
@@ -148,7 +205,7 @@ def _token_builders(path: str, sink: DiagnosticSink):
     def number(text: str, start: int, end: int) -> tuple[Fraction, int, int]:
         value = numbers.get(text)
         if value is None:
-            value = numbers[text] = _exact(text, lambda: span(start, end), sink)
+            value = numbers[text] = _exact(text, lambda: span(start, end), sink, max_length)
         return value, start, end
 
     return span, name, number
@@ -160,14 +217,14 @@ class _Builder:
     One method per rule (its alias or name), called with the rule's start and end positions
     (``lalr.position``; None for an empty rule) and its children as Lark's tree would hold them: nodes built by these
     methods and the tokens the rule keeps (``tokens``: a NAME is a ``syntax.Name``, a NUMBER the tuple (value,
-    start, end) — its span is made only where a rule keeps one —, an RBRACE its ``Span``, a UNIT or STRING its
-    text). ``verify.lalr`` calls them while parsing; ``transform`` applies them to a Lark tree (the
+    start, end) — its span is made only where a rule keeps one —, an RBRACE its ``Span``, a STRING (its text,
+    its ``Span``), a UNIT its text). ``verify.lalr`` calls them while parsing; ``transform`` applies them to a Lark tree (the
     error-recovering path)."""
 
-    def __init__(self, path: str, sink: DiagnosticSink):
+    def __init__(self, path: str, sink: DiagnosticSink, limits: Limits = DEFAULT_LIMITS):
         self.path = path
         self.sink = sink
-        self._span, self._name, self._number_token = _token_builders(path, sink)
+        self._span, self._name, self._number_token = _token_builders(path, sink, limits)
 
     def callbacks(self) -> dict:
         return {name: getattr(self, name) for name in _fast_parser().callback_names()}
@@ -186,7 +243,10 @@ class _Builder:
     # ---------------------------------------------------------------- helpers
     def tokens(self) -> dict:
         """The value of each kind of token the tree keeps (``lalr.FastParser.parse``)."""
-        return {"NAME": self._name, "NUMBER": self._number_token, "RBRACE": self._span_of}
+        return {"NAME": self._name, "NUMBER": self._number_token, "RBRACE": self._span_of, "STRING": self._string}
+
+    def _string(self, text: str, start: int, end: int) -> tuple[str, Span]:
+        return text, self._span(start, end)
 
     def _span_of(self, text: str, start: int, end: int) -> Span:
         return self._span(start, end)
@@ -203,7 +263,8 @@ class _Builder:
         return s.Module(self.path, imports, comps, systems, self._span(start, end))
 
     def import_decl(self, start, end, children):
-        return s.Import(children[0][1:-1], self._span(start, end))
+        text, where = children[0]
+        return s.Import(text[1:-1], self._span(start, end), where)
 
     # ---------------------------------------------------------------- quantities
     def quantity(self, start, end, children):

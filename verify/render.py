@@ -8,13 +8,15 @@ JSON schema ``verify.diagnostics/1``::
                       "end_column", "message"}], "notes": [...], "help": str | null, "spec": str}],
      "summary": {"errors": int, "warnings": int}}
 
-Lines and columns are 1-based; ``end_column`` is exclusive.
+Lines and columns are 1-based; ``end_column`` is exclusive. A snippet of source text shows at most
+``source.SNIPPET_WIDTH`` characters of a line (``source.excerpt``), and nothing of a file that is not a
+model but its offending token (``SourceFile.only``).
 """
 from __future__ import annotations
 
 from .codes import spec_anchor
 from .diagnostics import Diagnostic, Label, Severity
-from .source import SourceFile, Span
+from .source import SourceFile, Span, excerpt
 
 
 def _gutter_width(d: Diagnostic) -> int:
@@ -30,6 +32,7 @@ def _snippet(label: Label, marker: str, sources: dict[str, SourceFile], width: i
     text = source.line(span.line).replace("\t", " ")
     start = max(span.column, 1)
     end = span.end_column if span.end_line == span.line else len(text) + 1
+    text, start, end = excerpt(text, start, end)
     length = max(1, min(end, len(text) + 1) - start)
     pad = " " * width
     underline = " " * (start - 1) + marker * length

@@ -312,6 +312,7 @@ class System:
 class Import:
     path: str
     span: Span = _span()
+    path_span: Span = _span()  #: the quoted file name
 
 
 @dataclass(frozen=True)

@@ -96,7 +96,7 @@ def cmd_prove(args) -> int:
             return _fail(f"{what} {path}: the directory {os.path.dirname(os.path.abspath(path))} does not exist")
     if args.output and args.trace_svg and os.path.realpath(args.output) == os.path.realpath(args.trace_svg):
         return _fail("-o and --trace-svg name the same file")
-    result = api.load(args.file)
+    result = api.load(args.file, root=args.root, include=tuple(args.include or ()))
     if not result.ok:
         return _invalid(result.diagnostics, result.sources, args)
     try:
