@@ -1,0 +1,61 @@
+"""The seed corpus: the examples, the minimal failing example of every diagnostic code and the golden
+files of their reports, each as one file's bytes (a system's imports are inlined: the targets parse
+text in memory)."""
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+_IMPORT = re.compile(r'^import "([^"]*)"[^\n]*\n', re.MULTILINE)
+_BLOCK = re.compile(r"^```vfy([^\n]*)\n(.*?)^```[ \t]*$", re.MULTILINE | re.DOTALL)
+
+
+def _inlined(path: Path, seen: set[Path] | None = None) -> str:
+    """The text of ``path`` with every import replaced by the imported file's text (once each)."""
+    seen = set() if seen is None else seen
+    seen.add(path)
+    text = path.read_text(encoding="utf-8")
+
+    def include(match: re.Match) -> str:
+        target = (path.parent / match.group(1)).resolve()
+        if target in seen or not target.is_file():
+            return ""
+        return _inlined(target, seen) + "\n"
+
+    return _IMPORT.sub(include, text)
+
+
+def _spec_examples() -> dict[str, bytes]:
+    text = (ROOT / "specs" / "diagnostics.md").read_text(encoding="utf-8")
+    seeds = {}
+    for part in re.split(r"^## ", text, flags=re.MULTILINE)[1:]:
+        code = part.split(None, 1)[0]
+        blocks = _BLOCK.findall(part)
+        body = "\n".join(_IMPORT.sub("", b) for _, b in reversed(blocks))  # imported files first
+        encoding = "latin-1" if any("encoding=latin-1" in attrs for attrs, _ in blocks) else "utf-8"
+        seeds[f"spec-{code}"] = body.encode(encoding, errors="replace")
+    return seeds
+
+
+def seeds() -> dict[str, bytes]:
+    """Every seed by a name, in a fixed order."""
+    out: dict[str, bytes] = {}
+    for path in sorted((ROOT / "examples").rglob("*.vfy")):
+        out[f"example-{path.stem}"] = _inlined(path).encode("utf-8")
+    out.update(_spec_examples())
+    for path in sorted((ROOT / "tests" / "golden" / "diagnostics").rglob("*.txt")):
+        out[f"golden-{path.stem}"] = path.read_bytes()
+    return out
+
+
+def dictionary() -> list[str]:
+    """libFuzzer dictionary entries: the keywords, punctuation and units of the grammar."""
+    from verify.larkparse import _literal_words
+
+    words = sorted({w[1:-1] for w in _literal_words().values()} | {"ms", "us", "ns", "s", "Hz", "kHz", "?"})
+    return [json_quote(w) for w in words]
+
+
+def json_quote(word: str) -> str:
+    return '"' + word.replace("\\", "\\\\").replace('"', '\\"') + '"'

@@ -1,0 +1,185 @@
+"""The fuzz targets: one function per pipeline stage, each taking the bytes of one input.
+
+A target raises on a finding — an exception escaping the stage (an internal error: the command line
+would exit 70) or a broken invariant (``Finding``) — and returns normally otherwise. They run under
+atheris (``fuzz.harness``, coverage-guided) and without it (``tests/test_fuzz.py`` replays the seeds
+and every regression input through them), so this module never imports atheris.
+
+| target | what runs on the input | invariants |
+|---|---|---|
+| ``parse`` | ``parse_source`` | every diagnostic located and in the language's words; a tree prints (``fmt``) to text that parses to the same tree |
+| ``validate`` | ``verify.load_text`` (resolve, validate, models, chains, rates) and the text and JSON renderers | located diagnostics; a valid system has a model |
+| ``analyze`` | ``verify.timing.analyze`` of every configured system, both data-age variants, its text and JSON reports | every response time at least the WCET |
+| ``synth`` | ``synthesize`` of every system with holes (at most ``SMALL`` tasks, a small solver budget) and its reports | a configuration found passes the independent re-check |
+| ``prove`` | ``prove`` of every configured system (at most ``SMALL`` tasks, budget ``PROVE_BUDGET``, one process) and its text, JSON and SARIF reports | the exit code follows the verdicts |
+| ``fmt`` | ``format_text`` twice | ``fmt(fmt(x)) == fmt(x)``, and the tree and the models of ``fmt(x)`` equal those of ``x`` |
+"""
+from __future__ import annotations
+
+import io
+import json
+from contextlib import redirect_stderr, redirect_stdout
+from typing import Callable
+
+#: systems larger than this are only loaded by the synth and prove targets (a mutant that copies a
+#: block many times would spend the run in one input)
+SMALL = 12
+PROVE_BUDGET = 4
+SYNTH_RLIMIT = 300_000
+PROVE_RLIMIT = 2_000_000
+#: what a user must never see in a message (as tests/test_robustness.py)
+FORBIDDEN = ("__ANON", "$END", "Token(", "Tree(", "Traceback", "Fraction(", "NoneType")
+
+
+class Finding(AssertionError):
+    """An invariant a stage broke on the input."""
+
+
+def _check(condition: bool, what: str) -> None:
+    if not condition:
+        raise Finding(what)
+
+
+def _text(data: bytes) -> str:
+    """The input as text, as the loader reads a file: strict UTF-8, else undecodable bytes replaced
+    (the loader would report E003; the stages after it still get fuzzed text)."""
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError:
+        return data.decode("utf-8", errors="replace")
+
+
+def _located(diagnostics) -> None:
+    for d in diagnostics:
+        _check(bool(d.code and d.message), f"a diagnostic without code or message: {d}")
+        _check(d.span.line >= 1 and d.span.column >= 1, f"{d.code} is not located: {d.span}")
+        words = d.message + (d.help or "") + d.primary.message
+        bad = [w for w in FORBIDDEN if w in words]
+        _check(not bad, f"{d.code} shows {bad}: {words!r}")
+
+
+def _render(diagnostics, sources) -> None:
+    from verify.render import diagnostics_json, render_all_text
+
+    render_all_text(list(diagnostics), sources)
+    json.dumps(diagnostics_json(list(diagnostics)))
+
+
+# ------------------------------------------------------------------ the stages
+
+
+def parse(data: bytes) -> None:
+    from verify.fmt import format_module
+    from verify.parse import parse_source
+
+    text = _text(data)
+    parsed = parse_source(text, "fuzz.vfy")
+    _located(parsed.diagnostics)
+    _check((parsed.module is None) == any(d.severity.value == "error" for d in parsed.diagnostics),
+           "a tree and a syntax error, or neither")
+    if parsed.module is not None:
+        try:
+            printed = format_module(parsed.module)
+        except ValueError:  # a tree no text expresses (documented: fmt reports it)
+            return
+        again = parse_source(printed, "fuzz.vfy")
+        _check(again.module == parsed.module, "the printed tree parses to another tree")
+
+
+def validate(data: bytes) -> None:
+    import verify
+
+    result = verify.load_text(_text(data), "fuzz.vfy")
+    _located(result.diagnostics)
+    _render(result.diagnostics, result.sources)
+    if result.ok:
+        _check(len(result.models) == len(result.project.systems), "a valid system without a model")
+
+
+def _models(data: bytes, holes: bool, small: bool = False):
+    import verify
+
+    result = verify.load_text(_text(data), "fuzz.vfy")
+    for name, model in sorted(result.models.items()):
+        if bool(model.holes) == holes and (not small or len(model.tasks) <= SMALL):
+            yield result, model
+
+
+def analyze(data: bytes) -> None:
+    from verify.timing import analyze as run, diagnostics_of
+    from verify.timing.report import to_json, to_text
+
+    for result, model in _models(data, holes=False):
+        for variant in ("reduced", "non-reduced"):
+            analysis = run(model, data_age=variant)
+            problems = diagnostics_of(analysis)
+            _located(problems)
+            to_text(analysis)
+            json.dumps(to_json(analysis))
+            _render(problems, result.sources)
+            for task in analysis.tasks:
+                _check(task.wcrt is None or task.wcrt >= model.task(task.id).wcet,
+                       f"{task.id}: response time below its WCET")
+
+
+def synth(data: bytes) -> None:
+    from verify.synth import TooManyCandidates, synthesize
+    from verify.synth.report import to_json, to_text
+    from verify.synth.writeback import completed_text, recheck
+
+    for result, model in _models(data, holes=True, small=True):
+        try:
+            found = synthesize(result, model.name, objective="utilisation", rlimit=SYNTH_RLIMIT)
+        except TooManyCandidates:
+            continue  # (documented: E403)
+        _located(found.diagnostics)
+        to_text(found)
+        json.dumps(to_json(found, "fuzz.vfy"))
+        if found.model is not None and found.status == "sat":
+            text = completed_text(result, found.system, found.choices)
+            problems = recheck(result, found.system, text)[3]
+            _check(not problems, f"a synthesized configuration fails the re-check: {problems}")
+
+
+def prove(data: bytes) -> None:
+    from verify.prove import prove as run
+    from verify.prove.command import to_json, to_text
+    from verify.prove.sarif import to_sarif
+
+    for result, model in _models(data, holes=False, small=True):
+        proof = run(model, budget=PROVE_BUDGET, rlimit=PROVE_RLIMIT, jobs=1)
+        _located(proof.diagnostics)
+        statuses = {v.status for v in proof.verdicts}
+        expected = 1 if "violated" in statuses else 3 if "undecided" in statuses else 0
+        _check(proof.exit_code == expected, f"exit code {proof.exit_code} for verdicts {sorted(statuses)}")
+        to_text(model, proof)
+        json.dumps(to_json(model, proof))
+        json.dumps(to_sarif(list(proof.diagnostics)))
+
+
+def fmt(data: bytes) -> None:
+    import verify
+    from verify.fmt import format_text
+
+    text = _text(data)
+    once, diagnostics = format_text(text, "fuzz.vfy")
+    _located(diagnostics)
+    if once is None:
+        return
+    twice, _ = format_text(once, "fuzz.vfy")
+    _check(twice == once, "fmt is not idempotent")
+    before, after = verify.load_text(text, "fuzz.vfy"), verify.load_text(once, "fuzz.vfy")
+    _check(before.project.modules == after.project.modules, "fmt changed the tree")
+    _check(before.models == after.models, "fmt changed a model")
+    _check([d.code for d in before.diagnostics] == [d.code for d in after.diagnostics], "fmt changed the diagnostics")
+
+
+TARGETS: dict[str, Callable[[bytes], None]] = {
+    "parse": parse, "validate": validate, "analyze": analyze, "synth": synth, "prove": prove, "fmt": fmt,
+}
+
+
+def run(target: str, data: bytes) -> None:
+    """Run ``target`` on ``data`` with its output (there should be none) swallowed."""
+    with redirect_stdout(io.StringIO()), redirect_stderr(io.StringIO()):
+        TARGETS[target](data)
