@@ -143,8 +143,8 @@ def synth(data: bytes) -> None:
 
 def prove(data: bytes) -> None:
     from verify.prove import prove as run
-    from verify.prove.command import to_json, to_text
-    from verify.prove.sarif import to_sarif
+    from verify.prove.report import to_json, to_text
+    from verify.sarif import to_sarif
 
     for result, model in _models(data, holes=False, small=True):
         proof = run(model, budget=PROVE_BUDGET, rlimit=PROVE_RLIMIT, jobs=1)

@@ -28,6 +28,7 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 
 from .. import syntax as s
+from ..diagnostics import Diagnostic, DiagnosticSink
 from ..model import DataTriggered, Hole, Periodic, SystemModel, TaskModel
 from ..resolve import SystemScope
 from ..units import fmt_number, fmt_time
@@ -105,6 +106,13 @@ class TooManyCandidates(ValueError):
     def __init__(self, task: TaskModel, count: int):
         super().__init__(f"{task.id}: {count} candidates")
         self.task, self.count = task, count
+
+    def diagnostic(self) -> Diagnostic:
+        """E403 at the hole."""
+        return DiagnosticSink().emit(
+            "E403", f"`{self.task.id}` would have {self.count} candidate values; synth considers at most "
+            f"{MAX_CANDIDATES} per hole", self.task.activation.span, "too many candidates",
+            help="use a coarser `step`, or a narrower range")
 
 
 # ================================================================== trigger ports

@@ -1,4 +1,4 @@
-"""SARIF 2.1.0 logs of ``prove`` diagnostics, for code scanning (specs/proof.md §9).
+"""SARIF 2.1.0 logs of diagnostics (of `prove` and `check`), for code scanning (specs/proof.md §9).
 
 One run, tool driver "verify" whose rules are the diagnostic codes used (in code order); one result
 per diagnostic: ``level`` from the severity, the primary location at the diagnostic's span (for a
@@ -14,10 +14,10 @@ import pathlib
 import re
 from urllib.parse import quote
 
-from .. import __version__ as VERSION
-from ..codes import CODES, spec_anchor
-from ..diagnostics import Diagnostic, Severity
-from ..source import Span
+from . import __version__ as VERSION
+from .codes import CODES, spec_anchor
+from .diagnostics import Diagnostic, Severity
+from .source import Span
 
 SCHEMA_URI = "https://json.schemastore.org/sarif-2.1.0.json"
 LEVELS = {Severity.ERROR: "error", Severity.WARNING: "warning", Severity.NOTE: "note"}

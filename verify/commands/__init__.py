@@ -1,0 +1,20 @@
+"""The commands of the command line, one module each (``verify.cli`` builds the argument parser from them).
+
+A command module holds ``HELP`` (one line), ``RESULT`` (the kind of report it renders, whose formats
+``verify.outputs`` lists for ``--format``; None for a command without one), ``MODEL`` (it reads a model
+FILE and takes ``--root``/``--include``), ``SYSTEM`` (it takes ``--system``), ``add_arguments(parser)``
+for its own options and ``run(args) -> int`` (the exit code, ``common``). A new command is one module
+listed in ``COMMANDS``.
+"""
+from __future__ import annotations
+
+import importlib
+from types import ModuleType
+
+#: the commands, in the order ``verify --help`` lists them
+COMMANDS = ("check", "analyze", "synth", "prove", "fmt", "explain")
+
+
+def command(name: str) -> ModuleType:
+    """The module of command ``name``."""
+    return importlib.import_module(f"{__name__}.{name}")

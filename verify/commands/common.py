@@ -1,0 +1,134 @@
+"""What the commands share: exit codes, loading the model a command names, showing a report, and
+writing files without ever losing what the user wrote.
+
+Exit codes (stable, documented in README.md):
+  0  ok: the model is valid / every spec holds
+  1  a spec is violated, or synthesis is unsatisfiable
+  2  invalid input or usage (diagnostics say where)
+  3  undecided (solver budget exhausted, or the command cannot decide yet)
+  70 internal error (a bug: please report it)
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import stat
+import sys
+import tempfile
+from typing import Sequence
+
+from .. import api
+from ..diagnostics import Diagnostic, DiagnosticSink
+from ..model import SystemModel
+from ..outputs import Output, Report, render
+from ..render import render_all_text
+from ..source import Span
+
+EXIT_OK, EXIT_VIOLATED, EXIT_INVALID, EXIT_UNDECIDED, EXIT_INTERNAL = 0, 1, 2, 3, 70
+
+
+def load_args(args: argparse.Namespace) -> api.LoadResult:
+    """``api.load`` of the command's FILE, with its ``--root`` and ``--include``."""
+    return api.load(args.file, root=args.root, include=tuple(args.include or ()))
+
+
+def show(output: Output) -> None:
+    """Write a rendered report: its standard output part, then its standard error part."""
+    if output.stdout:
+        sys.stdout.write(output.stdout)
+    if output.stderr:
+        sys.stderr.write(output.stderr)
+
+
+def show_diagnostics(args: argparse.Namespace, diagnostics: Sequence[Diagnostic], sources) -> None:
+    """Diagnostics of a model that does not load, in the command's ``--format``."""
+    fmt = getattr(args, "format", "text")
+    show(render("diagnostics", fmt, Report("diagnostics", args.file, tuple(diagnostics), sources)))
+
+
+def load_or_fail(args: argparse.Namespace) -> api.LoadResult | int:
+    """The loaded model, or EXIT_INVALID after showing why it does not load."""
+    result = load_args(args)
+    if not result.ok:
+        show_diagnostics(args, result.diagnostics, result.sources)
+        return EXIT_INVALID
+    return result
+
+
+def select(result: api.LoadResult, args: argparse.Namespace) -> SystemModel | None:
+    """The system ``--system`` names (or the only one), or None after showing why there is none."""
+    try:
+        return result.system(args.system)
+    except api.SelectionError as err:
+        show_diagnostics(args, (err.diagnostic,), result.sources)
+        return None
+
+
+def load_configured(args: argparse.Namespace, command: str) -> tuple[api.LoadResult, SystemModel] | int:
+    """The loaded model and its configured system (no synthesis holes), or EXIT_INVALID."""
+    result = load_or_fail(args)
+    if isinstance(result, int):
+        return result
+    system = select(result, args)
+    if system is None:
+        return EXIT_INVALID
+    holes = api.require_configured(system, command)
+    if holes:
+        show_diagnostics(args, holes, result.sources)
+        return EXIT_INVALID
+    return result, system
+
+
+def fail(message: str) -> int:
+    """A usage error (exit 2)."""
+    print(f"error: {message}", file=sys.stderr)
+    return EXIT_INVALID
+
+
+def cannot_write(path: str, err: OSError) -> int:
+    """E004 for a file that cannot be written (exit 2); the file itself is left as it was."""
+    sink = DiagnosticSink()
+    sink.emit("E004", f"cannot write {path}: {err.strerror or err}", Span(path, 1, 1, 1, 1), "cannot be written",
+              help="check that the file and its directory are writable; nothing was changed")
+    print(render_all_text(sink.items, {}), file=sys.stderr)
+    return EXIT_INVALID
+
+
+def replace_file(path: str, text: str) -> int:
+    """Rewrite ``path`` atomically: write a temporary file in the same directory, give it the file's
+    mode, and rename it over the file (through a symbolic link, the file it points to). On any failure
+    the original file is untouched and the temporary file removed."""
+    target = os.path.realpath(path)
+    tmp = None
+    try:
+        mode = stat.S_IMODE(os.stat(target).st_mode)
+        fd, tmp = tempfile.mkstemp(prefix=".", suffix=".vfy.tmp", dir=os.path.dirname(target))
+        with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
+            fh.write(text)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.chmod(tmp, mode)
+        os.replace(tmp, target)
+        tmp = None
+    except OSError as err:
+        return cannot_write(path, err)
+    finally:
+        if tmp is not None:
+            try:
+                os.unlink(tmp)
+            except OSError:
+                pass
+    return EXIT_OK
+
+
+def write_new_file(path: str, text: str, force: bool) -> int:
+    """Write ``text`` to ``path``, which must not exist unless ``force``."""
+    if os.path.exists(path) and not force:
+        print(f"error: {path} exists; refusing to overwrite it (pass --force to replace it)", file=sys.stderr)
+        return EXIT_INVALID
+    try:
+        with open(path, "w", encoding="utf-8") as fh:
+            fh.write(text)
+    except OSError as err:
+        return cannot_write(path, err)
+    return EXIT_OK

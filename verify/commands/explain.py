@@ -1,0 +1,32 @@
+"""``verify explain CODE``: the meaning of a diagnostic code, with its minimal failing example."""
+from __future__ import annotations
+
+import argparse
+import sys
+
+from ..codes import CODES
+from .common import EXIT_INVALID, EXIT_OK
+
+HELP = "explain a diagnostic code with a minimal failing example"
+RESULT = None
+MODEL, SYSTEM = False, False
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("code", metavar="CODE")
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..explain import explain
+
+    code = args.code.upper()
+    if code not in CODES:
+        from ..diagnostics import suggest
+
+        starting = sorted(c for c in CODES if c.startswith(code)) if len(code) >= 2 else []
+        hint = ("one of " + ", ".join(starting) if starting else suggest(code, CODES))
+        print(f"error: unknown diagnostic code {args.code}" + (f"; did you mean {hint}?" if hint else ""),
+              file=sys.stderr)
+        return EXIT_INVALID
+    print(explain(code))
+    return EXIT_OK

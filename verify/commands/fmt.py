@@ -1,0 +1,57 @@
+"""``verify fmt FILE``: the canonical formatting (comments kept); ``--check``, ``--in-place``, ``-o NEW``."""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+
+from ..diagnostics import DiagnosticSink
+from ..render import render_all_text
+from ..source import SourceFile
+from .common import EXIT_INVALID, EXIT_OK, EXIT_VIOLATED, replace_file, write_new_file
+
+HELP = "print the canonical formatting of a file"
+DESCRIPTION = "print the canonical formatting of a file (comments are kept)"
+RESULT = None
+MODEL, SYSTEM = False, False
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("file", metavar="FILE")
+    group = p.add_mutually_exclusive_group()
+    group.add_argument("--check", action="store_true", help="exit 1 if the file is not canonically formatted")
+    group.add_argument("--in-place", action="store_true", help="rewrite FILE itself")
+    group.add_argument("-o", "--output", metavar="OUT", help="write to a new file OUT")
+    p.add_argument("--force", action="store_true", help="with -o: replace OUT if it exists")
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..fmt import format_text
+    from ..loader import _read
+
+    sink = DiagnosticSink()
+    text = _read(os.path.normpath(args.file), sink, None)
+    if text is None:
+        print(render_all_text(sink.items, {}), file=sys.stderr)
+        return EXIT_INVALID
+    formatted, diagnostics = format_text(text, args.file)
+    if formatted is None:
+        from ..parse import parse_source
+
+        opaque = parse_source(text, args.file).opaque
+        print(render_all_text(diagnostics, {args.file: SourceFile(args.file, text, opaque)}), file=sys.stderr)
+        return EXIT_INVALID
+    if args.check:
+        if formatted != text:
+            print(f"{args.file}: not canonically formatted (run `verify fmt --in-place {args.file}`)",
+                  file=sys.stderr)
+            return EXIT_VIOLATED
+        return EXIT_OK
+    if args.in_place:
+        if formatted != text:
+            return replace_file(args.file, formatted)
+        return EXIT_OK
+    if args.output:
+        return write_new_file(args.output, formatted, args.force)
+    sys.stdout.write(formatted)
+    return EXIT_OK

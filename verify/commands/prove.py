@@ -1,0 +1,127 @@
+"""``prove FILE`` / ``verify prove FILE`` (specs/proof.md §9).
+
+    prove FILE [--system NAME] [--format text|json|sarif] [--trace-svg FILE] [--budget N]
+               [--timeout S] [--data-age reduced|non-reduced] [-o OUT] [--force]
+
+Exit codes: 0 every spec and deadline proved, 1 one is violated (a counterexample is shown),
+2 invalid input or usage, 3 undecided within the budget. ``-o`` and ``--trace-svg`` never replace
+an existing file unless ``--force`` is given.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+
+from .. import api
+from ..outputs import Output, Report, render
+from .common import EXIT_INVALID, EXIT_OK, fail, load_args
+
+HELP = "prove every latency spec and deadline of a configured system"
+RESULT = "proof"
+MODEL, SYSTEM = True, True
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    from ..prove.core import DEFAULT_BUDGET
+
+    p.add_argument("--trace-svg", metavar="FILE", help="write every counterexample as an SVG Gantt chart (one below the other)")
+    p.add_argument("--budget", metavar="N", type=int, default=DEFAULT_BUDGET,
+                   help=f"scenarios the exact and falsifying searches may simulate (default {DEFAULT_BUDGET})")
+    p.add_argument("--timeout", metavar="S", type=float, default=None,
+                   help="wall-clock limit in seconds for the searches (default: none, fully deterministic)")
+    p.add_argument("--jobs", metavar="N", type=int, default=0,
+                   help="processes a large exact enumeration or large falsifying searches may use (default 0: "
+                        "every available CPU; the result is the same for any N)")
+    p.add_argument("--data-age", choices=("reduced", "non-reduced"), default="reduced",
+                   help="data-age variant checked by data_age and jitter specs")
+    p.add_argument("-o", "--output", metavar="OUT", help="write the report to OUT instead of standard output")
+    p.add_argument("--force", action="store_true", help="replace OUT or the SVG file if it exists")
+
+
+FORMAT_HELP = "output format: text, json (schema verify.proof/1) or sarif (SARIF 2.1.0)"
+
+
+def _emit(output: Output, args) -> int:
+    """The report's standard output part to ``-o`` or standard output, then its standard error part."""
+    status = EXIT_OK
+    if args.output and output.stdout:
+        try:
+            with open(args.output, "w", encoding="utf-8") as fh:
+                fh.write(output.stdout)
+        except OSError as err:
+            status = fail(f"cannot write {args.output}: {err.strerror or err}")
+    elif output.stdout:
+        sys.stdout.write(output.stdout)
+    if output.stderr:
+        sys.stderr.write(output.stderr)
+    return status
+
+
+def _check_paths(args) -> int | None:
+    if args.budget < 1:
+        return fail("--budget must be at least 1")
+    if args.timeout is not None and not args.timeout > 0:
+        return fail("--timeout must be a positive number of seconds")
+    if args.jobs < 0:
+        return fail("--jobs must be 0 (every available CPU) or a positive number of processes")
+    for path, what in ((args.output, "-o"), (args.trace_svg, "--trace-svg")):
+        if not path:
+            continue
+        if os.path.realpath(path) == os.path.realpath(args.file):
+            return fail(f"{what} {path} is the model being proved; name another file")
+        if os.path.exists(path) and not args.force:
+            return fail(f"{path} exists; refusing to overwrite it (pass --force to replace it)")
+        if not os.path.isdir(os.path.dirname(os.path.abspath(path))):
+            return fail(f"{what} {path}: the directory {os.path.dirname(os.path.abspath(path))} does not exist")
+    if args.output and args.trace_svg and os.path.realpath(args.output) == os.path.realpath(args.trace_svg):
+        return fail("-o and --trace-svg name the same file")
+    return None
+
+
+def _invalid(diagnostics, sources, args) -> int:
+    """Report input problems in the chosen format; exit 2."""
+    _emit(render(RESULT, args.format, Report(RESULT, args.file, tuple(diagnostics), sources)), args)
+    return EXIT_INVALID
+
+
+def run(args: argparse.Namespace) -> int:
+    refused = _check_paths(args)
+    if refused is not None:
+        return refused
+    result = load_args(args)
+    if not result.ok:
+        return _invalid(result.diagnostics, result.sources, args)
+    try:
+        model = result.system(args.system)
+    except api.SelectionError as err:
+        return _invalid([err.diagnostic], result.sources, args)
+    holes = api.require_configured(model, "prove")
+    if holes:
+        return _invalid(holes, result.sources, args)
+    from ..prove.core import DEFAULT_RLIMIT, prove
+
+    proof = prove(model, budget=args.budget, rlimit=DEFAULT_RLIMIT, timeout=args.timeout, data_age=args.data_age,
+                  jobs=args.jobs)
+    status = _emit(render(RESULT, args.format, Report(RESULT, args.file, tuple(proof.diagnostics), result.sources,
+                                                      proof, model)), args)
+    if status:
+        return status
+    if args.trace_svg:
+        return _trace_svg(model, proof, args) or proof.exit_code
+    return proof.exit_code
+
+
+def _trace_svg(model, proof, args) -> int | None:
+    drawn = [v for v in proof.verdicts if v.counterexample is not None]
+    if not drawn:
+        print(f"note: no counterexample, so nothing was drawn to {args.trace_svg}", file=sys.stderr)
+        return None
+    from ..prove.trace import to_svg_all
+
+    try:
+        with open(args.trace_svg, "w", encoding="utf-8") as fh:
+            fh.write(to_svg_all(model, drawn))
+    except OSError as err:
+        return fail(f"cannot write {args.trace_svg}: {err.strerror or err}")
+    return None

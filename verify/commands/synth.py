@@ -1,0 +1,117 @@
+"""``synth FILE`` / ``verify synth FILE``: fill the holes so that every spec holds, or explain why not.
+
+    synth FILE [--system NAME] [--objective OBJ] [-o OUT [--force] | --diff | --in-place]
+               [--format text|json] [--rlimit N] [--timeout S]
+
+Exit codes: 0 a configuration that meets every spec (printed), 1 unsatisfiable (E401 with an unsat
+core), 2 invalid input or usage, 3 undecided (E402; the best configuration found so far is still
+printed, marked not proven optimal), 70 internal error.
+
+Where things go: without ``-o``/``--in-place``, the completed file (or with ``--diff`` a unified diff
+against the input) goes to standard output and the summary to standard error; with ``-o`` or
+``--in-place`` the file is written and the summary goes to standard output. ``--format json`` prints
+one ``verify.synth/1`` document instead. The input file is modified only with ``--in-place``.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+
+from ..outputs import Report, render
+from .common import (EXIT_INVALID, EXIT_OK, EXIT_UNDECIDED, EXIT_VIOLATED, load_or_fail, replace_file, select, show,
+                     write_new_file)
+
+HELP = "synthesize periods, prescalers and activation kinds, or explain why no configuration exists"
+RESULT = "synthesis"
+MODEL, SYSTEM = True, True
+OBJECTIVE_HELP = ("what to optimise: utilisation (default: minimum total CPU utilisation), slack (maximum "
+                  "minimum margin over all specs), latency:CHAIN (minimum reaction time), age:CHAIN (minimum "
+                  "data age), none (any configuration); comma-separated for a lexicographic combination")
+
+
+def _rlimit(text: str) -> int:
+    value = int(text)
+    if value < 0:
+        raise argparse.ArgumentTypeError("the budget must be 0 (unlimited) or positive")
+    return value
+
+
+def _seconds(text: str) -> float:
+    value = float(text)
+    if not value > 0:
+        raise argparse.ArgumentTypeError("the time limit must be positive")
+    return value
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    from ..synth.driver import DEFAULT_RLIMIT
+
+    p.add_argument("--objective", metavar="OBJ", default="utilisation", help=OBJECTIVE_HELP)
+    where = p.add_mutually_exclusive_group()
+    where.add_argument("-o", "--output", metavar="OUT", help="write the completed file to a new file OUT")
+    where.add_argument("--diff", action="store_true", help="print a unified diff against FILE instead")
+    where.add_argument("--in-place", action="store_true", help="rewrite FILE itself")
+    p.add_argument("--force", action="store_true", help="with -o: replace OUT if it exists")
+    p.add_argument("--rlimit", type=_rlimit, default=DEFAULT_RLIMIT, metavar="N",
+                   help=f"deterministic solver budget in Z3 resource units (default {DEFAULT_RLIMIT}; 0: unlimited)")
+    p.add_argument("--timeout", type=_seconds, metavar="S", help="wall-clock limit in seconds (not deterministic)")
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..synth.candidates import TooManyCandidates
+    from ..synth.driver import ObjectiveError, parse_objective, synthesize
+
+    loaded = load_or_fail(args)
+    if isinstance(loaded, int):
+        return loaded
+    system = select(loaded, args)
+    if system is None:
+        return EXIT_INVALID
+    try:
+        goals = parse_objective(args.objective, system)
+    except ObjectiveError as err:
+        print(f"error: --objective: {err}", file=sys.stderr)
+        return EXIT_INVALID
+    try:
+        result = synthesize(loaded, system.name, objective=goals, rlimit=args.rlimit, timeout=args.timeout)
+    except TooManyCandidates as err:
+        _show(args, loaded, (err.diagnostic(),), None)
+        return EXIT_INVALID
+    if result.status == "unsat":
+        _show(args, loaded, result.diagnostics, result)
+        return EXIT_VIOLATED
+    code = EXIT_OK if result.status == "sat" else EXIT_UNDECIDED
+    if result.model is None:  # undecided without a configuration
+        _show(args, loaded, result.diagnostics, result)
+        return code
+    return _write_back(args, loaded, result, code)
+
+
+def _show(args, loaded, diagnostics, result, **extra) -> None:
+    show(render(RESULT, args.format, Report(RESULT, args.file, tuple(diagnostics), loaded.sources, result,
+                                            extra=extra)))
+
+
+def _write_back(args, loaded, result, code: int) -> int:
+    from ..synth.writeback import completed_text, recheck, unified_diff
+
+    text = completed_text(loaded, result.system, result.choices)
+    _, _, _, problems = recheck(loaded, result.system, text)
+    if problems:  # never print what the analysis would reject
+        raise RuntimeError("the synthesized configuration does not pass the re-check: " + "; ".join(problems))
+    original = loaded.sources[loaded.project.root].text
+    diff = unified_diff(original, text, args.file) if args.diff else None
+    written = None
+    if args.in_place:
+        if text != original:
+            status = replace_file(args.file, text)
+            if status != EXIT_OK:
+                return status
+        written = args.file
+    elif args.output:
+        status = write_new_file(args.output, text, args.force)
+        if status != EXIT_OK:
+            return status
+        written = args.output
+    _show(args, loaded, result.diagnostics, result, dsl=text, diff=diff, written=written)
+    return code

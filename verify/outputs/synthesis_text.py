@@ -1,0 +1,19 @@
+"""``synth``: the completed file (or ``--diff``) on standard output and the summary on standard error; with
+``-o``/``--in-place`` the summary on standard output. Without a configuration, the diagnostics only."""
+from __future__ import annotations
+
+from ..render import render_all_text
+from ..synth.report import to_text
+from . import Output, Report
+
+
+def render(report: Report) -> Output:
+    dsl = report.extra.get("dsl")
+    diagnostics = render_all_text(report.diagnostics, report.sources) + "\n" if report.diagnostics else ""
+    if dsl is None:
+        return Output(stderr=diagnostics)
+    summary = to_text(report.result)
+    if report.extra.get("written") is not None:
+        return Output(summary, diagnostics)
+    diff = report.extra.get("diff")
+    return Output(diff if diff is not None else dsl, summary + diagnostics)
