@@ -4,7 +4,8 @@
 Each target keeps its corpus in ``OUT/corpus/TARGET`` (seeded from ``fuzz.seeds``; libFuzzer adds the
 inputs that reach new code, so a later run starts where the last one stopped) and its findings in
 ``OUT/findings/TARGET`` (``crash-*``: an exception or a broken invariant; ``timeout-*``: one input ran
-longer than ``--timeout``; ``oom-*``). ``OUT/summary.json`` holds the numbers of the run. A finding,
+longer than ``--timeout``; ``oom-*``). ``OUT/summary.json`` holds the numbers of the run, and
+``OUT/history.jsonl`` those of every run (libFuzzer stops a target at its first finding). A finding,
 once fixed, becomes a regression input in ``tests/fuzz_regressions/TARGET/`` (``tests/test_fuzz.py``
 replays them all).
 """
@@ -65,7 +66,7 @@ def fuzz_one(target: str, runs: int, out: Path, *, max_len: int, smoke: bool, se
     seconds = time.monotonic() - started
     log = proc.stdout + proc.stderr
     (out / f"{target}.log").write_text(log, encoding="utf-8")
-    executed = re.findall(r"stat::number_of_executed_units:\s*(\d+)", log)
+    executed = re.findall(r"stat::number_of_executed_units:\s*(\d+)", log) or re.findall(r"^#(\d+)\s", log, re.M)
     new = sorted(p.name for p in findings.iterdir() if p.name not in before and FINDING.match(p.name))
     return {"target": target, "runs": runs, "executions": int(executed[-1]) if executed else 0,
             "seconds": round(seconds, 1), "exit_code": proc.returncode, "findings": new,
@@ -119,6 +120,8 @@ def main(argv: list[str] | None = None) -> int:
                "executions": sum(r["executions"] for r in results),
                "findings": sum(len(r["findings"]) for r in results), "targets": results}
     (out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
+    with open(out / "history.jsonl", "a", encoding="utf-8") as fh:  # every run, for the running total
+        fh.write(json.dumps(summary) + "\n")
     for r in results:
         found = ", ".join(r["findings"]) or "none"
         print(f"{r['target']:9} {r['executions']:>9,} executions in {r['seconds']:>8.1f} s  corpus {r['corpus']:>5}  "
