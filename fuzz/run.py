@@ -32,7 +32,9 @@ TIMEOUTS = {"synth": 60, "prove": 60}
 DEFAULT_TIMEOUT = 20
 #: the smoke run of tests/test_fuzz.py: executions per target, and only the example seeds
 SMOKE_RUNS = {"parse": 300, "validate": 200, "fmt": 200, "analyze": 100, "synth": 30, "prove": 30}
-FINDING = re.compile(r"^(crash|timeout|oom|leak|slow-unit)-")
+FINDING = re.compile(r"^(crash|timeout|oom|leak)-")
+#: inputs slower than libFuzzer's ``-report_slow_units`` (listed, not failed: a loaded machine makes them)
+SLOW = re.compile(r"^slow-unit-")
 
 
 def prepare(out: Path, target: str, smoke: bool) -> tuple[Path, Path, Path]:
@@ -67,9 +69,10 @@ def fuzz_one(target: str, runs: int, out: Path, *, max_len: int, smoke: bool, se
     log = proc.stdout + proc.stderr
     (out / f"{target}.log").write_text(log, encoding="utf-8")
     executed = re.findall(r"stat::number_of_executed_units:\s*(\d+)", log) or re.findall(r"^#(\d+)\s", log, re.M)
-    new = sorted(p.name for p in findings.iterdir() if p.name not in before and FINDING.match(p.name))
+    made = sorted(p.name for p in findings.iterdir() if p.name not in before)
     return {"target": target, "runs": runs, "executions": int(executed[-1]) if executed else 0,
-            "seconds": round(seconds, 1), "exit_code": proc.returncode, "findings": new,
+            "seconds": round(seconds, 1), "exit_code": proc.returncode,
+            "findings": [n for n in made if FINDING.match(n)], "slow": [n for n in made if SLOW.match(n)],
             "corpus": sum(1 for _ in corpus.iterdir())}
 
 
@@ -124,8 +127,9 @@ def main(argv: list[str] | None = None) -> int:
         fh.write(json.dumps(summary) + "\n")
     for r in results:
         found = ", ".join(r["findings"]) or "none"
+        slow = f"  slow: {', '.join(r['slow'])}" if r["slow"] else ""
         print(f"{r['target']:9} {r['executions']:>9,} executions in {r['seconds']:>8.1f} s  corpus {r['corpus']:>5}  "
-              f"findings: {found}")
+              f"findings: {found}{slow}")
     print(f"total     {summary['executions']:>9,} executions, {summary['findings']} findings "
           f"(logs and findings in {out})")
     failed = [r for r in results if r["findings"] or r["exit_code"] != 0]

@@ -312,5 +312,8 @@ def test_an_overlay_takes_the_place_of_the_file_on_disk(tmp_path):
     result = verify.load(str(main_file), overlay=unsaved)
     assert result.ok and [c.name.text for c in result.project.components] == ["Laser"]
     assert result.sources[str(tmp_path / "laser.vfy")].text == COMPONENT
+    seen = []
+    result = verify.load(str(main_file), overlay=lambda path: seen.append(path) or unsaved.get(path))
+    assert result.ok and str(tmp_path / "laser.vfy") in seen  # a read function in place of a mapping
     (tmp_path / "main.vfy").write_text('import "/abs.vfy"\n')
     assert _codes(verify.load(str(main_file), overlay={"/abs.vfy": COMPONENT})) == ["E006"]

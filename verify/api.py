@@ -11,17 +11,21 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass, field
-from typing import Mapping
+from functools import cached_property
+from typing import TYPE_CHECKING
 
 from .diagnostics import Diagnostic, DiagnosticSink, Label, has_errors
 from .gcpause import paused_gc
 from .limits import DEFAULT_LIMITS, Limits
-from .loader import Project, load_project, project_from_text
+from .loader import Overlay, Project, load_project, project_from_text
 from .roots import project_roots
 from .model import SystemModel, build_system
 from .resolve import Resolution, resolve
 from .source import SourceFile, Span
 from .validate import validate, validate_chains
+
+if TYPE_CHECKING:
+    from .symbols import SymbolIndex
 
 
 class SelectionError(Exception):
@@ -46,6 +50,13 @@ class LoadResult:
     @property
     def sources(self) -> dict[str, SourceFile]:
         return self.project.sources
+
+    @cached_property
+    def symbols(self) -> SymbolIndex:
+        """Every declared name and every resolved use of one (``verify.symbols``), built on first use."""
+        from .symbols import index
+
+        return index(self.resolution) if self.resolution is not None else SymbolIndex((), ())
 
     def root_system_names(self) -> list[str]:
         root = self.project.root_module
@@ -149,15 +160,16 @@ def _clean(scope, sink: DiagnosticSink) -> bool:
 
 
 def load(path: str, *, root: str | None = None, include: tuple[str, ...] | list[str] = (),
-         limits: Limits = DEFAULT_LIMITS, overlay: Mapping[str, str] | None = None,
+         limits: Limits = DEFAULT_LIMITS, overlay: Overlay | None = None,
          config: bool = True) -> LoadResult:
     """Load, resolve and validate the project whose root file is ``path`` (imports followed).
 
     Imports are confined to the project root — ``root``, else the ``root`` of ``[tool.verify]`` in the
     nearest ``pyproject.toml`` (``config``), else the directory of ``path`` — and the library directories
     ``include`` (and that table's ``include``); ``verify.roots`` gives the rules. ``limits`` bound what is
-    read (``verify.limits``). ``overlay`` maps paths to text that takes the place of the file on disk (an
-    editor's unsaved buffers)."""
+    read (``verify.limits``). ``overlay`` gives text that takes the place of a file on disk (an editor's
+    unsaved buffers): a mapping from paths, or a function of an absolute path returning the text or
+    None."""
     with paused_gc():
         sink = DiagnosticSink()
         roots, problems = project_roots(path, root, tuple(include), config=config) if path else (None, [])

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import contextlib
 import contextvars
+import copy
 import functools
 import re
 from importlib import resources
@@ -212,8 +213,13 @@ def _fits(parser, tokens: list[Token], text: str, pos: int) -> bool:
 
 
 def _feeds(parser, tokens: list[Token]) -> bool:
-    """Whether a copy of ``parser`` accepts ``tokens``."""
+    """Whether a copy of ``parser`` accepts ``tokens``. The copy shares the parser's values, so it runs
+    without callbacks (as Lark's own ``accepts``): a callback may extend the child list of a tree on the
+    stack in place, which would change the tree error recovery goes on to build (``parse.Parsed.partial``)."""
     trial = parser.copy(deepcopy_values=False)
+    conf = copy.copy(trial.parser_state.parse_conf)
+    conf.callbacks = {}
+    trial.parser_state.parse_conf = conf
     try:
         for tok in tokens:
             trial.feed_token(tok)

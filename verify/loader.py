@@ -11,7 +11,7 @@ from __future__ import annotations
 import os
 import stat
 from dataclasses import dataclass, field
-from typing import Mapping
+from typing import Callable, Mapping, Union
 
 from . import syntax as s
 from .diagnostics import DiagnosticSink
@@ -21,6 +21,11 @@ from .roots import Refusal, Roots
 from .source import Span, SourceFile
 
 
+#: text held in memory in place of files (an editor's unsaved buffers): a mapping from paths, or a
+#: function of an absolute path giving the text or None (then the file on disk is read)
+Overlay = Union[Mapping[str, str], Callable[[str], Union[str, None]]]
+
+
 @dataclass(frozen=True)
 class Project:
     """The parsed files of one project, root first, then imports in the order they were reached."""
@@ -28,6 +33,9 @@ class Project:
     root: str
     modules: tuple[s.Module, ...]
     sources: dict[str, SourceFile] = field(compare=False, repr=False)
+    #: for each file with a syntax error, what error recovery made of it (``parse.Parsed.partial``):
+    #: not resolved or validated, for an editor's outline and completion
+    partials: dict[str, s.Module] = field(default_factory=dict, compare=False, repr=False)
 
     @property
     def root_module(self) -> s.Module | None:
@@ -138,21 +146,24 @@ def _not_regular(shown: str, path: str, where: Span, sink: DiagnosticSink) -> No
 class _Loading:
     """The state of one ``load_project``: what was read, the budget left, the import path."""
 
-    def __init__(self, sink: DiagnosticSink, roots: Roots, limits: Limits,
-                 overlay: Mapping[str, str] | None):
+    def __init__(self, sink: DiagnosticSink, roots: Roots, limits: Limits, overlay: Overlay | None):
         self.sink = sink
         self.roots = roots
         self.limits = limits
-        self.overlay = {os.path.abspath(p): t for p, t in (overlay or {}).items()}
+        if callable(overlay):
+            self.held: Callable[[str], str | None] = overlay
+        else:
+            self.held = {os.path.abspath(p): t for p, t in (overlay or {}).items()}.get
         self.modules: list[s.Module] = []
         self.sources: dict[str, SourceFile] = {}
+        self.partials: dict[str, s.Module] = {}
         self.seen: dict[str, str] = {}  # realpath -> display path
         self.stack: list[str] = []  # realpaths on the current import path
         self.total = 0  # bytes read
 
     def text(self, path: str, at: Span | None) -> str | None:
         """The text of ``path``: an overlay's, else the file's (within the size limits)."""
-        held = self.overlay.get(os.path.abspath(path))
+        held = self.held(os.path.abspath(path))
         if held is not None:
             size = len(held.encode("utf-8", errors="surrogatepass"))
             if not self._fits(path, size, at):
@@ -203,6 +214,8 @@ class _Loading:
             self.sink.add(d)
         module = parsed.module
         if module is None:
+            if parsed.partial is not None:
+                self.partials[path] = parsed.partial
             return
         self.modules.append(module)
         self.stack.append(real)
@@ -236,9 +249,11 @@ class _Loading:
 
 
 def load_project(root: str, sink: DiagnosticSink, *, roots: Roots | None = None, limits: Limits = DEFAULT_LIMITS,
-                 overlay: Mapping[str, str] | None = None) -> Project:
+                 overlay: Overlay | None = None) -> Project:
     """Parse ``root`` and its imports, confined to ``roots`` (default: the directory of ``root``).
-    Diagnostics go to ``sink``; the project holds what parsed."""
+    ``overlay`` gives the text of files held in memory: a mapping from paths, or a function of an
+    absolute path that returns the text, or None to read the file from disk. Diagnostics go to
+    ``sink``; the project holds what parsed."""
     if not root:
         sink.emit("E004", "no file name given", Span("<command line>", 1, 1, 1, 1), "cannot be read",
                   help="name a .vfy file, e.g. `verify check examples/navigation/navigation.vfy`")
@@ -246,7 +261,7 @@ def load_project(root: str, sink: DiagnosticSink, *, roots: Roots | None = None,
     root = os.path.normpath(root)
     loading = _Loading(sink, roots if roots is not None else Roots.of_file(root), limits, overlay)
     loading.visit(root, None)
-    return Project(root, tuple(loading.modules), loading.sources)
+    return Project(root, tuple(loading.modules), loading.sources, loading.partials)
 
 
 def project_from_text(text: str, path: str, sink: DiagnosticSink, limits: Limits = DEFAULT_LIMITS) -> Project:
@@ -259,4 +274,5 @@ def project_from_text(text: str, path: str, sink: DiagnosticSink, limits: Limits
         for imp in module.imports:
             sink.emit("E004", f"imports are not followed for in-memory text: {imp.path}", imp.span,
                       "not followed", help="load the file from disk instead")
-    return Project(path, (module,) if module else (), {path: SourceFile(path, text, parsed.opaque)})
+    return Project(path, (module,) if module else (), {path: SourceFile(path, text, parsed.opaque)},
+                   {path: parsed.partial} if parsed.partial is not None else {})

@@ -18,8 +18,8 @@ from . import syntax as s
 from .construct import direct_constructor
 from .diagnostics import Diagnostic, DiagnosticSink
 from .lalr import FastParser, TooManyTokens, Unparsable, position
-from .larkparse import (_SKIP, _WORD_RE, _accepted, _glued_keyword, _keyword_terminals, _parser, _repair,
-                        _report_unexpected, _skip_unterminated_string, counting_tokens, token_span)
+from .larkparse import (_SKIP, _WORD_RE, _accepted, _glued_keyword, _keyword_terminals, _parser, _placeholder,
+                        _repair, _report_unexpected, _skip_unterminated_string, counting_tokens, token_span)
 from .limits import DEFAULT_LIMITS, Limits
 from .source import Span
 
@@ -36,6 +36,10 @@ class Parsed:
     module: s.Module | None
     diagnostics: tuple[Diagnostic, ...] = ()
     opaque: Span | None = None
+    #: after a syntax error, what error recovery made of the text (missing symbols filled in with
+    #: placeholders: a name ``_``, a number 0), for an editor's outline and completion; None when the
+    #: text has no error, is not a model, or recovery made nothing of it
+    partial: s.Module | None = None
 
 
 def looks_like_model(text: str) -> bool:
@@ -77,11 +81,11 @@ def parse_source(text: str, path: str, limits: Limits = DEFAULT_LIMITS) -> Parse
         except (Unparsable, _NumberError):
             pass
     sink = DiagnosticSink()
-    module = _parse_with_lark(text, path, sink, limits)
+    module, partial = _lark_parse(text, path, sink, limits)
     if module is None and sink.items and not looks_like_model(text):
         first = sink.items[0]  # (at the first token: no model starts otherwise)
         return Parsed(None, (first,), first.span)
-    return Parsed(module, tuple(sink.items))
+    return Parsed(module, tuple(sink.items), None, partial)
 
 
 def _too_many_tokens(path: str, at: int, limits: Limits) -> Diagnostic:
@@ -93,8 +97,22 @@ def _too_many_tokens(path: str, at: int, limits: Limits) -> Diagnostic:
 
 
 def _parse_with_lark(text: str, path: str, sink: DiagnosticSink, limits: Limits = DEFAULT_LIMITS) -> s.Module | None:
+    """The tree of ``text`` by Lark, or None after reporting its syntax errors into ``sink``."""
+    return _lark_parse(text, path, sink, limits)[0]
+
+
+def _lark_parse(text: str, path: str, sink: DiagnosticSink,
+                limits: Limits = DEFAULT_LIMITS) -> tuple[s.Module | None, s.Module | None]:
+    """(the tree, None) of a text without syntax errors; else (None, the partial tree): what error
+    recovery made of the text, completed at its end where it stops early (best effort: None when even
+    that fails). Syntax errors go to ``sink``."""
     errors: list[UnexpectedInput] = []
     last_line = [-1]
+    completed: list[Tree | None] = [None]
+
+    def give_up(err: UnexpectedInput) -> bool:
+        completed[0] = _complete_at_end(err)
+        return False
 
     def on_error(err: UnexpectedInput) -> bool:
         line = getattr(err, "line", -1)
@@ -113,14 +131,14 @@ def _parse_with_lark(text: str, path: str, sink: DiagnosticSink, limits: Limits 
             last_line[0] = line
         if isinstance(err, UnexpectedToken):
             if err.token.type == "$END":
-                return False
+                return give_up(err)
             _repair(err, text)
         elif isinstance(err, UnexpectedCharacters):
             if text.startswith("/*", err.pos_in_stream):
-                return False  # an unterminated comment: the rest of the file is its text
+                return give_up(err)  # an unterminated comment: the rest of the file is its text
             if text.startswith('"', err.pos_in_stream):
                 _skip_unterminated_string(err, text)
-        return len(errors) < limits.syntax_errors
+        return len(errors) < limits.syntax_errors or give_up(err)
 
     too_many = None
     try:
@@ -129,7 +147,7 @@ def _parse_with_lark(text: str, path: str, sink: DiagnosticSink, limits: Limits 
     except UnexpectedInput as err:
         if not errors or getattr(err, "line", None) != last_line[0]:
             errors.append(err)
-        tree = None
+        tree = completed[0]
     except TooManyTokens as err:
         too_many, tree = err, None
     for err in errors:
@@ -137,10 +155,50 @@ def _parse_with_lark(text: str, path: str, sink: DiagnosticSink, limits: Limits 
     if too_many is not None:
         sink.add(_too_many_tokens(path, too_many.at, limits))
     if errors or tree is None:
+        return None, _partial(tree, path, limits)
+    try:
+        return _Builder(path, sink, limits).transform(tree), None
+    except _NumberError:
+        return None, None
+
+
+#: the terminals a completion at the end of the text inserts first (a closing brace, then what a
+#: clause most often lacks)
+_COMPLETION_ORDER = ("RBRACE", "NAME", "NUMBER", "UNIT", "STRING")
+
+
+def _complete_at_end(err: UnexpectedInput) -> Tree | None:
+    """The tree the parser at ``err`` reaches when the text ends there, after inserting placeholder
+    tokens (a missing ``}``, a name, a number ...) until the end is accepted; None if it cannot."""
+    parser = getattr(err, "interactive_parser", None)
+    if parser is None:
+        return None
+    # (the parser itself: it is given up after this; a copy would share its values, and a deep copy of a
+    # token drops its end position)
+    where = err.token if isinstance(err, UnexpectedToken) else None
+    line, column = getattr(err, "line", 1) or 1, getattr(err, "column", 1) or 1
+    try:
+        for _ in range(64):
+            accepted = parser.accepts()
+            if "$END" in accepted:
+                return parser.feed_eof(where)
+            pick = next((n for n in _COMPLETION_ORDER if n in accepted), None) or min(accepted, default=None)
+            if pick is None:
+                return None
+            parser.feed_token(Token(pick, _placeholder(pick), line=line, column=column, end_line=line,
+                                    end_column=column))
+    except UnexpectedInput:
+        return None
+    return None
+
+
+def _partial(tree: Tree | None, path: str, limits: Limits) -> s.Module | None:
+    """The syntax tree of a recovered Lark tree (placeholders included), or None."""
+    if tree is None:
         return None
     try:
-        return _Builder(path, sink, limits).transform(tree)
-    except _NumberError:
+        return _Builder(path, DiagnosticSink(), limits).transform(tree)
+    except Exception:  # best effort: a tree recovery made need not build (an impossible number, ...)
         return None
 
 
@@ -211,6 +269,13 @@ def _token_builders(path: str, sink: DiagnosticSink, limits: Limits):
     return span, name, number
 
 
+def _positions(where) -> tuple[int, int]:
+    """The start and end positions of a token or a tree's meta (a token error recovery inserted lacks
+    its end, and so may the tree around it)."""
+    line, column = where.line or 1, where.column or 1
+    return position(line, column), position(where.end_line or line, where.end_column or column)
+
+
 class _Builder:
     """Builds ``verify.syntax`` nodes; collects repeated clauses for validation to report.
 
@@ -232,13 +297,12 @@ class _Builder:
     def transform(self, tree: Tree):
         """The value of a Lark tree (built with positions), bottom-up as Lark's Transformer does."""
         tokens = self.tokens()
-        children = [self.transform(c) if isinstance(c, Tree) else tokens.get(c.type, _text)(
-                    c.value, position(c.line, c.column), position(c.end_line, c.end_column)) for c in tree.children]
+        children = [self.transform(c) if isinstance(c, Tree) else tokens.get(c.type, _text)(c.value, *_positions(c))
+                    for c in tree.children]
         meta = tree.meta
         if meta.empty:
             return getattr(self, tree.data)(None, None, children)
-        return getattr(self, tree.data)(position(meta.line, meta.column), position(meta.end_line, meta.end_column),
-                                        children)
+        return getattr(self, tree.data)(*_positions(meta), children)
 
     # ---------------------------------------------------------------- helpers
     def tokens(self) -> dict:

@@ -1,7 +1,15 @@
-"""Source files and spans: where in the user's text a node or a diagnostic lives."""
+"""Source files and spans: where in the user's text a node or a diagnostic lives.
+
+A :class:`Span` counts lines and columns as the lexer does: 1-based, a line ends at "\\n" only, a column is
+a character (a code point) and a byte order mark before line 1 is not counted. A file's
+:class:`SourceMap` (``SourceFile.map``) converts them to character offsets into the file's text and to
+the positions of the Language Server Protocol (0-based lines, UTF-16 code units).
+"""
 from __future__ import annotations
 
+import bisect
 from dataclasses import dataclass
+from functools import cached_property
 
 
 @dataclass(frozen=True, order=True)
@@ -57,6 +65,78 @@ class SourceFile:
         start = self.only.column - 1
         end = self.only.end_column - 1 if self.only.end_line == number else len(line)
         return " " * start + line[start:end]
+
+    @cached_property
+    def map(self) -> SourceMap:
+        """Offsets and LSP positions of this file's spans."""
+        return SourceMap(self.text)
+
+
+class SourceMap:
+    """Positions in one text: spans' (line, column) ↔ character offsets ↔ LSP positions.
+
+    Offsets index the text as given (a byte order mark at its start included: line 1, column 1 is then
+    offset 1). LSP positions are (line, character) with 0-based lines and characters counted in UTF-16
+    code units, the byte order mark not counted, as an editor shows the text."""
+
+    def __init__(self, text: str):
+        self.text = text
+        self.bom = 1 if text.startswith("\ufeff") else 0
+        starts = [self.bom]
+        find = text.find
+        at = find("\n", self.bom)
+        while at >= 0:
+            starts.append(at + 1)
+            at = find("\n", at + 1)
+        self.line_starts = starts
+
+    @property
+    def lines(self) -> int:
+        return len(self.line_starts)
+
+    def _line_end(self, index: int) -> int:
+        """The offset of the "\\n" ending line ``index`` (0-based), or of the end of the text."""
+        return self.line_starts[index + 1] - 1 if index + 1 < len(self.line_starts) else len(self.text)
+
+    def offset(self, line: int, column: int) -> int:
+        """The offset of (``line``, ``column``), both 1-based; clamped to the text (a column past the end
+        of its line is the line's end)."""
+        index = min(max(line, 1), len(self.line_starts)) - 1
+        start = self.line_starts[index]
+        return min(start + max(column, 1) - 1, self._line_end(index))
+
+    def span_offsets(self, span: Span) -> tuple[int, int]:
+        """The offsets of ``span``'s start and (exclusive) end."""
+        return self.offset(span.line, span.column), self.offset(span.end_line, span.end_column)
+
+    def position(self, offset: int) -> tuple[int, int]:
+        """The 1-based (line, column) of ``offset``."""
+        offset = min(max(offset, self.bom), len(self.text))
+        index = bisect.bisect_right(self.line_starts, offset) - 1
+        return index + 1, offset - self.line_starts[index] + 1
+
+    def to_lsp(self, line: int, column: int) -> tuple[int, int]:
+        """The LSP position (0-based line, UTF-16 character) of 1-based (``line``, ``column``)."""
+        index = min(max(line, 1), len(self.line_starts)) - 1
+        start = self.line_starts[index]
+        before = self.text[start:self.offset(line, column)]
+        return index, len(before) + sum(1 for ch in before if ord(ch) > 0xFFFF)
+
+    def from_lsp(self, line: int, character: int) -> tuple[int, int]:
+        """The 1-based (line, column) of an LSP position (a character inside a surrogate pair, or past the
+        end of the line, is moved to the next whole character or the line's end)."""
+        index = min(max(line, 0), len(self.line_starts) - 1)
+        start, end = self.line_starts[index], self._line_end(index)
+        units = column = 0
+        while units < character and start + column < end:
+            units += 2 if ord(self.text[start + column]) > 0xFFFF else 1
+            column += 1
+        return index + 1, column + 1
+
+    def lsp_range(self, span: Span) -> dict[str, dict[str, int]]:
+        """``span`` as an LSP ``Range``."""
+        (sl, sc), (el, ec) = self.to_lsp(span.line, span.column), self.to_lsp(span.end_line, span.end_column)
+        return {"start": {"line": sl, "character": sc}, "end": {"line": el, "character": ec}}
 
 
 def excerpt(line: str, start: int, end: int, width: int = SNIPPET_WIDTH) -> tuple[str, int, int]:
