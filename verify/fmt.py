@@ -155,6 +155,11 @@ def _prescaler(p: s.Number | s.PrescalerHole) -> str:
     return f" every ? in {format_number(p.low.value)} .. {format_number(p.high.value)}"
 
 
+def format_activation(a: s.Activation) -> str:
+    """The canonical text of an activation source (``timer 50 ms``, ``trigger scan every 2``)."""
+    return _activation(a)
+
+
 def _activation(a: s.Activation) -> str:
     if isinstance(a, s.Timer):
         return f"timer {_period(a.period)}" + (f" phase {format_quantity(a.phase)}" if a.phase else "")

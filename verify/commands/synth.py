@@ -1,6 +1,6 @@
 """``synth FILE`` / ``verify synth FILE``: fill the holes so that every spec holds, or explain why not.
 
-    synth FILE [--system NAME] [--objective OBJ] [-o OUT [--force] | --diff | --in-place]
+    synth FILE [--system NAME] [--objective OBJ] [-o OUT [--force] | --diff | --in-place] [--canonical]
                [--format text|json] [--rlimit N] [--timeout S]
 
 Exit codes: 0 a configuration that meets every spec (printed), 1 unsatisfiable (E401 with an unsat
@@ -10,7 +10,8 @@ printed, marked not proven optimal), 70 internal error.
 Where things go: without ``-o``/``--in-place``, the completed file (or with ``--diff`` a unified diff
 against the input) goes to standard output and the summary to standard error; with ``-o`` or
 ``--in-place`` the file is written and the summary goes to standard output. ``--format json`` prints
-one ``verify.synth/1`` document instead. The input file is modified only with ``--in-place``.
+one ``verify.synth/1`` document instead. The input file is modified only with ``--in-place``. What is
+written changes only the holes of the file (``--canonical``: the whole file as ``verify fmt`` prints it).
 """
 from __future__ import annotations
 
@@ -52,6 +53,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     where.add_argument("--diff", action="store_true", help="print a unified diff against FILE instead")
     where.add_argument("--in-place", action="store_true", help="rewrite FILE itself")
     p.add_argument("--force", action="store_true", help="with -o: replace OUT if it exists")
+    p.add_argument("--canonical", action="store_true",
+                   help="format the whole file canonically (as `verify fmt`), not only the filled holes")
     p.add_argument("--rlimit", type=_rlimit, default=DEFAULT_RLIMIT, metavar="N",
                    help=f"deterministic solver budget in Z3 resource units (default {DEFAULT_RLIMIT}; 0: unlimited)")
     p.add_argument("--timeout", type=_seconds, metavar="S", help="wall-clock limit in seconds (not deterministic)")
@@ -95,7 +98,7 @@ def _show(args, loaded, diagnostics, result, **extra) -> None:
 def _write_back(args, loaded, result, code: int) -> int:
     from ..synth.writeback import completed_text, recheck, unified_diff
 
-    text = completed_text(loaded, result.system, result.choices)
+    text = completed_text(loaded, result.system, result.choices, canonical=args.canonical)
     _, _, _, problems = recheck(loaded, result.system, text)
     if problems:  # never print what the analysis would reject
         raise RuntimeError("the synthesized configuration does not pass the re-check: " + "; ".join(problems))

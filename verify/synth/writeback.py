@@ -1,9 +1,12 @@
-"""Writing a synthesized configuration back as DSL, and re-checking what was written.
+"""Writing a synthesized configuration back into the user's file, and re-checking what was written.
 
-The holes of the root file's system are filled in the syntax tree (``dataclasses.replace``, keeping
-each activation's span so comments stay where they were) and the whole root file is printed by the
-canonical formatter with the user's comments and blank lines (``verify.fmt``). A timer keeps the
-unit of its hole's range (a frequency range gives a frequency), otherwise milliseconds.
+By default only the holes change (``completed_text``): each ``?`` — a period hole with its range, a
+prescaler hole with its range, ``activation ?`` — is replaced in the text by the chosen value, and every
+other byte stays as the user wrote it (layout, comments, line endings). A timer keeps the unit of its
+hole's range (a frequency range gives a frequency), otherwise milliseconds. The edited text must parse
+to the syntax tree with the holes filled in (``filled_module``), or nothing is written. With
+``canonical=True`` the whole root file is printed by the canonical formatter instead, comments and blank
+lines kept (``verify.fmt``).
 
 ``recheck`` runs the complete front end (parse, resolve, validate, model) and the timing analysis on
 the text exactly as it will be written, with the original imports: the text is printed only if that
@@ -12,14 +15,14 @@ analysis accepts it.
 from __future__ import annotations
 
 import difflib
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from fractions import Fraction
 from typing import Mapping
 
 from .. import syntax as s
 from ..api import LoadResult, _finish
 from ..diagnostics import DiagnosticSink
-from ..fmt import blank_lines, collect_comments, format_module
+from ..fmt import blank_lines, collect_comments, format_activation, format_module, format_number, format_quantity
 from ..loader import Project
 from ..parse import parse_text
 from ..source import SourceFile
@@ -75,11 +78,72 @@ def filled_module(module: s.Module, system: str, choices: Mapping[str, Candidate
     return replace(module, systems=tuple(systems))
 
 
-def completed_text(load: LoadResult, system: str, choices: Mapping[str, Candidate]) -> str:
-    """The root file with the holes of ``system`` filled, canonically formatted, comments kept."""
+def completed_text(load: LoadResult, system: str, choices: Mapping[str, Candidate], *, canonical: bool = False) -> str:
+    """The root file with the holes of ``system`` filled: only the holes edited, or (``canonical``) the
+    whole file canonically formatted with its comments kept."""
     root = load.project.root_module
-    text = load.project.sources[load.project.root].text
-    return format_module(filled_module(root, system, choices), collect_comments(text), blank_lines(text))
+    source = load.project.sources[load.project.root]
+    filled = filled_module(root, system, choices)
+    if canonical:
+        return format_module(filled, collect_comments(source.text), blank_lines(source.text))
+    edited = apply_edits(source.text, hole_edits(source, root, system, choices))
+    again = parse_text(edited, load.project.root, DiagnosticSink())
+    if again != filled:  # (a tree compares without its spans)
+        raise RuntimeError("filling the holes in the text did not give the configuration chosen")
+    return edited
+
+
+@dataclass(frozen=True)
+class Edit:
+    """Replace the text between offsets ``start`` and ``end`` by ``text``."""
+
+    start: int
+    end: int
+    text: str
+
+
+def hole_edits(source: SourceFile, module: s.Module, system: str, choices: Mapping[str, Candidate]) -> list[Edit]:
+    """One edit per hole of ``system`` in ``module`` that ``choices`` fills, in source order. A comment
+    inside the replaced text is kept after the new value."""
+    edits = []
+    comments = collect_comments(source.text)
+    for sy in module.systems:
+        if sy.name.text != system:
+            continue
+        for inst in sy.instances:
+            for b in inst.bindings:
+                cand = choices.get(f"{inst.name.text}.{b.task.text}")
+                if cand is None or not b.activations or not _is_hole(b.activations[0]):
+                    continue
+                hole = b.activations[0]
+                region, text = _replaced(hole, filled_activation(hole, cand))
+                start, end = source.map.span_offsets(region)
+                inside = [c for c in comments if region.line <= c.line <= region.end_line
+                          and start <= source.map.offset(c.line, c.column) < end]
+                text += "".join(" " + c.text + ("\n" if c.ends_line else "") for c in inside)
+                edits.append(Edit(start, end, text))
+    return sorted(edits, key=lambda e: e.start)
+
+
+def _replaced(hole: s.Activation, filled: s.Activation):
+    """(the part of ``hole`` that is replaced, its new text): the period hole and its range, the
+    prescaler hole and its range, or the whole ``activation ?``."""
+    if isinstance(hole, s.Timer) and isinstance(hole.period, s.PeriodHole) and isinstance(filled, s.Timer):
+        return hole.period.span, format_quantity(filled.period)
+    if isinstance(hole, s.Trigger) and isinstance(hole.prescaler, s.PrescalerHole) and isinstance(filled, s.Trigger):
+        return hole.prescaler.span, format_number(filled.prescaler.value)
+    return hole.span, format_activation(filled)
+
+
+def apply_edits(text: str, edits: list[Edit]) -> str:
+    """``text`` with ``edits`` (in source order, not overlapping) applied."""
+    parts, at = [], 0
+    for e in edits:
+        parts.append(text[at:e.start])
+        parts.append(e.text)
+        at = e.end
+    parts.append(text[at:])
+    return "".join(parts)
 
 
 def recheck(load: LoadResult, system: str, text: str):
