@@ -102,7 +102,7 @@ def require_configured(model: SystemModel, command: str) -> list[Diagnostic]:
     sink = DiagnosticSink()
     for task in model.holes:
         sink.emit("E218", f"`{command}` needs a configured system, but `{task.id}` has a synthesis hole",
-                  task.activation.activation.span, "left open for synthesis",
+                  task.activation.span, "left open for synthesis",
                   help=f"run `synth` to fill the holes (`synth FILE -o configured.vfy`), then `{command}` the result")
     return sink.items
 

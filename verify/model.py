@@ -1,9 +1,15 @@
 """The semantic model of one validated system: what analysis, synthesis, proof and generators walk.
 
 Built from a resolved, validated system (``build_system``). Every time is an exact ``Fraction`` of
-seconds; every rate a ``Fraction`` of hertz. Tasks are identified as ``instance.Task``, ports as
-``instance.port``. Nodes keep the span of the statement they come from so results can point back at
-the user's text. Computed results never live here: analyses return their own result objects.
+seconds; every rate a ``Fraction`` of hertz. Tasks are identified as ``instance.Task`` (``ids.TaskId``),
+ports as ``instance.port`` (``ids.PortId``); ``SystemModel.task``, ``port``, ``instance`` and
+``component`` look them up. Besides what the analysis walks (tasks with their activations, links,
+chains, compounds), the model holds the typed structure a generator or an importer walks: the
+instances, the components they instantiate with their ports' message types, compound ports and task
+declarations, and every port of every instance. A synthesis hole is a semantic ``Hole`` (what is
+open and within which range), not syntax. Nodes keep the span of the statement they come from so
+results can point back at the user's text. Computed results never live here: analyses return their
+own result objects.
 """
 from __future__ import annotations
 
@@ -13,6 +19,7 @@ from typing import Literal, Union
 
 from . import syntax as s
 from .construct import direct_constructor
+from .ids import PortId, TaskId
 from .resolve import SystemScope
 from .source import NO_SPAN, Span
 
@@ -70,20 +77,79 @@ class DataTriggered:
         return "trigger"
 
 
+HoleWhat = Literal["period", "prescaler", "kind"]
+
+
 @dataclass(frozen=True)
 class Hole:
-    """An unknown left for ``synth``: the syntax node says what is unknown and within which range."""
+    """An unknown left for ``synth`` (specs/synthesis.md §2): a timer's period (``timer ?``), a data
+    trigger's prescaler (``trigger p every ?``) or the kind of activation (``activation ?``), with the
+    range the user allows.
 
-    activation: s.Activation
+    ``low``, ``high`` and ``step`` bound a period (seconds, each as written: a frequency range gives the
+    periods of its ends, in the order written) or a prescaler (integers); None for a bare ``?``.
+    ``phase`` is a timer hole's fixed phase, ``port`` a prescaler hole's trigger port. ``text`` is the
+    hole as written (canonical: ``timer ? in 25 ms .. 200 ms step 25 ms``), ``range_text`` its range
+    (``25 ms .. 200 ms step 25 ms``); ``span`` is the activation, ``range_span`` the ``?`` and its range.
+
+    ``Hole(node)`` with the syntax node of a hole builds the same object (``Hole.of(node)``)."""
+
+    what: HoleWhat = "kind"
+    low: Fraction | None = None
+    high: Fraction | None = None
+    step: Fraction | None = None
+    phase: Fraction | None = None
+    port: str | None = None
+    text: str = "activation ?"
+    range_text: str = ""
+    span: Span = _span()
+    range_span: Span = _span()
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.what, str):  # Hole(syntax node)
+            for name, value in _hole_fields(self.what).items():
+                object.__setattr__(self, name, value)
+
+    @classmethod
+    def of(cls, node: s.Activation) -> "Hole":
+        """The hole that the activation ``node`` (with a ``?``) leaves open."""
+        return cls(**_hole_fields(node))
 
     @property
     def kind(self) -> str:
         return "hole"
 
     @property
-    def span(self) -> Span:
-        """The activation with the hole, as written."""
-        return self.activation.span
+    def bounded(self) -> bool:
+        """The user gave a range (``? in LOW .. HIGH``)."""
+        return self.low is not None
+
+
+def _hole_fields(node: s.Activation) -> dict:
+    from .fmt import format_activation, format_number, format_quantity
+
+    text = format_activation(node)
+    if isinstance(node, s.Timer) and isinstance(node.period, s.PeriodHole):
+        h = node.period
+        bounds = {}
+        range_text = ""
+        if h.low is not None and h.high is not None:
+            bounds = {"low": h.low.seconds(), "high": h.high.seconds(),
+                      "step": h.step.seconds() if h.step is not None else None}
+            range_text = f"{format_quantity(h.low)} .. {format_quantity(h.high)}" + (
+                f" step {format_quantity(h.step)}" if h.step is not None else "")
+        return dict(what="period", phase=_seconds(node.phase), text=text, range_text=range_text, span=node.span,
+                    range_span=h.span, **bounds)
+    if isinstance(node, s.Trigger) and isinstance(node.prescaler, s.PrescalerHole):
+        h = node.prescaler
+        bounds = {}
+        range_text = ""
+        if h.low is not None and h.high is not None:
+            bounds = {"low": Fraction(h.low.value), "high": Fraction(h.high.value)}
+            range_text = f"{format_number(h.low.value)} .. {format_number(h.high.value)}"
+        return dict(what="prescaler", port=node.port.text, text=text, range_text=range_text, span=node.span,
+                    range_span=h.span, **bounds)
+    return dict(what="kind", text=text, span=node.span, range_span=node.span)
 
 
 ActivationModel = Union[Periodic, SporadicSource, DataTriggered, Hole]
@@ -103,7 +169,7 @@ class ReadModel:
 
 @dataclass(frozen=True)
 class TaskModel:
-    id: str  # "instance.Task"
+    id: TaskId  # "instance.Task"
     instance: str
     name: str
     component: str
@@ -131,21 +197,22 @@ class TaskModel:
 class LinkModel:
     """A connection ``source`` (out-port) → ``target`` (in-port), with its writer and its readers."""
 
-    source: str  # "inst.port"
-    target: str
-    writer: str  # task id producing source
-    readers: tuple[str, ...]  # task ids reading the target in-port
+    source: PortId  # "inst.port"
+    target: PortId
+    writer: TaskId  # the task producing source
+    readers: tuple[TaskId, ...]  # the tasks reading the target in-port
     delay_min: Fraction = Fraction(0)
     delay_max: Fraction = Fraction(0)
     span: Span = _span()
+    message_type: str = ""  # what the connection carries (the ports' type)
 
 
 @dataclass(frozen=True)
 class HopModel:
     """One step of a chain: ``writer`` produces on ``link.source``; ``reader`` reads ``link.target``."""
 
-    writer: str
-    reader: str
+    writer: TaskId
+    reader: TaskId
     link: LinkModel
     span: Span = _span()  # the chain element the hop reaches
 
@@ -153,7 +220,7 @@ class HopModel:
 @dataclass(frozen=True)
 class ChainModel:
     name: str
-    tasks: tuple[str, ...]  # task ids, first samples the stimulus, last produces the response
+    tasks: tuple[TaskId, ...]  # first samples the stimulus, last produces the response
     hops: tuple[HopModel, ...]
     reaction_time: Fraction | None = None  # spec bounds, seconds
     data_age: Fraction | None = None
@@ -175,7 +242,7 @@ class CompoundModel:
     ``max_rate`` (Hz, None: no bound) are a requirement on their rate, checked by the analysis
     (E314, §5.1); they never change the rate it propagates."""
 
-    id: str  # "instance.port"
+    id: PortId  # "instance.port"
     instance: str
     name: str
     mode: Literal["and", "or"]
@@ -189,6 +256,91 @@ class CompoundModel:
     @property
     def constrained(self) -> bool:
         return self.min_rate is not None or self.max_rate is not None
+
+
+@dataclass(frozen=True)
+class PortDecl:
+    """A port a component declares: its local name, direction and message type (``in scan : LaserScan``)."""
+
+    name: str
+    direction: Literal["in", "out"]
+    message_type: str
+    span: Span = _span()  # the declaration in the component
+
+
+@dataclass(frozen=True)
+class CompoundDecl:
+    """A compound in-port a component declares (``in both = a & b``)."""
+
+    name: str
+    mode: Literal["and", "or"]
+    members: tuple[str, ...]
+    span: Span = _span()
+
+
+@dataclass(frozen=True)
+class TaskDecl:
+    """A task as its component declares it (the same for every instance): what it reads and produces,
+    its execution times and its activation constraint."""
+
+    name: str
+    kind: Literal["preemptive", "cooperative"]
+    reads: tuple[ReadModel, ...]
+    produces: tuple[str, ...]
+    bcet: Fraction
+    wcet: Fraction | None
+    min_rate: Fraction | None = None
+    max_rate: Fraction | None = None
+    changeable: bool = True
+    span: Span = _span()
+
+
+@dataclass(frozen=True)
+class ComponentModel:
+    """A component used by the system (Lotz et al.: the component developer's part): its ports with
+    their message types, its compound in-ports and its tasks."""
+
+    name: str
+    ports: tuple[PortDecl, ...]
+    compounds: tuple[CompoundDecl, ...]
+    tasks: tuple[TaskDecl, ...]
+    span: Span = _span()
+
+    def port(self, name: str) -> PortDecl | None:
+        return next((p for p in self.ports if p.name == name), None)
+
+    @property
+    def in_ports(self) -> tuple[PortDecl, ...]:
+        return tuple(p for p in self.ports if p.direction == "in")
+
+    @property
+    def out_ports(self) -> tuple[PortDecl, ...]:
+        return tuple(p for p in self.ports if p.direction == "out")
+
+
+@dataclass(frozen=True)
+class PortModel:
+    """A port of an instance: ``id`` is ``instance.port``; ``message_type`` what it carries."""
+
+    id: PortId
+    instance: str
+    name: str
+    direction: Literal["in", "out"]
+    message_type: str
+    span: Span = _span()  # the declaration in the component
+
+
+@dataclass(frozen=True)
+class InstanceModel:
+    """An instance of a component in the system: its core (where its tasks run unless a binding says
+    otherwise), its tasks and its ports."""
+
+    name: str
+    component: str
+    core: str | None
+    tasks: tuple[TaskId, ...]
+    ports: tuple[PortId, ...]
+    span: Span = _span()  # the instance in the system
 
 
 @dataclass(frozen=True)
@@ -207,9 +359,24 @@ class SystemModel:
     chains: tuple[ChainModel, ...]
     span: Span = _span()
     compounds: tuple[CompoundModel, ...] = ()  # every compound in-port of every instance
+    #: the typed structure generators and importers walk: the instances, the components they
+    #: instantiate (in order of first use) and every port of every instance
+    instances: tuple[InstanceModel, ...] = ()
+    components: tuple[ComponentModel, ...] = ()
+    ports: tuple[PortModel, ...] = ()
 
     def task(self, task_id: str) -> TaskModel:
         return self._index()["tasks"][task_id]
+
+    def port(self, port_id: str) -> PortModel:
+        """The port ``instance.port`` (with its message type)."""
+        return self._index()["ports"][port_id]
+
+    def instance(self, name: str) -> InstanceModel:
+        return self._index()["instances"][name]
+
+    def component(self, name: str) -> ComponentModel:
+        return self._index()["components"][name]
 
     def _index(self) -> dict:
         """Lookup tables, built once per model (the model is immutable, so they never go stale)."""
@@ -221,13 +388,16 @@ class SystemModel:
             for lk in self.links:
                 out_of.setdefault(lk.source, []).append(lk)
             index = {"tasks": {t.id: t for t in self.tasks}, "producers": producers, "into": into,
-                     "out_of": out_of}
+                     "out_of": out_of, "ports": {p.id: p for p in self.ports},
+                     "instances": {i.name: i for i in self.instances},
+                     "components": {c.name: c for c in self.components}}
             object.__setattr__(self, "_lookup", index)
         return index
 
     def _with_chains(self, chains: tuple[ChainModel, ...]) -> SystemModel:
         """This system with ``chains``; it shares the lookup tables, which do not depend on the chains."""
-        other = SystemModel(self.name, self.cores, self.tasks, self.links, chains, self.span, self.compounds)
+        other = SystemModel(self.name, self.cores, self.tasks, self.links, chains, self.span, self.compounds,
+                            self.instances, self.components, self.ports)
         if "_lookup" in self.__dict__:
             object.__setattr__(other, "_lookup", self.__dict__["_lookup"])
         return other
@@ -265,6 +435,8 @@ _new_read = direct_constructor(ReadModel)
 _new_periodic = direct_constructor(Periodic)
 _new_link = direct_constructor(LinkModel)
 _new_hop = direct_constructor(HopModel)
+_new_port = direct_constructor(PortModel)
+_new_port_decl = direct_constructor(PortDecl)
 
 #: each unit's factor to seconds or hertz as (numerator, denominator)
 _UNIT_RATIOS = {unit: factor.as_integer_ratio() for unit, factor in {**s.TIME_UNITS, **s.FREQUENCY_UNITS}.items()}
@@ -304,17 +476,17 @@ def activation_model(act: s.Activation, component: s.Component) -> ActivationMod
     """The semantic activation of a (validated) binding of a task of ``component``."""
     if isinstance(act, s.Timer):
         if isinstance(act.period, s.PeriodHole):
-            return Hole(act)
+            return Hole.of(act)
         return _new_periodic(quantity_seconds(act.period), _seconds(act.phase), act.span)
     if isinstance(act, s.Sporadic):
         a, b = quantity_seconds(act.low), quantity_seconds(act.high)
         return SporadicSource(min(a, b), max(a, b), act.span)
     if isinstance(act, s.Trigger):
         if isinstance(act.prescaler, s.PrescalerHole):
-            return Hole(act)
+            return Hole.of(act)
         mode, members = _trigger_members(component, act.port.text)
         return DataTriggered(act.port.text, members, mode, int(act.prescaler.value), act.span)
-    return Hole(act)
+    return Hole.of(act)
 
 
 def _trigger_members(component: s.Component, port: str) -> tuple[str, tuple[str, ...]]:
@@ -342,12 +514,15 @@ def build_system(scope: SystemScope) -> SystemModel:
     for t in tasks:
         for r in t.reads:
             readers.setdefault(f"{t.instance}.{r.port}", []).append(t.id)
-    links = tuple(_link_model(conn, producers, readers) for conn in system.connections)
+    instances, components, ports = _structure(scope)
+    types = {p.id: p.message_type for p in ports}
+    links = tuple(_link_model(conn, producers, readers, types) for conn in system.connections)
     cores = tuple(CoreModel(c.name.text, c.policy.text if c.policy else "fixed_priority", c.span)
                   for c in system.cores)
     compounds = tuple(cm for inst in system.instances
                       for cm in _compound_models(inst, scope.component_of[inst.name.text].component))
-    model = SystemModel(system.name.text, cores, tuple(tasks), links, (), system.span, compounds)
+    model = SystemModel(system.name.text, cores, tuple(tasks), links, (), system.span, compounds, instances,
+                        components, ports)
     chains = tuple(_chain_model(ch, model, scope) for ch in system.chains)
     return model._with_chains(chains)
 
@@ -356,7 +531,7 @@ def _task_model(inst: s.Instance, task: s.Task, binding: s.TaskBinding, componen
     core = (binding.core or inst.core).text  # validation guarantees one of them
     c = task.constraint
     return _new_task(
-        id=f"{inst.name.text}.{task.name.text}",
+        id=TaskId(f"{inst.name.text}.{task.name.text}"),
         instance=inst.name.text,
         name=task.name.text,
         component=inst.component.text,
@@ -389,7 +564,7 @@ def _compound_models(inst: s.Instance, component: s.Component) -> list[CompoundM
             continue
         k = c.constraint
         out.append(CompoundModel(
-            id=f"{inst.name.text}.{c.name.text}", instance=inst.name.text, name=c.name.text, mode=c.mode,
+            id=PortId(f"{inst.name.text}.{c.name.text}"), instance=inst.name.text, name=c.name.text, mode=c.mode,
             members=tuple(m.text for m in c.members),
             min_rate=quantity_hertz(k.min) if k and k.min else None,
             max_rate=quantity_hertz(k.max) if k and k.max else None,
@@ -398,11 +573,57 @@ def _compound_models(inst: s.Instance, component: s.Component) -> list[CompoundM
     return out
 
 
-def _link_model(conn: s.Connection, producers: dict[str, str], readers: dict[str, list[str]]) -> LinkModel:
+def _link_model(conn: s.Connection, producers: dict[str, str], readers: dict[str, list[str]],
+                types: dict[PortId, str]) -> LinkModel:
     low = _seconds(conn.delay_min) or Fraction(0)
     high = _seconds(conn.delay_max) or Fraction(0)
-    return _new_link(str(conn.source), str(conn.target), producers[str(conn.source)],
-                     tuple(readers.get(str(conn.target), ())), low, high, conn.span)
+    source = PortId(str(conn.source))
+    return _new_link(source, PortId(str(conn.target)), producers[source], tuple(readers.get(str(conn.target), ())),
+                     low, high, conn.span, types.get(source, ""))
+
+
+def _component_model(component: s.Component) -> ComponentModel:
+    """The component as the model keeps it (the last declaration of a name counts, as in a dict of
+    them; validation reports duplicates)."""
+    ports = {p.name.text: _new_port_decl(p.name.text, "in", p.type.text, p.span) for p in component.in_ports}
+    ports.update({p.name.text: _new_port_decl(p.name.text, "out", p.type.text, p.span) for p in component.out_ports})
+    compounds = {c.name.text: CompoundDecl(c.name.text, c.mode, tuple(m.text for m in c.members), c.span)
+                 for c in component.compounds}
+    tasks = tuple(_task_decl(t) for t in component.tasks)
+    return ComponentModel(component.name.text, tuple(ports.values()), tuple(compounds.values()), tasks,
+                          component.span)
+
+
+def _task_decl(task: s.Task) -> TaskDecl:
+    c = task.constraint
+    return TaskDecl(task.name.text, task.kind,
+                    tuple([_new_read(r.port.text, r.optional, r.oversampling, r.undersampling, r.span)
+                           for r in task.reads]),
+                    tuple(p.text for p in task.produces),
+                    quantity_seconds(task.bcet) if task.bcet else Fraction(0),
+                    quantity_seconds(task.wcet) if task.wcet else None,
+                    quantity_hertz(c.min) if c and c.min else None, quantity_hertz(c.max) if c and c.max else None,
+                    c.changeable if c else True, task.span)
+
+
+def _structure(scope: SystemScope) -> tuple[tuple[InstanceModel, ...], tuple[ComponentModel, ...],
+                                             tuple[PortModel, ...]]:
+    """The instances, the components they instantiate (in order of first use) and their ports."""
+    components: dict[str, ComponentModel] = {}
+    instances, ports = [], []
+    for inst in scope.system.instances:
+        name = inst.name.text
+        component = scope.component_of[name].component
+        comp = components.get(component.name.text)
+        if comp is None:
+            comp = components[component.name.text] = _component_model(component)
+        own = [_new_port(PortId(f"{name}.{p.name}"), name, p.name, p.direction, p.message_type, p.span)
+               for p in comp.ports]
+        ports.extend(own)
+        instances.append(InstanceModel(name, comp.name, inst.core.text if inst.core else None,
+                                       tuple(TaskId(f"{name}.{t.name}") for t in comp.tasks),
+                                       tuple(p.id for p in own), inst.span))
+    return tuple(instances), tuple(components.values()), tuple(ports)
 
 
 def chain_path(chain: s.Chain, model: SystemModel, scope: SystemScope):

@@ -82,12 +82,17 @@ def restrict(model: SystemModel, tasks: frozenset[str], chains: set[str]) -> Sys
         readers = tuple(r for r in lk.readers if r in tasks)
         if lk.writer in tasks and readers:
             links.append(lk if readers == lk.readers else type(lk)(lk.source, lk.target, lk.writer, readers,
-                                                                   lk.delay_min, lk.delay_max, lk.span))
+                                                                   lk.delay_min, lk.delay_max, lk.span,
+                                                                   lk.message_type))
     instances = {t.instance for t in kept}
     cores = {t.core for t in kept}
+    used = tuple(i for i in model.instances if i.name in instances)
+    components = {i.component for i in used}
     return SystemModel(model.name, tuple(c for c in model.cores if c.name in cores), tuple(kept), tuple(links),
                        tuple(c for c in model.chains if c.name in chains), model.span,
-                       tuple(c for c in model.compounds if c.instance in instances))
+                       tuple(c for c in model.compounds if c.instance in instances), used,
+                       tuple(c for c in model.components if c.name in components),
+                       tuple(p for p in model.ports if p.instance in instances))
 
 
 def slices(model: SystemModel, targets: list[Target]) -> list[tuple[SystemModel, list[Target]]]:

@@ -27,7 +27,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from fractions import Fraction
 
-from .. import syntax as s
 from ..diagnostics import Diagnostic, DiagnosticSink
 from ..model import DataTriggered, Hole, Periodic, SystemModel, TaskModel
 from ..resolve import SystemScope
@@ -92,7 +91,7 @@ class Choice:
     task: str
     candidates: tuple[Candidate, ...]
     excluded: tuple[tuple[str, ...], ...]
-    hole: s.Activation | None = None  # the hole's syntax node; None for a relaxable fixed binding
+    hole: Hole | None = None  # the hole; None for a relaxable fixed binding
     slowest: int = field(default=0, compare=False)
 
     def allowed(self, off: frozenset[str] = frozenset()) -> tuple[int, ...]:
@@ -156,24 +155,24 @@ def _grid(lo: Fraction, hi: Fraction, step: Fraction, task: TaskModel) -> list[F
     return [lo + i * step for i in range(int(count))]
 
 
-def period_values(h: s.PeriodHole, task: TaskModel) -> tuple[list[Fraction] | None, list[Fraction]]:
+def period_values(h: Hole, task: TaskModel) -> tuple[list[Fraction] | None, list[Fraction]]:
     """(the hole's own range values or None for a bare ``?``, its default candidates)."""
     extremes = _constraint_periods(task)
-    if h.low is None:
+    if h.low is None or h.high is None:
         return None, sorted(set(DEFAULT_PERIODS) | set(extremes))
-    lo, hi = sorted((h.low.seconds(), h.high.seconds()))
+    lo, hi = sorted((h.low, h.high))
     if h.step is not None:
-        values = _grid(h.low.seconds(), h.high.seconds(), h.step.seconds(), task)
+        values = _grid(h.low, h.high, h.step, task)
     else:
         inside = [p for p in list(DEFAULT_PERIODS) + extremes if lo <= p <= hi]
         values = sorted({lo, hi, *inside})
     return values, values
 
 
-def prescaler_values(h: s.PrescalerHole, task: TaskModel) -> tuple[list[int] | None, list[int]]:
-    if h.low is None:
+def prescaler_values(h: Hole, task: TaskModel) -> tuple[list[int] | None, list[int]]:
+    if h.low is None or h.high is None:
         return None, list(DEFAULT_PRESCALERS)
-    lo, hi = int(h.low.value), int(h.high.value)
+    lo, hi = int(h.low), int(h.high)
     if hi - lo + 1 > MAX_CANDIDATES:
         raise TooManyCandidates(task, hi - lo + 1)
     return list(range(lo, hi + 1)), list(range(lo, hi + 1))
@@ -202,7 +201,7 @@ class _Builder:
             out.append(self.slots.get("max_rate") or self.slots.get("rate"))
         return [k for k in out if k]
 
-    def choice(self, hole: s.Activation | None, drop_excluded: bool) -> Choice:
+    def choice(self, hole: Hole | None, drop_excluded: bool) -> Choice:
         if len(self.items) > MAX_CANDIDATES:
             raise TooManyCandidates(self.task, len(self.items))
         cands = sorted(self.items, key=Candidate.sort_key)
@@ -213,7 +212,7 @@ class _Builder:
 
 
 def make_choice(task: str, cands: tuple[Candidate, ...], excluded: tuple[tuple[str, ...], ...],
-                hole: s.Activation | None) -> Choice:
+                hole: Hole | None) -> Choice:
     """A choice; ``slowest`` is the slowest allowed timer candidate (else the slowest allowed one)."""
     allowed = [i for i, ex in enumerate(excluded) if not ex] or list(range(len(cands)))
     slowest = max(allowed, key=lambda i: (cands[i].kind == "timer", cands[i].speed), default=0)
@@ -229,8 +228,8 @@ def task_choice(model: SystemModel, task: TaskModel, scope: SystemScope | None, 
     b = _Builder(task, slots)
     act = task.activation
     if isinstance(act, Hole):
-        _hole_candidates(b, model, task, act.activation, scope, slots, tracked)
-        hole = act.activation
+        _hole_candidates(b, model, task, act, scope, slots, tracked)
+        hole: Hole | None = act
     elif tracked and isinstance(act, Periodic) and "rate" in slots:
         bound = Candidate("timer", act.period, act.phase)
         b.add(bound)
@@ -252,23 +251,22 @@ def _timer_defaults(task: TaskModel) -> list[Fraction]:
     return sorted(set(DEFAULT_PERIODS) | set(_constraint_periods(task)))
 
 
-def _hole_candidates(b: _Builder, model: SystemModel, task: TaskModel, node: s.Activation,
+def _hole_candidates(b: _Builder, model: SystemModel, task: TaskModel, hole: Hole,
                      scope: SystemScope | None, slots: dict[str, str], tracked: bool) -> None:
     rng = slots.get("range")
-    if isinstance(node, s.Timer):
-        phase = node.phase.seconds() if node.phase is not None else None
-        own, values = period_values(node.period, task)
+    if hole.what == "period":
+        own, values = period_values(hole, task)
         for p in values:
-            b.add(Candidate("timer", p, phase))
+            b.add(Candidate("timer", p, hole.phase))
         if tracked and own is not None:
             for p in _timer_defaults(task):
-                b.add(Candidate("timer", p, phase), rng if p not in own else None)
-    elif isinstance(node, s.Trigger):
-        mode, members = trigger_ports(model, task, scope).get(node.port.text, ("single", (node.port.text,)))
-        own, values = prescaler_values(node.prescaler, task)
+                b.add(Candidate("timer", p, hole.phase), rng if p not in own else None)
+    elif hole.what == "prescaler" and hole.port is not None:
+        mode, members = trigger_ports(model, task, scope).get(hole.port, ("single", (hole.port,)))
+        own, values = prescaler_values(hole, task)
         extra = DEFAULT_PRESCALERS if tracked and own is not None else ()
         for k in sorted(set(values) | set(extra)):
-            b.add(Candidate("trigger", port=node.port.text, members=members, mode=mode, prescaler=k),
+            b.add(Candidate("trigger", port=hole.port, members=members, mode=mode, prescaler=k),
                   rng if own is not None and k not in own else None)
     else:  # activation ?
         for p in _timer_defaults(task):
@@ -291,9 +289,7 @@ def build_choices(model: SystemModel, scope: SystemScope | None, statements: tup
 
 def describe_hole(choice: Choice) -> str:
     """What the user wrote for a hole, e.g. ``timer ? in 25 ms .. 200 ms step 25 ms``."""
-    from ..fmt import _activation  # the canonical text of an activation clause
-
-    return _activation(choice.hole) if choice.hole is not None else "(fixed binding)"
+    return choice.hole.text if choice.hole is not None else "(fixed binding)"
 
 
 def value_text(c: Candidate) -> str:

@@ -160,18 +160,14 @@ def _rate_statement(task: TaskModel, node, binding, comp_key: str) -> Statement 
 
 
 def _range_statement(task: TaskModel) -> Statement | None:
-    node = task.activation.activation
-    if isinstance(node, s.Timer) and isinstance(node.period, s.PeriodHole) and node.period.low is not None:
-        h = node.period
-        text = f"{fmt_quantity(h.low)} .. {fmt_quantity(h.high)}" + (f" step {fmt_quantity(h.step)}" if h.step else "")
-        return Statement(f"range:{task.id}", "range", _span(h.span, node.span), f"period in {text}",
-                         f"timer ? in {text}", (task.id,))
-    if isinstance(node, s.Trigger) and isinstance(node.prescaler, s.PrescalerHole) and node.prescaler.low is not None:
-        h = node.prescaler
-        text = f"{fmt_number(h.low.value)} .. {fmt_number(h.high.value)}"
-        return Statement(f"range:{task.id}", "range", _span(h.span, node.span), f"prescaler in {text}",
-                         f"every ? in {text}", (task.id,))
-    return None
+    hole = task.activation
+    if not isinstance(hole, Hole) or not hole.bounded or hole.what == "kind":
+        return None
+    if hole.what == "period":
+        return Statement(f"range:{task.id}", "range", _span(hole.range_span, hole.span),
+                         f"period in {hole.range_text}", f"timer ? in {hole.range_text}", (task.id,))
+    return Statement(f"range:{task.id}", "range", _span(hole.range_span, hole.span),
+                     f"prescaler in {hole.range_text}", f"every ? in {hole.range_text}", (task.id,))
 
 
 def _core_statement(task: TaskModel, binding, inst) -> Statement:
@@ -239,7 +235,8 @@ def configured_model(model: SystemModel, activations: Mapping[str, object],
             cores.append(CoreModel(t.core))
             known.add(t.core)
     chains = tuple(_configured_chain(c, off) for c in model.chains) if off else model.chains
-    return SystemModel(model.name, tuple(cores), tasks, model.links, chains, model.span, model.compounds)
+    return SystemModel(model.name, tuple(cores), tasks, model.links, chains, model.span, model.compounds,
+                       model.instances, model.components, model.ports)
 
 
 def _configured_task(task: TaskModel, choice, slots: dict[str, str], off: frozenset[str]) -> TaskModel:
