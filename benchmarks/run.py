@@ -19,6 +19,12 @@ took). It may return a dict of result fields (status, evaluations, ...), shown i
 
 - ``parse+check``: ``verify.load_text`` on the text (parse, resolve, validate, build the model, chain
   checks). The system must load without a single diagnostic.
+- ``parse-verify``, ``parse-lark-transformer``, ``parse-lark-standalone``, ``parse-lark-tree``: one valid text
+  into the ``verify.syntax`` tree by verify's own parse (the fast path of ``verify/lalr.py``), by Lark's LALR with
+  ``transformer=`` (no parse tree), by the parser of ``python -m lark.tools.standalone`` with the same
+  transformer, and by Lark's tree then ``_Builder.transform`` (``benchmarks.parsers``), the collector paused as
+  ``verify.load_text`` runs (``--param gc=on``: on). Every run's tree must equal the fast path's, spans
+  included (a sample of them). Run them together with ``--interleave``.
 - ``analyze``: ``verify.timing.analyze`` on the loaded model.
 - ``analyze-pipeline``: ``analyze`` of a trigger pipeline at one priority on one core
   (``generate.generate_pipeline_system``): every task must have a WCRT bound.
@@ -42,6 +48,11 @@ took). It may return a dict of result fields (status, evaluations, ...), shown i
   ``baseline-random-search`` (random candidate combinations of the unpruned problem, each analysed by
   ``Problem.evaluate``, up to a limit) and ``baseline-z3-direct`` (the solver loop of ``synthesize`` on
   the problem built with ``prune=False``).
+
+A stage may also give ``setup=`` (called untimed before it is measured, e.g. to build a parser) and
+``check=`` (called untimed on what each timed run returned; raises BenchmarkError or returns the result
+fields). ``--interleave`` measures size by size, the selected stages one repetition each in turn;
+``--param KEY=VALUE`` sets a parameter of every selected stage that has it.
 
 A stage states its generator options (``options=``, e.g. ``{"hole_share": Fraction(1, 5)}``; instances
 are cached per size, options and chain count), its own parameters (``params=``, with ``quick_params=``
@@ -80,6 +91,7 @@ DEFAULT_SIZES = (10, 100, 1000)
 QUICK_SIZES = (10, 30)
 SCHEMA = "verify.benchmarks/2"
 ONE_PER_FIVE = Fraction(1, 5)  # chains per task of the targets (2,000 for 10,000 tasks; 200 for 1,000)
+SPAN_SAMPLE = 1000  # the parse-* stages compare every span, except in tuples of more nodes: about this many of them
 
 
 class BenchmarkError(Exception):
@@ -135,6 +147,27 @@ class Instance:
         return resolution.systems.get(self.model.name) if resolution is not None else None
 
     @cached_property
+    def syntax(self):
+        """The ``verify.syntax.Module`` of the text, straight from verify's fast path (``verify/lalr.py``): the
+        reference of the ``parse-*`` stages. Raises BenchmarkError if the fast path does not accept the text
+        (``parse_source`` would then time Lark's error path)."""
+        from verify.lalr import Unparsable
+
+        from .parsers import VerifyEngine
+
+        try:
+            return VerifyEngine.fast_path(self.text, self.name)
+        except Unparsable:
+            raise BenchmarkError(f"verify's fast path (verify/lalr.py) does not accept {self.name}") from None
+
+    @cached_property
+    def syntax_spans(self) -> list:
+        """The sampled spans of ``syntax`` (``parsers.sampled_spans``)."""
+        from .parsers import sampled_spans
+
+        return sampled_spans(self.syntax, SPAN_SAMPLE)
+
+    @cached_property
     def chain_count(self) -> int:
         return sum(1 for line in self.text.splitlines() if line.lstrip().startswith("chain "))
 
@@ -185,13 +218,20 @@ GENERATORS: dict[str, Callable[..., str]] = {}
 CHAINS_PER_TASK: dict[str, Fraction | None] = {}
 #: stage name -> why it is not available here (import failed)
 UNAVAILABLE: dict[str, str] = {}
+#: stage name -> called (untimed) before each measurement of the stage, e.g. to build a parser once (cache in it)
+SETUPS: dict[str, Callable[[], object]] = {}
+#: stage name -> ``check(inst, product)``, called after the timer stops on each timed run with what the stage
+#: returned: raises BenchmarkError if the work is wrong, else returns the result fields (a dict) or None
+CHECKS: dict[str, Callable[..., dict | None]] = {}
 
 
 def stage(name: str, description: str, *, needs: tuple[str, ...] = (), options: dict | None = None,
           params: dict | None = None, quick_params: dict | None = None, sizes: tuple[int, ...] = DEFAULT_SIZES,
           quick_sizes: tuple[int, ...] = QUICK_SIZES, generator: Callable[..., str] = generate_system,
-          chains_per_task: Fraction | None = None):
-    """Register the decorated callable as stage ``name``."""
+          chains_per_task: Fraction | None = None, setup: Callable[[], object] | None = None,
+          check: Callable[..., dict | None] | None = None):
+    """Register the decorated callable as stage ``name``. ``setup`` runs untimed before the stage is measured;
+    ``check`` checks what a timed run returned, untimed (a stage that checks its work itself needs neither)."""
 
     def register(fn: Callable[..., object]) -> Callable[..., object]:
         STAGES[name] = fn
@@ -204,6 +244,10 @@ def stage(name: str, description: str, *, needs: tuple[str, ...] = (), options: 
         QUICK[name] = tuple(quick_sizes)
         GENERATORS[name] = generator
         CHAINS_PER_TASK[name] = chains_per_task
+        if setup is not None:
+            SETUPS[name] = setup
+        if check is not None:
+            CHECKS[name] = check
         return fn
 
     return register
@@ -228,6 +272,72 @@ def chains_for(name: str, size: int, override: int | None) -> int | None:
        sizes=(10, 100, 1000, 10000))
 def parse_and_check(inst: Instance) -> None:
     _load_clean(inst)
+
+
+def _register_parsers() -> None:
+    try:
+        import lark  # noqa: F401
+
+        from . import parsers
+    except Exception as err:
+        for key in ("verify", "lark-transformer", "lark-standalone", "lark-tree"):
+            UNAVAILABLE[f"parse-{key}"] = f"benchmarks.parsers is not importable ({type(err).__name__}: {err})"
+        return
+
+    engines: dict[str, object] = {}  # built once, untimed (the standalone parser is generated then)
+
+    def engine(key: str):
+        if key not in engines:
+            built = parsers.ENGINES[key]()
+            built.parse(generate_system(4, 0), "<warm-up>")  # (Lark compiles its lexers' regexes at first use)
+            engines[key] = built
+        return engines[key]
+
+    def check(inst: Instance, module) -> dict:
+        reference = inst.syntax
+        if module != reference:
+            raise BenchmarkError(f"the tree differs from parse-verify's: {parsers.first_difference(module, reference)}",
+                                 {"tree": "different"})
+        spans = parsers.sampled_spans(module, SPAN_SAMPLE)
+        if spans != inst.syntax_spans:
+            bad = next((i for i, (a, b) in enumerate(zip(spans, inst.syntax_spans)) if a != b), None)
+            where = (f"first {spans[bad]!r} for {inst.syntax_spans[bad]!r}" if bad is not None
+                     else f"{len(spans)} spans for {len(inst.syntax_spans)}")
+            raise BenchmarkError(f"the same tree, other spans: {where}", {"tree": "equal", "spans": "different"})
+        return {"tree": "equal", "spans equal": len(spans)}
+
+    descriptions = {
+        "verify": "verify.parse.parse_source on valid input: the fast path of verify/lalr.py (Lark's table, "
+                  "its own lexer, _Builder's callbacks at each reduction)",
+        "lark-transformer": "Lark LALR, contextual lexer, transformer= (no parse tree): _Builder's callbacks "
+                            "through an adapter (keep_all_tokens, positions from the children)",
+        "lark-standalone": "the parser of python -m lark.tools.standalone (generated into benchmarks/out/ at "
+                           "benchmark time) with the same transformer",
+        "lark-tree": "Lark's parse tree with positions, then _Builder.transform (verify's error path; a "
+                     "reference)",
+    }
+
+    def register(key: str) -> None:
+        @stage(f"parse-{key}", descriptions[key], needs=("syntax", "syntax_spans"), sizes=(10, 100, 1000, 10000),
+               params={"gc": "paused"}, setup=lambda: engine(key), check=check)
+        def parse_stage(inst: Instance, **params):
+            # "paused": the cyclic collector off during the parse, as verify.load_text runs it (verify.gcpause;
+            # not paused_gc itself, whose exit may run a full collection); "on": as the runner's other stages
+            mode = params["gc"]
+            if mode == "on":
+                return engine(key).parse(inst.text, inst.name)
+            if mode != "paused":
+                raise BenchmarkError(f"parameter gc is 'paused' or 'on', not {mode!r}")
+            enabled = gc.isenabled()
+            gc.disable()
+            try:
+                return engine(key).parse(inst.text, inst.name)
+            finally:
+                if enabled:
+                    gc.enable()
+
+    for key in parsers.ENGINES:
+        register(key)
 
 
 def _register_analyze() -> None:
@@ -463,6 +573,7 @@ def _register_synth() -> None:
         return result
 
 
+_register_parsers()
 _register_analyze()
 _register_prove()
 _register_synth()
@@ -475,17 +586,28 @@ def _summary(values: list) -> dict:
     return {"median": statistics.median(values), "min": min(values), "max": max(values)}
 
 
-def _run(fn: Callable[..., object], inst: Instance, params: dict) -> tuple[float, object]:
+def _run(fn: Callable[..., object], inst: Instance, params: dict,
+         check: Callable[..., dict | None] | None = None) -> tuple[float, object]:
     start = time.perf_counter()
     try:
         result = fn(inst, **params)
     except BenchmarkError as err:
         err.seconds = time.perf_counter() - start
         raise
-    return time.perf_counter() - start, result
+    elapsed = time.perf_counter() - start
+    if check is not None:  # untimed
+        try:
+            result = check(inst, result)
+        except BenchmarkError as err:
+            err.seconds = elapsed
+            raise
+    return elapsed, result
 
 
 def prepare(name: str, inst: Instance) -> None:
+    setup = SETUPS.get(name)
+    if setup is not None:
+        setup()
     for attr in ("text",) + NEEDS[name]:
         getattr(inst, attr)
 
@@ -501,7 +623,7 @@ def measure(name: str, inst: Instance, repeat: int, memory: bool = True, budget:
     outcome = None
     for _ in range(repeat):
         gc.collect()
-        elapsed, result = _run(fn, inst, params)
+        elapsed, result = _run(fn, inst, params, CHECKS.get(name))
         seconds.append(elapsed)
         outcome = result if isinstance(result, dict) else outcome
         del result
@@ -528,6 +650,21 @@ def measure(name: str, inst: Instance, repeat: int, memory: bool = True, budget:
     if peaks:
         row.update(memory_runs=len(peaks), peak_bytes=peaks, peak_bytes_summary=_summary(peaks))
     return row
+
+
+def _merge(row: dict, more: dict) -> dict:
+    """The row of a stage's repetitions so far (``row``) and of one more (``more``), both from ``measure``."""
+    merged = dict(more)
+    merged["seconds"] = row["seconds"] + more["seconds"]
+    merged["runs"] = len(merged["seconds"])
+    merged["seconds_summary"] = _summary(merged["seconds"])
+    if "peak_bytes" in row or "peak_bytes" in more:
+        merged["peak_bytes"] = row.get("peak_bytes", []) + more.get("peak_bytes", [])
+        merged["memory_runs"] = len(merged["peak_bytes"])
+        merged["peak_bytes_summary"] = _summary(merged["peak_bytes"])
+    if "result" not in more and "result" in row:
+        merged["result"] = row["result"]
+    return merged
 
 
 def profile(name: str, inst: Instance, path: Path, top: int = 30, params: dict | None = None) -> str:
@@ -636,6 +773,25 @@ def markdown(rows: list[dict]) -> str:
 # ------------------------------------------------------------------------------ command line
 
 
+def stage_params(name: str, quick: bool, overrides: dict[str, str] | None = None) -> dict:
+    """The parameters of stage ``name`` (its quick ones with ``quick``), with the ``--param`` values of the
+    keys it has, each read as the type of its default (ValueError if it is not one)."""
+    params = dict(QUICK_PARAMS[name] if quick else PARAMS[name])
+    for key, text in (overrides or {}).items():
+        if key not in params:
+            continue
+        default = params[key]
+        if isinstance(default, bool):
+            if text.lower() not in ("true", "false", "yes", "no", "1", "0"):
+                raise ValueError(f"not a boolean: {text!r}")
+            params[key] = text.lower() in ("true", "yes", "1")
+        elif isinstance(default, (int, float, Fraction)):
+            params[key] = type(default)(text)
+        else:
+            params[key] = text
+    return params
+
+
 def _sizes(text: str) -> list[int]:
     try:
         sizes = [int(s) for s in text.split(",") if s.strip()]
@@ -665,6 +821,12 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--profile", nargs="?", const="all", default=None, metavar="STAGES",
                    help="also profile stages once at their largest measured size (cProfile, written next "
                         "to --out as profile-STAGE-TASKS.txt): every stage, or the comma-separated STAGES")
+    p.add_argument("--interleave", action="store_true",
+                   help="measure size by size, the selected stages one repetition each in turn (stages compared "
+                        "with each other then share the machine's state: load, the instances alive)")
+    p.add_argument("--param", action="append", default=[], metavar="KEY=VALUE",
+                   help="set parameter KEY of every selected stage that has one (e.g. gc=on for the parse-* "
+                        "stages, limit=50 for the baselines); repeatable")
     p.add_argument("--out", type=Path, default=DEFAULT_OUT, help=f"JSON results (default {DEFAULT_OUT})")
     p.add_argument("--list", action="store_true", help="list the stages and exit")
     args = p.parse_args(argv)
@@ -690,6 +852,21 @@ def main(argv: list[str] | None = None) -> int:
         {s.strip() for s in args.profile.split(",")} if args.profile else set()
     for name in to_profile - set(names):
         p.error(f"--profile {name!r}: not among the stages run")
+    overrides: dict[str, str] = {}
+    for item in args.param:
+        key, sep, value = item.partition("=")
+        if not sep or not key.strip():
+            p.error(f"--param {item!r}: expected KEY=VALUE")
+        overrides[key.strip()] = value.strip()
+    for key, value in overrides.items():
+        having = [n for n in names if key in (QUICK_PARAMS[n] if args.quick else PARAMS[n])]
+        if not having:
+            p.error(f"--param {key}: no selected stage has a parameter {key!r}")
+        try:
+            for n in having:
+                stage_params(n, args.quick, {key: value})
+        except ValueError as err:
+            p.error(f"--param {key}={value}: {err}")
 
     verify.load_text(generate_system(4, 0))  # warm-up, untimed: builds the parser once
     info = machine()
@@ -700,57 +877,77 @@ def main(argv: list[str] | None = None) -> int:
     instances: dict[tuple, Instance] = {}
     rows: list[dict] = []
     largest: dict[str, Instance] = {}
-    stage_sizes: dict[str, list[int]] = {}
+    stage_sizes = {name: list(args.sizes or (QUICK[name] if args.quick else SIZES[name])) for name in names}
+    params_of = {name: stage_params(name, args.quick, overrides) for name in names}
+    last: dict[str, tuple[int, float]] = {}  # stage -> (size, median seconds) of its last measured size
     failed = False
-    for name in names:
-        sizes = args.sizes or list(QUICK[name] if args.quick else SIZES[name])
-        stage_sizes[name] = sizes
-        params = QUICK_PARAMS[name] if args.quick else PARAMS[name]
-        last = None  # (size, median seconds) of the last measured size
-        for size in sizes:
-            if budget is not None and last is not None and last[1] * size / last[0] > budget:
+    jobs = [(name, size) for name in names for size in stage_sizes[name]]
+    if args.interleave:  # every stage at one size, repetition by repetition, before the next size
+        groups = [[job for job in jobs if job[1] == size] for size in sorted({size for _, size in jobs})]
+    else:
+        groups = [[job] for job in jobs]
+    for group in groups:
+        todo = []
+        for name, size in group:
+            if budget is not None and name in last and last[name][1] * size / last[name][0] > budget:
+                done, took = last[name]
                 rows.append({"stage": name, "tasks": size, "seed": args.seed,
-                             "skipped": f"{last[0]} tasks took {last[1]:.1f} s; even linear growth exceeds "
+                             "skipped": f"{done} tasks took {took:.1f} s; even linear growth exceeds "
                                         f"the budget of {args.budget:g} s"})
-                last = (size, last[1] * size / last[0])
+                last[name] = (size, took * size / done)
                 continue
             chains = chains_for(name, size, args.chains)
             inst = instances.setdefault(instance_key(name, size, chains),
                                         Instance(size, args.seed, OPTIONS[name], chains, GENERATORS[name]))
-            print(f"  {name} on {size} tasks ...", file=sys.stderr, flush=True)
-            try:
-                row = measure(name, inst, repeat, memory=not args.no_memory, budget=budget, params=params)
-            except Exception as err:  # recorded, and the run goes on with the other stages and sizes
-                failed = True
-                what = str(err) if isinstance(err, BenchmarkError) else f"{type(err).__name__}: {err}"
-                row = {"stage": name, "tasks": size, "seed": args.seed, "error": what, "params": params}
-                if "text" in inst.__dict__:
-                    row.update(chains=inst.chain_count, lines=inst.text.count("\n"))
-                if isinstance(err, BenchmarkError):
-                    row["result"] = err.result
-                    if err.seconds is not None:
-                        row["seconds"] = [err.seconds]
-                        largest[name] = inst
-                        last = (size, err.seconds)
-                rows.append(row)
-                print(f"    error: {what}", file=sys.stderr, flush=True)
-                continue
+            todo.append((name, size, inst))
+        measured: dict[str, dict] = {}  # stage -> its row so far (its repetitions merged when interleaved)
+        for rep in range(repeat if args.interleave else 1):
+            for name, size, inst in todo:
+                so_far = measured.get(name)
+                if so_far is not None and ("error" in so_far or (budget is not None
+                                                                 and so_far["seconds"][-1] > budget)):
+                    continue  # failed, or its repetitions ended
+                print(f"  {name} on {size} tasks" + (f" (repetition {rep + 1})" if args.interleave else "")
+                      + " ...", file=sys.stderr, flush=True)
+                try:
+                    row = measure(name, inst, 1 if args.interleave else repeat, memory=not args.no_memory,
+                                  budget=budget, params=params_of[name])
+                except Exception as err:  # recorded, and the run goes on with the other stages and sizes
+                    what = str(err) if isinstance(err, BenchmarkError) else f"{type(err).__name__}: {err}"
+                    row = {"stage": name, "tasks": size, "seed": args.seed, "error": what, "params": params_of[name]}
+                    if "text" in inst.__dict__:
+                        row.update(chains=inst.chain_count, lines=inst.text.count("\n"))
+                    if isinstance(err, BenchmarkError):
+                        row["result"] = err.result
+                        if err.seconds is not None:
+                            row["seconds"] = [err.seconds]
+                    print(f"    error: {what}", file=sys.stderr, flush=True)
+                measured[name] = row if so_far is None or "error" in row else _merge(so_far, row)
+        for name, size, inst in todo:
+            row = measured[name]
             rows.append(row)
-            largest[name] = inst
-            last = (size, row["seconds_summary"]["median"])
+            if "error" in row:
+                failed = True
+                if row.get("seconds"):
+                    largest[name] = inst
+                    last[name] = (size, row["seconds"][0])
+            else:
+                largest[name] = inst
+                last[name] = (size, row["seconds_summary"]["median"])
     profiles = {}
     for name, inst in largest.items():
         if name not in to_profile:
             continue
         path = args.out.parent / f"profile-{name.replace('+', '-')}-{inst.n_tasks}.txt"
         print(f"  profiling {name} on {inst.n_tasks} tasks -> {path}", file=sys.stderr, flush=True)
-        profile(name, inst, path, params=QUICK_PARAMS[name] if args.quick else PARAMS[name])
+        profile(name, inst, path, params=stage_params(name, args.quick, overrides))
         profiles[name] = str(path)
     table = markdown(rows)
     print(table)
     doc = {"schema": SCHEMA, "machine": info,
            "config": {"sizes": stage_sizes, "repeat": repeat, "seed": args.seed, "chains": args.chains,
-                      "memory": not args.no_memory, "budget": args.budget, "quick": args.quick, "stages": names},
+                      "memory": not args.no_memory, "budget": args.budget, "quick": args.quick, "stages": names,
+                      "interleave": args.interleave, "params": overrides},
            "unavailable": UNAVAILABLE, "results": rows, "profiles": profiles, "markdown": table}
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(doc, indent=2, default=_json_default) + "\n", encoding="utf-8")
