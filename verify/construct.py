@@ -15,19 +15,23 @@ the speed.
 from __future__ import annotations
 
 import dataclasses
-from typing import Callable, TypeVar
+from typing import TYPE_CHECKING, Callable, TypeGuard, TypeVar
+
+if TYPE_CHECKING:
+    from _typeshed import DataclassInstance
 
 T = TypeVar("T")
 _RESERVED = frozenset({"obj", "_new", "_set", "_cls"})  # the names the generated function uses itself
 
 
-def is_plain_frozen(cls) -> bool:
+def is_plain_frozen(cls: type) -> TypeGuard[type[DataclassInstance]]:
     """``cls`` is a frozen dataclass whose instances are fully described by their ``__dict__``."""
-    if not (dataclasses.is_dataclass(cls) and cls.__dataclass_params__.frozen):
+    if not (dataclasses.is_dataclass(cls) and getattr(cls, "__dataclass_params__").frozen):
         return False
     if "__post_init__" in dir(cls) or any("__slots__" in vars(k) for k in cls.__mro__[:-1]):
         return False
-    all_fields = getattr(cls, "__dataclass_fields__").values()
+    all_fields = [f for f in getattr(cls, "__dataclass_fields__").values()
+                  if f._field_type is not dataclasses._FIELD_CLASSVAR]  # type: ignore[attr-defined]
     return all(f._field_type is dataclasses._FIELD and f.init and not f.kw_only  # type: ignore[attr-defined]
                and f.default_factory is dataclasses.MISSING for f in all_fields)
 
@@ -51,6 +55,6 @@ def direct_constructor(cls: type[T]) -> Callable[..., T]:
               f"    return obj\n")
     namespace = {"_new": object.__new__, "_set": object.__setattr__, "_cls": cls, **defaults}
     exec(source, namespace)  # as dataclasses builds __init__: one function with the fields as parameters
-    make = namespace[f"new_{cls.__name__}"]
+    make: Callable[..., T] = namespace[f"new_{cls.__name__}"]
     make.__doc__ = f"``{cls.__qualname__}(...)``, built directly (verify.construct)."
     return make

@@ -18,6 +18,7 @@ from fractions import Fraction
 from typing import Literal, Union
 
 from . import syntax as s
+from .activations import KINDS, Activation, DataTriggered, Hole, HoleWhat, Periodic, SporadicSource  # noqa: F401
 from .construct import direct_constructor
 from .ids import PortId, TaskId
 from .resolve import SystemScope
@@ -28,129 +29,7 @@ def _span() -> Span:
     return field(default=NO_SPAN, compare=False, repr=False)
 
 
-# ------------------------------------------------------------------ activations
-
-
-@dataclass(frozen=True)
-class Periodic:
-    """A periodic timer. ``phase`` None means unknown (any offset in [0, period))."""
-
-    period: Fraction
-    phase: Fraction | None = None
-    span: Span = _span()  # the activation in the binding (NO_SPAN when synthesised)
-
-    @property
-    def kind(self) -> str:
-        return "timer"
-
-
-@dataclass(frozen=True)
-class SporadicSource:
-    """Activations at least ``min_interarrival`` and at most ``max_interarrival`` apart."""
-
-    min_interarrival: Fraction
-    max_interarrival: Fraction
-    span: Span = _span()
-
-    @property
-    def kind(self) -> str:
-        return "sporadic"
-
-
-@dataclass(frozen=True)
-class DataTriggered:
-    """Activated by arrivals on ``port`` (an in-port or compound of the task's component).
-
-    ``members`` are the in-ports whose arrivals count: one for a plain in-port; for a compound,
-    its members with ``mode`` "and" (every member holds a fresh sample) or "or" (any arrival).
-    The task fires on every ``prescaler``-th activation event.
-    """
-
-    port: str
-    members: tuple[str, ...]
-    mode: Literal["single", "and", "or"] = "single"
-    prescaler: int = 1
-    span: Span = _span()
-
-    @property
-    def kind(self) -> str:
-        return "trigger"
-
-
-HoleWhat = Literal["period", "prescaler", "kind"]
-
-
-@dataclass(frozen=True)
-class Hole:
-    """An unknown left for ``synth`` (specs/synthesis.md §2): a timer's period (``timer ?``), a data
-    trigger's prescaler (``trigger p every ?``) or the kind of activation (``activation ?``), with the
-    range the user allows.
-
-    ``low``, ``high`` and ``step`` bound a period (seconds, each as written: a frequency range gives the
-    periods of its ends, in the order written) or a prescaler (integers); None for a bare ``?``.
-    ``phase`` is a timer hole's fixed phase, ``port`` a prescaler hole's trigger port. ``text`` is the
-    hole as written (canonical: ``timer ? in 25 ms .. 200 ms step 25 ms``), ``range_text`` its range
-    (``25 ms .. 200 ms step 25 ms``); ``span`` is the activation, ``range_span`` the ``?`` and its range.
-
-    ``Hole(node)`` with the syntax node of a hole builds the same object (``Hole.of(node)``)."""
-
-    what: HoleWhat = "kind"
-    low: Fraction | None = None
-    high: Fraction | None = None
-    step: Fraction | None = None
-    phase: Fraction | None = None
-    port: str | None = None
-    text: str = "activation ?"
-    range_text: str = ""
-    span: Span = _span()
-    range_span: Span = _span()
-
-    def __post_init__(self) -> None:
-        if not isinstance(self.what, str):  # Hole(syntax node)
-            for name, value in _hole_fields(self.what).items():
-                object.__setattr__(self, name, value)
-
-    @classmethod
-    def of(cls, node: s.Activation) -> "Hole":
-        """The hole that the activation ``node`` (with a ``?``) leaves open."""
-        return cls(**_hole_fields(node))
-
-    @property
-    def kind(self) -> str:
-        return "hole"
-
-    @property
-    def bounded(self) -> bool:
-        """The user gave a range (``? in LOW .. HIGH``)."""
-        return self.low is not None
-
-
-def _hole_fields(node: s.Activation) -> dict:
-    from .fmt import format_activation, format_number, format_quantity
-
-    text = format_activation(node)
-    if isinstance(node, s.Timer) and isinstance(node.period, s.PeriodHole):
-        h = node.period
-        bounds = {}
-        range_text = ""
-        if h.low is not None and h.high is not None:
-            bounds = {"low": h.low.seconds(), "high": h.high.seconds(),
-                      "step": h.step.seconds() if h.step is not None else None}
-            range_text = f"{format_quantity(h.low)} .. {format_quantity(h.high)}" + (
-                f" step {format_quantity(h.step)}" if h.step is not None else "")
-        return dict(what="period", phase=_seconds(node.phase), text=text, range_text=range_text, span=node.span,
-                    range_span=h.span, **bounds)
-    if isinstance(node, s.Trigger) and isinstance(node.prescaler, s.PrescalerHole):
-        h = node.prescaler
-        bounds = {}
-        range_text = ""
-        if h.low is not None and h.high is not None:
-            bounds = {"low": Fraction(h.low.value), "high": Fraction(h.high.value)}
-            range_text = f"{format_number(h.low.value)} .. {format_number(h.high.value)}"
-        return dict(what="prescaler", port=node.port.text, text=text, range_text=range_text, span=node.span,
-                    range_span=h.span, **bounds)
-    return dict(what="kind", text=text, span=node.span, range_span=node.span)
-
+# ------------------------------------------------------------------ activations (verify.activations)
 
 ActivationModel = Union[Periodic, SporadicSource, DataTriggered, Hole]
 
@@ -416,7 +295,7 @@ class SystemModel:
 
     @property
     def holes(self) -> tuple[TaskModel, ...]:
-        return tuple(t for t in self.tasks if isinstance(t.activation, Hole))
+        return tuple(t for t in self.tasks if t.activation.unknown)
 
     @property
     def is_configured(self) -> bool:

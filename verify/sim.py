@@ -42,7 +42,7 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import Callable, Mapping
 
-from .model import ChainModel, DataTriggered, LinkModel, Periodic, SporadicSource, SystemModel, TaskModel
+from .model import Activation, ChainModel, LinkModel, SystemModel, TaskModel
 
 ZERO = Fraction(0)
 GRID = 1000  # random choices lie on a grid of GRID steps across their range
@@ -122,13 +122,12 @@ def random_scenario(system: SystemModel, rng: random.Random, horizon: Fraction) 
     gaps: dict[tuple[str, ...], tuple[Fraction, Fraction]] = {}
     for t in system.tasks:
         act = t.activation
-        if isinstance(act, Periodic) and act.phase is None:
-            phases[t.id] = _offset(rng, act.period)
-        elif isinstance(act, SporadicSource):
-            phases[t.id] = _offset(rng, act.max_interarrival)
-            gaps[(t.id,)] = (act.min_interarrival, act.max_interarrival)
-        elif isinstance(act, DataTriggered):
-            counters[t.id] = rng.randrange(act.prescaler)
+        if act.offset_window is not None:
+            phases[t.id] = _offset(rng, act.offset_window)
+        if act.gaps is not None and act.gaps[0] != act.gaps[1]:
+            gaps[(t.id,)] = act.gaps
+        if act.trigger_port is not None:
+            counters[t.id] = rng.randrange(act.release_every)
     execs = {(t.id,): (t.bcet, t.wcet) for t in system.tasks}
     delays = {(lk.source, lk.target): (lk.delay_min, lk.delay_max) for lk in system.links}
     return Scenario(Fraction(horizon), phases, Draw(rng.getrandbits(64), execs),
@@ -245,24 +244,20 @@ class _Simulator:
 
     def _init_activation(self, t: TaskModel) -> None:
         act, phase = t.activation, self.sc.phases.get(t.id)
-        if isinstance(act, Periodic):
-            if act.phase is not None:
-                _check(phase is None or phase == act.phase, f"{t.id}: phase is fixed to {act.phase}")
-                phase = act.phase
+        if act.gaps is not None:  # released by time
+            if act.fixed_phase is not None:
+                _check(phase is None or phase == act.fixed_phase, f"{t.id}: phase is fixed to {act.fixed_phase}")
+                phase = act.fixed_phase
             else:
                 phase = ZERO if phase is None else phase
-                _check(0 <= phase < act.period, f"{t.id}: phase {phase} outside [0, {act.period})")
+                _check(0 <= phase < act.offset_window,
+                       f"{t.id}: {act.offset_name} {phase} outside [0, {act.offset_window})")
             self._push(phase, _RELEASE, t)
-        elif isinstance(act, SporadicSource):
-            phase = ZERO if phase is None else phase
-            _check(0 <= phase < act.max_interarrival or phase == 0,
-                   f"{t.id}: first release {phase} outside [0, {act.max_interarrival})")
-            self._push(phase, _RELEASE, t)
-        elif isinstance(act, DataTriggered):
+        elif act.trigger_port is not None:
             c = self.sc.counter_phase.get(t.id, 0)
-            _check(0 <= c < act.prescaler, f"{t.id}: counter phase {c} outside 0..{act.prescaler - 1}")
+            _check(0 <= c < act.release_every, f"{t.id}: counter phase {c} outside 0..{act.release_every - 1}")
             self.counter[t.id], self.fresh[t.id] = c, set()
-            for member in act.members:
+            for member in act.trigger_members:
                 self.triggered.setdefault(f"{t.instance}.{member}", []).append((t, member))
 
     # -------------------------------------------------------------- scenario choices
@@ -278,10 +273,13 @@ class _Simulator:
                f"{lk.source}->{lk.target}#{index}: delay {d} outside [{lk.delay_min}, {lk.delay_max}]")
         return Fraction(d)
 
-    def _gap(self, t: TaskModel, act: SporadicSource, index: int) -> Fraction:
-        a = act.min_interarrival if self.sc.interarrival is None else self.sc.interarrival(t.id, index)
-        _check(act.min_interarrival <= a <= act.max_interarrival,
-               f"{t.id}#{index}: inter-arrival {a} outside [{act.min_interarrival}, {act.max_interarrival}]")
+    def _gap(self, t: TaskModel, act: Activation, index: int) -> Fraction:
+        """The time from release ``index`` of ``t`` (released by time) to the next one."""
+        low, high = act.gaps
+        if low == high:
+            return low
+        a = low if self.sc.interarrival is None else self.sc.interarrival(t.id, index)
+        _check(low <= a <= high, f"{t.id}#{index}: inter-arrival {a} outside [{low}, {high}]")
         return Fraction(a)
 
     # -------------------------------------------------------------- the event loop
@@ -364,25 +362,20 @@ class _Simulator:
 
     def _trigger_event(self, t: TaskModel, member: str) -> None:
         act = t.activation
-        assert isinstance(act, DataTriggered)
-        if act.mode == "and":
+        if act.all_members:
             fresh = self.fresh[t.id]
             fresh.add(member)
-            if not fresh.issuperset(act.members):
+            if not fresh.issuperset(act.trigger_members):
                 return
             fresh.clear()  # the event consumes the freshness
         self.counter[t.id] += 1
-        if self.counter[t.id] >= act.prescaler:
+        if self.counter[t.id] >= act.release_every:
             self.counter[t.id] = 0
             self._release(t)
 
     def _timed_release(self, t: TaskModel) -> None:
         job = self._release(t)
-        act = t.activation
-        if isinstance(act, Periodic):
-            self._push(self.now + act.period, _RELEASE, t)
-        elif isinstance(act, SporadicSource):
-            self._push(self.now + self._gap(t, act, job.index), _RELEASE, t)
+        self._push(self.now + self._gap(t, t.activation, job.index), _RELEASE, t)
 
     def _release(self, t: TaskModel) -> _Job:
         index = len(self.jobs[t.id])

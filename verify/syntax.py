@@ -221,6 +221,13 @@ class UnknownActivation:
 Activation = Union[Timer, Trigger, Sporadic, UnknownActivation]
 
 
+def is_hole(act: Activation | None) -> bool:
+    """``act`` leaves something for ``synth`` to choose: ``activation ?``, ``timer ?`` or ``every ?``."""
+    return (isinstance(act, UnknownActivation)
+            or (isinstance(act, Timer) and isinstance(act.period, PeriodHole))
+            or (isinstance(act, Trigger) and isinstance(act.prescaler, PrescalerHole)))
+
+
 # ------------------------------------------------------------------ systems
 
 

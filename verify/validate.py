@@ -292,7 +292,7 @@ def _check_against_constraint(act: s.Activation, task: s.Task, who: str, sink: D
     c = task.constraint
     if c is None:
         return
-    if not c.changeable and _is_hole(act):
+    if not c.changeable and s.is_hole(act):
         sink.emit("E216", f"task {who} has a fixed rate ({_constraint_text(c)}), so it cannot be left to synthesis",
                   act.span, "hole on a fixed task", secondary=(Label(c.span, "the component fixes the rate"),),
                   help=f"bind it as its component requires, e.g. `{_fixed_binding_hint(c)}`")
@@ -363,10 +363,6 @@ def _allowed_periods(c: s.ActivationConstraint) -> str:
     return f"at most {fmt_time(1 / quantity_hertz(c.min))}"
 
 
-def _is_hole(act: s.Activation) -> bool:
-    return (isinstance(act, s.UnknownActivation)
-            or (isinstance(act, s.Timer) and isinstance(act.period, s.PeriodHole))
-            or (isinstance(act, s.Trigger) and isinstance(act.prescaler, s.PrescalerHole)))
 
 
 def _constraint_text(c: s.ActivationConstraint) -> str:

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from fractions import Fraction
 
-from ..model import DataTriggered, SystemModel
+from ..model import SystemModel
 from .intsim import target_samples
 from .scenario import Target
 
@@ -36,8 +36,8 @@ class ConeIndex:
             if t.kind == "cooperative":
                 self.siblings.setdefault(t.instance, []).append(t.id)
             act = t.activation
-            if isinstance(act, DataTriggered):
-                links = (model.link_into(f"{t.instance}.{m}") for m in act.members)
+            if act.trigger_port is not None:
+                links = (model.link_into(f"{t.instance}.{m}") for m in act.trigger_members)
                 self.writers[t.id] = [lk.writer for lk in links if lk is not None]
         for tasks in self.by_core.values():
             tasks.sort(key=lambda t: -t.priority)  # (stable: system order among equals)

@@ -23,11 +23,11 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import Callable, Iterator
 
-from ..model import DataTriggered, Periodic, SporadicSource, SystemModel
+from ..model import SystemModel
 from ..sim import SimulationError
 from .parallel import ordered_map, resolve_workers
-from .scenario import (ConcreteScenario, Measured, Target, ceil_to, floor_to, frac_gcd, hyperperiod, measure,
-                       measure_periodic)
+from ..timebase import TimeBase, ceil_to, floor_to
+from .scenario import ConcreteScenario, Measured, Target, hyperperiod, measure, measure_periodic
 
 ZERO = Fraction(0)
 
@@ -63,8 +63,8 @@ class Budget:
 def exact_class(model: SystemModel) -> str | None:
     """None when the exactness theorem (proof spec §4) applies to ``model``, else why not."""
     for t in model.tasks:
-        if isinstance(t.activation, SporadicSource):
-            return f"`{t.id}` is sporadic: its releases have no hyperperiod"
+        if t.activation.irregular:
+            return f"`{t.id}` is {t.activation.kind}: its releases have no hyperperiod"
     for t in model.tasks:
         if t.bcet != t.wcet:
             return (f"`{t.id}` has execution times in [bcet, wcet] with bcet < wcet: exactness is only "
@@ -83,19 +83,19 @@ def tick_of(model: SystemModel) -> Fraction:
     for t in model.tasks:
         values += [t.wcet, t.bcet]
         act = t.activation
-        if isinstance(act, Periodic):
-            values += [act.period, act.phase or ZERO]
+        if act.strict_period is not None:
+            values += [act.strict_period, act.fixed_phase or ZERO]
     for lk in model.links:
         values += [lk.delay_min, lk.delay_max]
-    return frac_gcd(values) or Fraction(1)
+    return TimeBase.gcd_of(values).unit
 
 
 def free_timers(model: SystemModel) -> list:
-    return [t for t in model.tasks if isinstance(t.activation, Periodic) and t.activation.phase is None]
+    return [t for t in model.tasks if t.activation.strict_period is not None and t.activation.fixed_phase is None]
 
 
 def counter_tasks(model: SystemModel) -> list:
-    return [t for t in model.tasks if isinstance(t.activation, DataTriggered) and t.activation.prescaler > 1]
+    return [t for t in model.tasks if t.activation.release_every > 1]
 
 
 def weak_orders(m: int) -> Iterator[tuple[int, ...]]:
@@ -144,10 +144,10 @@ def grid_of(model: SystemModel) -> Grid:
     tick = tick_of(model)
     timers = free_timers(model)
     m = len(timers)
-    fixed = any(isinstance(t.activation, Periodic) and t.activation.phase is not None for t in model.tasks)
+    fixed = any(t.activation.fixed_phase is not None for t in model.tasks)
     return Grid(tick, tick / (2 * m + 1), tuple(t.id for t in timers),
-                tuple(int(t.activation.period / tick) for t in timers), not fixed,
-                tuple((t.id, t.activation.prescaler) for t in counter_tasks(model)), hyperperiod(model))
+                tuple(int(t.activation.strict_period / tick) for t in timers), not fixed,
+                tuple((t.id, t.activation.release_every) for t in counter_tasks(model)), hyperperiod(model))
 
 
 def _u_ranges(grid: Grid, w: tuple[int, ...]) -> list[range]:
@@ -356,9 +356,8 @@ def search_horizon(model: SystemModel, span: Fraction | None) -> Fraction:
     """How long each search run simulates: two hyperperiods plus the latency bound, capped at 60
     times the longest period or inter-arrival (the search proves nothing, so the window only needs
     to be long enough to show a violation)."""
-    longest = max([t.activation.period for t in model.tasks if isinstance(t.activation, Periodic)]
-                  + [t.activation.max_interarrival for t in model.tasks
-                     if isinstance(t.activation, SporadicSource)] + [Fraction(1, 1000)])
+    longest = max([t.activation.gaps[1] for t in model.tasks if t.activation.gaps is not None]
+                  + [Fraction(1, 1000)])
     hyper = hyperperiod(model)
     base = 2 * hyper if hyper is not None else 10 * longest
     return min(base + (span or 2 * longest), 60 * longest)
@@ -369,11 +368,9 @@ def _random_scenario(model: SystemModel, rng: random.Random, horizon: Fraction) 
     phases = []
     for t in model.tasks:
         act = t.activation
-        if isinstance(act, Periodic) and act.phase is None:
-            phases.append((t.id, _grid_pick(rng, act.period, tick)))
-        elif isinstance(act, SporadicSource):
-            phases.append((t.id, _grid_pick(rng, act.max_interarrival, tick)))
-    counters = tuple((t.id, rng.randrange(t.activation.prescaler)) for t in counter_tasks(model))
+        if act.offset_window is not None:
+            phases.append((t.id, _grid_pick(rng, act.offset_window, tick)))
+    counters = tuple((t.id, rng.randrange(t.activation.release_every)) for t in counter_tasks(model))
     mode = rng.random()
     execs = []
     for t in model.tasks:
@@ -401,12 +398,13 @@ def _random_scenario(model: SystemModel, rng: random.Random, horizon: Fraction) 
     gaps = []
     for t in model.tasks:
         act = t.activation
-        if isinstance(act, SporadicSource) and act.min_interarrival != act.max_interarrival:
+        if act.gaps is not None and act.gaps[0] != act.gaps[1]:
+            low, high = act.gaps
             choice = rng.random()
             if choice < 0.4:
-                gaps.append((t.id, (act.max_interarrival,)))
+                gaps.append((t.id, (high,)))
             elif choice < 0.7:
-                gaps.append((t.id, tuple(_range_pick(rng, act.min_interarrival, act.max_interarrival)
+                gaps.append((t.id, tuple(_range_pick(rng, low, high)
                                          for _ in range(rng.choice([2, 3, 5])))))
     return ConcreteScenario(horizon, tuple(phases), counters, tuple(execs), tuple(delays), tuple(gaps))
 
@@ -431,7 +429,7 @@ def _mutate(model: SystemModel, sc: ConcreteScenario, rng: random.Random) -> Con
     if phases and rng.random() < 0.7:
         task = rng.choice(sorted(phases))
         act = model.task(task).activation
-        length = act.period if isinstance(act, Periodic) else act.max_interarrival
+        length = act.gaps[1]  # the phase of a task released by time lies in [0, its greatest gap)
         if rng.random() < 0.5:
             step = tick * Fraction(rng.choice([-4, -2, -1, 1, 2, 4]), rng.choice([1, 4, 16]))
             phases[task] = (phases[task] + step) % length
@@ -447,7 +445,7 @@ def _mutate(model: SystemModel, sc: ConcreteScenario, rng: random.Random) -> Con
     counters = dict(sc.counters)
     for t in counter_tasks(model):
         if rng.random() < 0.3:
-            counters[t.id] = rng.randrange(t.activation.prescaler)
+            counters[t.id] = rng.randrange(t.activation.release_every)
     return ConcreteScenario(sc.horizon, sc.phases, tuple(sorted(counters.items())), tuple(sorted(execs.items())),
                             sc.delays, sc.interarrivals)
 

@@ -23,18 +23,12 @@ import heapq
 from bisect import bisect_left
 from fractions import Fraction
 
-from ..model import DataTriggered, Periodic, SporadicSource, SystemModel
+from ..model import SystemModel
 from ..sim import (DEFAULT_MAX_EVENTS, JobRecord, Message, Sample, ScenarioError, SimulationError,
                    Trace)
+from ..timebase import TimeBase
 
 _ARRIVAL, _RELEASE = 1, 2  # heap phases, as in verify.sim
-
-
-def _unit_of(values) -> Fraction:
-    """The greatest d > 0 with every value an integer multiple of d (1 if all are 0)."""
-    from .scenario import frac_gcd
-
-    return frac_gcd(values) or Fraction(1)
 
 
 class _Job:
@@ -75,20 +69,19 @@ class IntSimulator:
         times += list(extra_times)
         for t in tasks:
             act = t.activation
-            if isinstance(act, Periodic):
-                times += [act.period, act.phase or Fraction(0)]
-            elif isinstance(act, SporadicSource):
-                times.append(act.min_interarrival)
+            if act.gaps is not None:  # released by time: the gaps a run takes, and a fixed phase
+                times += [act.gaps[0], act.fixed_phase or 0]
         legal_exec = {t.id: (t.bcet, t.wcet) for t in tasks}
         legal_delay = {(lk.source, lk.target): (lk.delay_min, lk.delay_max) for lk in model.links}
-        legal_gap = {t.id: (t.activation.min_interarrival, t.activation.max_interarrival) for t in tasks
-                     if isinstance(t.activation, SporadicSource)}
+        legal_gap = {t.id: t.activation.gaps for t in tasks
+                     if t.activation.gaps is not None and t.activation.gaps[0] != t.activation.gaps[1]}
         for patterns, legal in ((exec_times, legal_exec), (delays, legal_delay), (interarrivals, legal_gap)):
             for key, pattern in patterns.items():
                 if key in legal:
                     lo, hi = legal[key]
                     times += [v for v in pattern if lo <= v <= hi]
-        self.unit = unit = _unit_of(times)
+        self.base = base = TimeBase.gcd_of(times)
+        self.unit = base.unit
         self.model, self.max_events = model, max_events
         self.ids = [t.id for t in tasks]
         self.index_of = {t.id: i for i, t in enumerate(tasks)}
@@ -98,13 +91,13 @@ class IntSimulator:
         self.coop = [t.kind == "cooperative" for t in tasks]
         self.instance = [t.instance for t in tasks]
         self.prio = [t.priority for t in tasks]
-        self.exec = [_ticks(t.wcet, unit) for t in tasks]
-        self.exec_pattern = [_pattern(exec_times.get(t.id), legal_exec[t.id], unit) for t in tasks]
+        self.exec = [base.ticks(t.wcet) for t in tasks]
+        self.exec_pattern = [_pattern(exec_times.get(t.id), legal_exec[t.id], base) for t in tasks]
         self.read_ports = [tuple(f"{t.instance}.{r.port}" for r in t.reads) for t in tasks]
         self.links = list(model.links)
         self.conn_of = {(lk.source, lk.target): c for c, lk in enumerate(self.links)}
-        self.delay = [_ticks(lk.delay_min, unit) for lk in self.links]
-        self.delay_pattern = [_pattern(delays.get((lk.source, lk.target)), (lk.delay_min, lk.delay_max), unit)
+        self.delay = [base.ticks(lk.delay_min) for lk in self.links]
+        self.delay_pattern = [_pattern(delays.get((lk.source, lk.target)), (lk.delay_min, lk.delay_max), base)
                               for lk in self.links]
         self.target = [lk.target for lk in self.links]
         links_from: dict[str, list[int]] = {}
@@ -131,7 +124,7 @@ class IntSimulator:
         self.last_arrival: dict[int, int] = {}
         self.arrivals: list[tuple[tuple, int]] | None = [] if log else None  # (message, arrival) for ``trace``
         for i, t in enumerate(tasks):
-            self._init_activation(i, t, phases, counters, interarrivals, unit)
+            self._init_activation(i, t, phases, counters, interarrivals, base)
 
     @classmethod
     def of(cls, model: SystemModel, scenario, max_events: int, extra_times=(), log: bool = False) -> "IntSimulator":
@@ -142,37 +135,33 @@ class IntSimulator:
                    interarrivals=dict(scenario.interarrivals), log=log)
 
     def _init_activation(self, i: int, t, phases: dict, counters: dict, interarrivals: dict,
-                         unit: Fraction) -> None:
+                         base: TimeBase) -> None:
         act = t.activation
-        if isinstance(act, Periodic):
+        if act.gaps is not None:  # released by time (specs/timing.md §3)
             phase = phases.get(t.id)
-            if act.phase is not None:
-                if phase is not None and phase != act.phase:
-                    raise ScenarioError(f"{t.id}: phase is fixed to {act.phase}")
-                phase = act.phase
+            if act.fixed_phase is not None:
+                if phase is not None and phase != act.fixed_phase:
+                    raise ScenarioError(f"{t.id}: phase is fixed to {act.fixed_phase}")
+                phase = act.fixed_phase
             else:
                 phase = Fraction(0) if phase is None else phase
-                if not 0 <= phase < act.period:
-                    raise ScenarioError(f"{t.id}: phase {phase} outside [0, {act.period})")
-            self.period[i] = _ticks(act.period, unit)
-            self._push(_ticks(phase, unit), _RELEASE, i)
-        elif isinstance(act, SporadicSource):
-            phase = phases.get(t.id)
-            phase = Fraction(0) if phase is None else phase
-            if not (0 <= phase < act.max_interarrival or phase == 0):
-                raise ScenarioError(f"{t.id}: first release {phase} outside [0, {act.max_interarrival})")
-            self.gap[i] = _ticks(act.min_interarrival, unit)
-            self.gap_pattern[i] = _pattern(interarrivals.get(t.id),
-                                           (act.min_interarrival, act.max_interarrival), unit)
-            self._push(_ticks(phase, unit), _RELEASE, i)
-        elif isinstance(act, DataTriggered):
+                if not 0 <= phase < act.offset_window:
+                    raise ScenarioError(f"{t.id}: {act.offset_name} {phase} outside [0, {act.offset_window})")
+            low, high = act.gaps
+            if low == high:
+                self.period[i] = base.ticks(low)
+            else:
+                self.gap[i] = base.ticks(low)
+                self.gap_pattern[i] = _pattern(interarrivals.get(t.id), act.gaps, base)
+            self._push(base.ticks(phase), _RELEASE, i)
+        elif act.trigger_port is not None:
             c = counters.get(t.id, 0)
-            if not 0 <= c < act.prescaler:
-                raise ScenarioError(f"{t.id}: counter phase {c} outside 0..{act.prescaler - 1}")
-            self.counter[i], self.fresh[i], self.prescaler[i] = c, set(), act.prescaler
-            if act.mode == "and":
-                self.and_members[i] = frozenset(act.members)
-            for member in act.members:
+            if not 0 <= c < act.release_every:
+                raise ScenarioError(f"{t.id}: counter phase {c} outside 0..{act.release_every - 1}")
+            self.counter[i], self.fresh[i], self.prescaler[i] = c, set(), act.release_every
+            if act.all_members:
+                self.and_members[i] = frozenset(act.trigger_members)
+            for member in act.trigger_members:
                 self.triggered.setdefault(f"{t.instance}.{member}", []).append((i, member))
 
     # -------------------------------------------------------------- the event loop
@@ -434,19 +423,15 @@ class _Pattern(tuple):
         return value
 
 
-def _pattern(values, legal: tuple[Fraction, Fraction], unit: Fraction) -> _Pattern | None:
+def _pattern(values, legal: tuple[Fraction, Fraction], base: TimeBase) -> _Pattern | None:
     if not values:
         return None
     lo, hi = legal
-    pattern = _Pattern(_ticks(v, unit) if lo <= v <= hi else None for v in values)
+    pattern = _Pattern(base.ticks(v) if lo <= v <= hi else None for v in values)
     pattern.values = tuple(values)
     return pattern
 
 
-def _ticks(value: Fraction, unit: Fraction) -> int:
-    q = Fraction(value) / unit
-    assert q.denominator == 1, (value, unit)
-    return q.numerator
 
 
 # ------------------------------------------------------------------ samples (specs/timing.md §4)
@@ -570,7 +555,7 @@ def run_trace(model: SystemModel, scenario, max_events: int = DEFAULT_MAX_EVENTS
     ``scenario.replay`` gives by the reference simulator (tests/test_intsim.py compares the two); with
     ``tasks``, only their jobs and the messages they read (``IntSimulator.trace``)."""
     sim = IntSimulator.of(model, scenario, max_events, (scenario.horizon,), log=True)
-    sim.run_to(_ticks(scenario.horizon, sim.unit))
+    sim.run_to(sim.base.ticks(scenario.horizon))
     return sim.trace(scenario.horizon, tasks)
 
 
@@ -582,7 +567,7 @@ def target_samples(model: SystemModel, scenario, targets, max_events: int = DEFA
 
     sim = IntSimulator.of(model, scenario, max_events, (scenario.horizon,))
     unit = sim.unit
-    horizon = _ticks(scenario.horizon, unit)
+    horizon = sim.base.ticks(scenario.horizon)
     sim.run_to(horizon)
     chain_samples = _chain_samples_of(sim, model)
     out = {}
@@ -650,7 +635,7 @@ def measure_prefix(model: SystemModel, scenario, targets, max_events: int, event
 
     sim = IntSimulator.of(model, scenario, max_events, (scenario.horizon,))
     unit = sim.unit
-    horizon = sim.run_to(_ticks(scenario.horizon, unit), event_budget)
+    horizon = sim.run_to(sim.base.ticks(scenario.horizon), event_budget)
     if horizon * unit != scenario.horizon:
         scenario = scenario.with_horizon(horizon * unit)
     values = extremes_of(targets, unit, lambda tid: sim.jobs[sim.index_of[tid]], _chain_samples_of(sim, model),

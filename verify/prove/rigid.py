@@ -14,8 +14,8 @@ from __future__ import annotations
 
 from fractions import Fraction
 
-from ..model import SporadicSource, SystemModel
-from .intsim import _ARRIVAL, ChainSamples, IntSimulator, _Job, _ticks, extremes_of
+from ..model import SystemModel
+from .intsim import _ARRIVAL, ChainSamples, IntSimulator, _Job, extremes_of
 
 
 def rigid_scenario(model: SystemModel, scenario) -> bool:
@@ -23,7 +23,7 @@ def rigid_scenario(model: SystemModel, scenario) -> bool:
     delays, no sporadic source, no holes, and no per-job patterns in the scenario."""
     if model.holes or scenario.exec_times or scenario.delays or scenario.interarrivals:
         return False
-    if any(t.bcet != t.wcet or isinstance(t.activation, SporadicSource) for t in model.tasks):
+    if any(t.bcet != t.wcet or t.activation.irregular for t in model.tasks):
         return False
     return all(lk.delay_min == lk.delay_max for lk in model.links)
 
@@ -171,7 +171,7 @@ def measure_rigid(model: SystemModel, scenario, targets, hyper: Fraction, max_pe
     targets = tuple(targets)
     sim = IntSimulator(model, dict(scenario.phases), dict(scenario.counters), max_events, (hyper,))
     unit = sim.unit
-    big_h = _ticks(hyper, unit)
+    big_h = sim.base.ticks(hyper)
     snapshots: dict[int, _Snapshot] = {}
 
     def timing_state(at: int) -> tuple:

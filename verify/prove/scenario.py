@@ -15,48 +15,17 @@ complete, so that its maxima are those of the infinite run.
 """
 from __future__ import annotations
 
-import math
+from collections.abc import Iterable
 from dataclasses import dataclass
 from fractions import Fraction
-from functools import reduce
-from typing import Iterable
 
-from ..model import DataTriggered, Periodic, SporadicSource, SystemModel
+from ..model import SystemModel
+from ..timebase import frac_lcm
 from ..sim import (DEFAULT_MAX_EVENTS, Sample, Scenario, Trace, _ARRIVAL, _RELEASE, _Simulator,
                    chain_latencies, simulate)
 
 ZERO = Fraction(0)
 CHAIN_KINDS = ("reaction_time", "data_age", "data_age_nonreduced")
-
-
-# ------------------------------------------------------------------ exact helpers
-
-
-def frac_gcd(values: Iterable[Fraction]) -> Fraction | None:
-    """The greatest d > 0 with every value an integer multiple of d (None if all are 0)."""
-    vals = [Fraction(v) for v in values if v]
-    if not vals:
-        return None
-    den = reduce(math.lcm, (v.denominator for v in vals))
-    num = reduce(math.gcd, (abs(v.numerator) * (den // v.denominator) for v in vals))
-    return Fraction(num, den)
-
-
-def frac_lcm(values: Iterable[Fraction]) -> Fraction | None:
-    vals = [Fraction(v) for v in values if v]
-    if not vals:
-        return None
-    den = reduce(math.lcm, (v.denominator for v in vals))
-    num = reduce(math.lcm, (v.numerator * (den // v.denominator) for v in vals))
-    return Fraction(num, den)
-
-
-def ceil_to(value: Fraction, tick: Fraction) -> Fraction:
-    return tick * math.ceil(value / tick)
-
-
-def floor_to(value: Fraction, tick: Fraction) -> Fraction:
-    return tick * math.floor(value / tick)
 
 
 # ------------------------------------------------------------------ targets and samples
@@ -152,8 +121,8 @@ class ConcreteScenario:
         simulator's defaults for ``model``."""
         wcet = {t.id: t.wcet for t in model.tasks}
         dmin = {(lk.source, lk.target): lk.delay_min for lk in model.links}
-        amin = {t.id: t.activation.min_interarrival for t in model.tasks
-                if isinstance(t.activation, SporadicSource)}
+        amin = {t.id: t.activation.gaps[0] for t in model.tasks
+                if t.activation.gaps is not None and t.activation.gaps[0] != t.activation.gaps[1]}
         execs, delays, gaps = dict(self.exec_times), dict(self.delays), dict(self.interarrivals)
 
         def exec_time(task: str, index: int) -> Fraction:
@@ -203,8 +172,7 @@ class ConcreteScenario:
         from ..units import fmt_time
 
         parts = []
-        free = [t.id for t in model.tasks if (isinstance(t.activation, Periodic) and t.activation.phase is None)
-                or isinstance(t.activation, SporadicSource)]
+        free = [t.id for t in model.tasks if t.activation.offset_window is not None]
         given = dict(self.phases)
         if free:
             if any(given.get(t, ZERO) for t in free):
@@ -273,11 +241,11 @@ def hyperperiod(model: SystemModel) -> Fraction | None:
     for tid in order:
         t = model.task(tid)
         act = t.activation
-        if isinstance(act, Periodic):
-            eff[tid] = act.period
-        elif isinstance(act, DataTriggered):
+        if act.strict_period is not None:
+            eff[tid] = act.strict_period
+        elif act.trigger_port is not None:
             writers = []
-            for member in act.members:
+            for member in act.trigger_members:
                 lk = model.link_into(f"{t.instance}.{member}")
                 if lk is not None:
                     writers.append(eff.get(lk.writer))
@@ -285,7 +253,7 @@ def hyperperiod(model: SystemModel) -> Fraction | None:
                 eff[tid] = None
             else:
                 base = frac_lcm(writers)
-                eff[tid] = None if base is None else base * act.prescaler
+                eff[tid] = None if base is None else base * act.release_every
         else:
             eff[tid] = None
     if any(v is None for t, v in eff.items() if not _silent(model, t)):
@@ -297,8 +265,8 @@ def _silent(model: SystemModel, tid: str) -> bool:
     """A triggered task none of whose members is connected never runs."""
     t = model.task(tid)
     act = t.activation
-    return isinstance(act, DataTriggered) and all(
-        model.link_into(f"{t.instance}.{m}") is None for m in act.members)
+    return act.trigger_port is not None and all(
+        model.link_into(f"{t.instance}.{m}") is None for m in act.trigger_members)
 
 
 # ------------------------------------------------------------------ periodic evaluation (rigid systems)

@@ -24,9 +24,10 @@ from fractions import Fraction
 
 import z3
 
-from ..model import DataTriggered, Periodic, SystemModel
+from ..model import SystemModel
 from .exact import Budget, Extreme, ExactResult, Grid, exact_class, grid_of, scenario_of
-from .scenario import Measured, Target, ceil_to, floor_to, measure_periodic
+from ..timebase import ceil_to, floor_to
+from .scenario import Measured, Target, measure_periodic
 
 MAX_CELLS = 2_500  # instants × tasks: beyond, bit-blasting alone can outlast any resource limit
 MAX_PERIODS = 8  # hyperperiods tried for the start of the repetition
@@ -45,7 +46,7 @@ def z3_applicable(model: SystemModel) -> str | None:
         if t.kind != "preemptive":
             return f"`{t.id}` is cooperative"
         act = t.activation
-        if isinstance(act, DataTriggered) and act.mode != "single":
+        if act.trigger_port is not None and act.single_port is None:
             return f"`{t.id}` is triggered by a compound port"
         if t.wcet <= 0:
             return f"`{t.id}` has a zero execution time"
@@ -78,14 +79,14 @@ class Encoding:
         self.cons: list = []
         for t in self.tasks:
             act = t.activation
-            if isinstance(act, Periodic):
-                period = self.units(act.period)
-                if act.phase is None:
+            if act.strict_period is not None:
+                period = self.units(act.strict_period)
+                if act.fixed_phase is None:
                     v = z3.BitVec(f"phi_{t.id}", width)
                     self.cons += [z3.ULT(v, period)]
                     self.phi[t.id] = v
                 else:
-                    self.phi[t.id] = self.units(act.phase)
+                    self.phi[t.id] = self.units(act.fixed_phase)
         if grid.normalise and grid.timers:
             self.cons.append(z3.Or([self.phi[a] == 0 for a in grid.timers]))
         self.c0: dict[str, z3.ArithRef] = {}
@@ -96,9 +97,9 @@ class Encoding:
         self.trigger = {}
         for t in self.tasks:
             act = t.activation
-            if isinstance(act, DataTriggered):
-                lk = model.link_into(f"{t.instance}.{act.members[0]}")
-                self.trigger[t.id] = None if lk is None else (lk.writer, self.units(lk.delay_max), act.prescaler)
+            if act.trigger_port is not None:
+                lk = model.link_into(f"{t.instance}.{act.trigger_members[0]}")
+                self.trigger[t.id] = None if lk is None else (lk.writer, self.units(lk.delay_max), act.release_every)
         self.q = {i: [] for i in self.ids}
         self.rem = {i: [] for i in self.ids}
         self.rel = {i: [] for i in self.ids}
@@ -128,8 +129,8 @@ class Encoding:
                 self.comp[i].append(c)
         for tsk in self.tasks:
             i, act = tsk.id, tsk.activation
-            if isinstance(act, Periodic):
-                period = self.units(act.period)
+            if act.strict_period is not None:
+                period = self.units(act.strict_period)
                 phi = self.phi[i]
                 rel = (phi == t % period) if isinstance(phi, z3.BitVecRef) else B(phi == t % period)
             elif i in self.trigger:

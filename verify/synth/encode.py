@@ -26,7 +26,8 @@ from typing import Mapping
 
 import z3
 
-from ..model import DataTriggered, LinkModel, Periodic, SporadicSource, SystemModel, TaskModel
+from ..model import LinkModel, SystemModel, TaskModel
+from ..timebase import TimeBase
 from ..timing.chains import same_core_reason
 from .candidates import Choice
 from .statements import Statement, statement_index
@@ -38,19 +39,13 @@ Term = "int | z3.ArithRef"
 # ================================================================== scale
 
 
-def _gcd(a: Fraction, b: Fraction) -> Fraction:
-    return Fraction(math.gcd(a.numerator * b.denominator, b.numerator * a.denominator), a.denominator * b.denominator)
-
-
 def problem_times(model: SystemModel, choices: Mapping[str, Choice]) -> list[Fraction]:
     times: list[Fraction | None] = []
     for t in model.tasks:
         times += [t.wcet, t.bcet, t.deadline, t.wcrt_bound]
         act = t.activation
-        if isinstance(act, Periodic):
-            times += [act.period, act.phase]
-        elif isinstance(act, SporadicSource):
-            times += [act.min_interarrival, act.max_interarrival]
+        if act.gaps is not None:
+            times += [*act.gaps, act.fixed_phase]
     for lk in model.links:
         times += [lk.delay_min, lk.delay_max]
     for ch in model.chains:
@@ -63,10 +58,7 @@ def problem_times(model: SystemModel, choices: Mapping[str, Choice]) -> list[Fra
 
 def tick_of(model: SystemModel, choices: Mapping[str, Choice]) -> Fraction:
     """The largest time of which every time of the problem is a whole multiple."""
-    tick = Fraction(0)
-    for x in problem_times(model, choices):
-        tick = x if tick == 0 else _gcd(tick, x)
-    return tick or Fraction(1, 1000)
+    return TimeBase.gcd_of(problem_times(model, choices), default=Fraction(1, 1000)).unit
 
 
 def rate_scale(model: SystemModel, choices: Mapping[str, Choice], structure: Structure, tick: Fraction) -> int:
@@ -76,15 +68,13 @@ def rate_scale(model: SystemModel, choices: Mapping[str, Choice], structure: Str
     def of(task: TaskModel) -> int:
         value = 1
         for _, act in activation_options(task, choices.get(task.id)):
-            if isinstance(act, Periodic):
-                d = int(act.period / tick)
-            elif isinstance(act, SporadicSource):
-                d = math.lcm(int(act.min_interarrival / tick), int(act.max_interarrival / tick))
-            elif isinstance(act, DataTriggered):
-                d = act.prescaler
+            if act.gaps is not None:
+                d = math.lcm(int(act.gaps[0] / tick), int(act.gaps[1] / tick))
+            elif act.trigger_port is not None:
+                d = act.release_every
                 for _, link in member_links(model, task, act):
                     if link is not None:
-                        d = math.lcm(d, den.get(link.writer, 1) * act.prescaler)
+                        d = math.lcm(d, den.get(link.writer, 1) * act.release_every)
             else:
                 d = 1
             value = math.lcm(value, d)
@@ -165,6 +155,7 @@ class Encoding:
         self.model, self.choices, self.statements = model, choices, statements
         self.structure, self.tracked, self.seed = structure, tracked, seed
         self.tick = tick_of(model, choices)
+        self.base = TimeBase(self.tick)
         self.M = rate_scale(model, choices, structure, self.tick)
         self.ctx = ctx
         self.t = Terms(ctx)
@@ -186,9 +177,8 @@ class Encoding:
     # -------------------------------------------------------------- basics
 
     def ticks(self, x: Fraction) -> int:
-        value = x / self.tick
-        assert value.denominator == 1, f"{x} is not a multiple of the tick {self.tick}"
-        return int(value)
+        """``x`` in ticks of the problem (``verify.timebase``)."""
+        return self.base.ticks(x)
 
     def add(self, c) -> None:
         if c is True:
@@ -278,8 +268,6 @@ class Encoding:
         if task.id in self.choices or task.id in self.structure.cyclic:
             return True
         act = task.activation
-        if not isinstance(act, DataTriggered):
-            return False
         for _, link in member_links(self.model, task, act):
             if link is not None and (self._varflags[link.writer] or not isinstance(self.R[link.writer], int)):
                 return True
@@ -306,7 +294,7 @@ class Encoding:
             cond = self.sel[task.id][index] if index is not None else None
             P, J, F = self.events[task.id]
             fl, fh = self.rates[task.id]
-            k = act.prescaler if isinstance(act, DataTriggered) else 1
+            k = act.release_every
             cs = [self.t.eq(P, events[0]), self.t.eq(J, events[1]), self.t.eq(F, events[2]),
                   self.t.eq(self.t.mul(k, fl), rates[0]), self.t.eq(self.t.mul(k, fh), rates[1])]
             for c in cs:
@@ -314,13 +302,9 @@ class Encoding:
 
     def _source(self, task: TaskModel, act) -> tuple[tuple, tuple]:
         """(P⁺, J⁺, F) in ticks and (k·fl, k·fh) in rate units for one activation (§5.2)."""
-        if isinstance(act, Periodic):
-            period = self.ticks(act.period)
-            first = self.ticks(act.phase) if act.phase is not None else period
-            return (period, 0, first), (self.M // period, self.M // period)
-        if isinstance(act, SporadicSource):
-            lo, hi = self.ticks(act.min_interarrival), self.ticks(act.max_interarrival)
-            return (hi, 0, hi), (self.M // hi, self.M // lo)
+        if act.gaps is not None:  # released by time: (a⁺, 0, first release at the latest)
+            lo, hi = self.ticks(act.gaps[0]), self.ticks(act.gaps[1])
+            return (hi, 0, self.ticks(act.first_release_latest)), (self.M // hi, self.M // lo)
         arrivals = [(self.arrival(link), self.rates[link.writer])
                     for _, link in member_links(self.model, task, act) if link is not None]
         stream = self._stream([a for a, _ in arrivals], act.mode)
@@ -418,7 +402,7 @@ class Encoding:
         outside it are excluded candidates already."""
         if task.min_rate is None and task.max_rate is None:
             return
-        options = [(i, a) for i, a in activation_options(task, self.choices.get(task.id)) if isinstance(a, DataTriggered)]
+        options = [(i, a) for i, a in activation_options(task, self.choices.get(task.id)) if a.trigger_port is not None]
         if not options:
             return
         fl, fh = self.rates[task.id]
@@ -451,8 +435,8 @@ class Encoding:
         general = []
         for index, act in activation_options(reader, self.choices.get(reader.id)):
             cond = [self.sel[reader.id][index]] if index is not None else []
-            if isinstance(act, DataTriggered) and act.mode == "single" and act.port == port:
-                if direction == "under" and act.prescaler > limit:
+            if act.single_port == port:
+                if direction == "under" and act.release_every > limit:
                     self.guard(key, False, *cond)
             else:
                 general.append(cond)
@@ -553,7 +537,7 @@ class Encoding:
         register_r = t.add(d, self.wait(i), self.R[i])
         register_a = t.add(d, self.a_max(p), self.R[p])
         member = hop.link.target.split(".", 1)[1]
-        if not (isinstance(act, DataTriggered) and member in act.members):
+        if not act.listens_to(member):
             return self._same_core(hop, register_r, register_a)
         k = act.prescaler
         if act.mode == "and":
@@ -621,7 +605,8 @@ def first_job_bounds(model: SystemModel, choices: Mapping[str, Choice], *, relax
         periods = []
         for t in tasks:
             acts = [a for _, a in activation_options(t, choices.get(t.id))]
-            periods.append(max(a.period for a in acts) if all(isinstance(a, Periodic) for a in acts) else None)
+            periods.append(max(a.strict_period for a in acts) if all(a.strict_period is not None for a in acts)
+                           else None)
         scale = 1
         for x in cost + [p for p in periods if p is not None]:
             scale = math.lcm(scale, x.denominator)

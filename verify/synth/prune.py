@@ -22,7 +22,7 @@ from dataclasses import dataclass
 from fractions import Fraction
 from typing import Mapping
 
-from ..model import ChainModel, DataTriggered, Periodic, SporadicSource, SystemModel, TaskModel
+from ..model import ChainModel, DataTriggered, SystemModel, TaskModel
 from ..timing.chains import same_core_reason
 from .candidates import Choice, make_choice
 from .structure import activation_options, member_links
@@ -60,12 +60,9 @@ def _hull(items: list[Bounds]) -> Bounds:
 
 def activation_bounds(model: SystemModel, task: TaskModel, act, known: Mapping[str, Bounds]) -> Bounds:
     """The bounds of one activation of ``task`` given its writers' bounds (specs/timing.md §5.1)."""
-    if isinstance(act, Periodic):
-        rate = 1 / act.period
-        return Bounds((rate, rate), (rate, rate), act.period)
-    if isinstance(act, SporadicSource):
-        lo, hi = 1 / act.max_interarrival, 1 / act.min_interarrival
-        return Bounds((lo, lo), (hi, hi), act.max_interarrival)
+    if act.gaps is not None:  # released by time
+        lo, hi = 1 / act.gaps[1], 1 / act.gaps[0]
+        return Bounds((lo, lo), (hi, hi), act.gaps[1])
     if not isinstance(act, DataTriggered):
         return UNKNOWN
     members = [known.get(link.writer, UNKNOWN) for _, link in member_links(model, task, act) if link is not None]
@@ -158,7 +155,7 @@ class Pruner:
             if not self._rate_ok(self.model.task(tid), self.choices[tid].candidates[i], b):
                 dead.add((tid, i))
         for t in sorted(self.model.tasks, key=lambda t: t.id):  # (by name: the blame must not depend on order)
-            if t.id not in self.choices and isinstance(t.activation, DataTriggered) and not self._rate_ok(
+            if t.id not in self.choices and t.activation.trigger_port is not None and not self._rate_ok(
                     t, _FIXED_TRIGGER, tasks.get(t.id, UNKNOWN)):
                 self._blame(f"`{t.id}` is activated outside its activation constraint in every configuration",
                             ((), (t.id,)))
@@ -221,8 +218,8 @@ class Pruner:
         w = tasks.get(writer, UNKNOWN)
         for index, act in options:
             rb = per.get((reader.id, index), tasks.get(reader.id, UNKNOWN)) if index is not None else tasks[reader.id]
-            if isinstance(act, DataTriggered) and act.mode == "single" and act.port == port:
-                bad = direction == "under" and act.prescaler > limit
+            if act.single_port == port:
+                bad = direction == "under" and act.release_every > limit
             else:
                 bad = _violates(direction, w, rb, limit)
             if bad and index is not None:
@@ -296,7 +293,7 @@ def _triggered_by(reader: TaskModel, choice: Choice | None, port: str) -> bool:
     """Whether some activation of ``reader`` is a single-port trigger on ``port`` (then the writer's
     rate does not matter to that activation's tolerance)."""
     for _, act in activation_options(reader, choice):
-        if isinstance(act, DataTriggered) and act.mode == "single" and act.port == port:
+        if act.single_port == port:
             return True
     return False
 
@@ -362,15 +359,15 @@ class ChainLowerBound:
         member = hop.link.target.split(".", 1)[1]
         waits, same_core_waits = [], []
         for act, pm in options(hop.reader):
-            triggered = isinstance(act, DataTriggered) and member in act.members
+            triggered = act.listens_to(member)
             if self.kind == "reaction":
-                if triggered and act.mode != "and" and act.prescaler > 1:
-                    waits.append(min(pm, (act.prescaler - 1) * p_min(hop.writer)))
+                if triggered and not act.all_members and act.release_every > 1:
+                    waits.append(min(pm, (act.release_every - 1) * p_min(hop.writer)))
                 else:
                     waits.append(ZERO if triggered else pm)
-                same_core_waits.append(ZERO if isinstance(act, DataTriggered) else pm)
+                same_core_waits.append(ZERO if act.trigger_port is not None else pm)
             else:
-                waits.append(ZERO if triggered and act.mode == "single" else p_min(hop.writer))
+                waits.append(ZERO if triggered and act.single_port is not None else p_min(hop.writer))
         end = hop.reader if self.kind == "reaction" else hop.writer
         lower = hop.link.delay_max + _r_min(model.task(end)) + min(waits)
         if self.same_core[n - 1]:

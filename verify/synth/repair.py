@@ -13,7 +13,7 @@ independent analysis like every other answer, and when it finds none the solver 
 """
 from __future__ import annotations
 
-from ..model import DataTriggered, SystemModel
+from ..model import SystemModel
 from .candidates import Choice
 from .problem import Config, Evaluation, Problem
 from .structure import member_links
@@ -56,7 +56,7 @@ def upstream(model: SystemModel, tasks) -> set[str]:
             continue
         seen.add(tid)
         task = model.task(tid)
-        if isinstance(task.activation, DataTriggered):
+        if task.activation.trigger_port is not None:
             stack += [link.writer for _, link in member_links(model, task, task.activation) if link is not None]
     return seen
 

@@ -106,7 +106,7 @@ def _task_statements(model: SystemModel, task: TaskModel, scope: SystemScope | N
     rate = _rate_statement(task, node, binding, comp_key)
     if rate is not None:
         out.append(rate)
-    if isinstance(task.activation, Hole):
+    if task.activation.unknown:
         rng = _range_statement(task)
         if rng is not None:
             out.append(rng)

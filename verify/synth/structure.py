@@ -16,7 +16,7 @@ from typing import Mapping
 
 import networkx as nx
 
-from ..model import DataTriggered, LinkModel, SystemModel, TaskModel
+from ..model import LinkModel, SystemModel, TaskModel
 from .candidates import Choice
 
 
@@ -29,9 +29,7 @@ def activation_options(task: TaskModel, choice: Choice | None) -> list[tuple[int
 
 def member_links(model: SystemModel, task: TaskModel, act) -> list[tuple[str, LinkModel | None]]:
     """(member in-port, connection into it or None) of a data-triggered activation."""
-    if not isinstance(act, DataTriggered):
-        return []
-    return [(m, model.link_into(f"{task.instance}.{m}")) for m in act.members]
+    return [(m, model.link_into(f"{task.instance}.{m}")) for m in act.trigger_members]
 
 
 @dataclass(frozen=True)
@@ -133,7 +131,7 @@ def and_feeders(model: SystemModel, choices: Mapping[str, Choice], trigger: nx.D
     writers: set[str] = set()
     for task in model.tasks:
         for _, act in activation_options(task, choices.get(task.id)):
-            if isinstance(act, DataTriggered) and act.mode == "and":
+            if act.all_members:
                 writers.update(link.writer for _, link in member_links(model, task, act) if link is not None)
     upstream: set[str] = set(writers)
     for w in writers:

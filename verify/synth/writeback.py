@@ -51,12 +51,6 @@ def filled_activation(hole: s.Activation, cand: Candidate) -> s.Activation:
     return s.Trigger(s.Name(cand.port), prescaler, hole.span)
 
 
-def _is_hole(act: s.Activation | None) -> bool:
-    return (isinstance(act, s.UnknownActivation)
-            or (isinstance(act, s.Timer) and isinstance(act.period, s.PeriodHole))
-            or (isinstance(act, s.Trigger) and isinstance(act.prescaler, s.PrescalerHole)))
-
-
 def filled_module(module: s.Module, system: str, choices: Mapping[str, Candidate]) -> s.Module:
     """``module`` with the holes of ``system`` filled from ``choices`` (task id → candidate)."""
     systems = []
@@ -69,7 +63,7 @@ def filled_module(module: s.Module, system: str, choices: Mapping[str, Candidate
             bindings = []
             for b in inst.bindings:
                 cand = choices.get(f"{inst.name.text}.{b.task.text}")
-                if cand is not None and b.activations and _is_hole(b.activations[0]):
+                if cand is not None and b.activations and s.is_hole(b.activations[0]):
                     acts = (filled_activation(b.activations[0], cand),) + b.activations[1:]
                     b = replace(b, activations=acts)
                 bindings.append(b)
@@ -113,7 +107,7 @@ def hole_edits(source: SourceFile, module: s.Module, system: str, choices: Mappi
         for inst in sy.instances:
             for b in inst.bindings:
                 cand = choices.get(f"{inst.name.text}.{b.task.text}")
-                if cand is None or not b.activations or not _is_hole(b.activations[0]):
+                if cand is None or not b.activations or not s.is_hole(b.activations[0]):
                     continue
                 hole = b.activations[0]
                 region, text = _replaced(hole, filled_activation(hole, cand))

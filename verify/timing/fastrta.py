@@ -38,7 +38,8 @@ from math import lcm
 from typing import Mapping
 
 from ..construct import direct_constructor
-from ..model import DataTriggered, Hole, SystemModel
+from ..model import SystemModel
+from ..timebase import TimeBase
 from .rates import EventModel
 from .rta import (MAX_JOBS, MAX_STEPS, ZERO, TaskResponse, bcrt, deadline_of, ratio)
 
@@ -77,9 +78,8 @@ class Static:
         self.trigger: list[tuple[int, Fraction, int] | None] = []
         for t in tasks:
             act = t.activation
-            link = (system.link_into(f"{t.instance}.{act.port}")
-                    if isinstance(act, DataTriggered) and act.mode == "single" else None)
-            self.trigger.append(None if link is None else (act.prescaler, link.delay_max, self.index[link.writer]))
+            link = system.link_into(f"{t.instance}.{act.single_port}") if act.single_port is not None else None
+            self.trigger.append(None if link is None else (act.release_every, link.delay_max, self.index[link.writer]))
 
 
 @dataclass
@@ -171,7 +171,8 @@ class Round:
                 if previous is not None else [False] * len(tasks))
         self.deadlines = [previous.deadlines[n] if kept[n] else deadline_of(t, self.events[n])
                           for n, t in enumerate(tasks)]
-        self.scale = self._time_base(previous, kept)
+        self.base = self._time_base(previous, kept)
+        self.scale = self.base.scale
         if previous is None or previous.scale != self.scale:
             kept = [False] * len(tasks)
         periods = [previous.streams[n].period if kept[n] else self.ticks(e.period_min)
@@ -196,8 +197,8 @@ class Round:
                 self._sweep(static.levels[core], pending)
 
     # ------------------------------------------------------------------ ticks
-    def _time_base(self, previous: Round | None, kept: list[bool]) -> int:
-        """D: every duration of the round is a multiple of 1/D seconds. Any multiple of the least such
+    def _time_base(self, previous: Round | None, kept: list[bool]) -> TimeBase:
+        """1/D seconds (``verify.timebase``): every duration of the round is a multiple of 1/D seconds. Any multiple of the least such
         D would do as well; after the first round D grows only by what tasks with new event models
         bring (last round's D covers the others, and the execution times)."""
         dens = {1 if previous is None else previous.scale}
@@ -211,13 +212,13 @@ class Round:
                     if v is not None:
                         dens.add(v.denominator)
         dens.update(r.denominator for r in self.estimates if r is not None)
-        return lcm(*dens)
+        return TimeBase.per_second(dens)
 
     def ticks(self, value: Fraction | None) -> int | None:
-        return None if value is None else value.numerator * (self.scale // value.denominator)
+        return None if value is None else self.base.ticks(value)
 
     def seconds(self, ticks: int | None) -> Fraction | None:
-        return None if ticks is None else Fraction(ticks, self.scale)
+        return None if ticks is None else self.base.seconds(ticks)
 
     def _stream(self, n: int) -> _Stream:
         """Task n as an interferer (``rta.interferer``): its jitter grows by ``R − C`` if it is
@@ -555,7 +556,7 @@ class Round:
         task = self.tasks[n]
         computed, q, crit, failure, blocking, remote = self.result[n]
         names = hp_names + tuple(self.tasks[s.task].id for s in remote)
-        if isinstance(task.activation, Hole):
+        if task.activation.unknown:
             failure = "its activation is an unresolved synthesis hole (run `synth` first)"
         if task.wcrt_bound is not None:
             used, rule = task.wcrt_bound, "user bound"

@@ -27,8 +27,8 @@ from typing import Mapping
 
 from ..construct import direct_constructor
 from ..diagnostics import DiagnosticSink, Label, name_list
-from ..model import CompoundModel, DataTriggered, LinkModel, Periodic, SporadicSource, SystemModel, TaskModel
-from ..units import fmt_number, fmt_rate, fmt_time
+from ..model import CompoundModel, DataTriggered, LinkModel, SystemModel, TaskModel
+from ..units import fmt_number, fmt_rate
 
 ZERO = Fraction(0)
 
@@ -116,11 +116,8 @@ _new_activation_info = direct_constructor(ActivationInfo)
 
 def trigger_sources(system: SystemModel, task: TaskModel) -> tuple[Source, ...]:
     """The members of ``task``'s data trigger with the connection into each (``model.link_into``)."""
-    act = task.activation
-    if not isinstance(act, DataTriggered):
-        return ()
     out = []
-    for member in act.members:
+    for member in task.activation.trigger_members:
         port = f"{task.instance}.{member}"
         link = system.link_into(port)
         out.append(_new_source(member, port, link.writer if link else None, link))
@@ -233,26 +230,26 @@ def activation_rates(system: SystemModel, order: tuple[tuple[str, ...], frozense
 def _activation_info(system: SystemModel, task: TaskModel, known: Mapping[str, ActivationInfo],
                      in_cycle: bool, timers: dict | None = None) -> ActivationInfo:
     act = task.activation
-    if isinstance(act, Periodic):
-        key = act.period.as_integer_ratio()
+    if act.strict_period is not None:
+        key = act.strict_period.as_integer_ratio()
         found = timers.get(key) if timers is not None else None
         if found is None:
-            rate = Fraction(1) / act.period
-            found = (_new_rate_interval(rate, rate), f"timer {fmt_time(act.period)}")
+            rate = Fraction(1) / act.strict_period
+            found = (_new_rate_interval(rate, rate), act.describe())
             if timers is not None:
                 timers[key] = found
-        return _new_activation_info(task.id, "timer", found[0], found[1], period=act.period, phase=act.phase)
-    if isinstance(act, SporadicSource):
-        rate = _new_rate_interval(1 / act.max_interarrival, 1 / act.min_interarrival)
-        text = f"sporadic {fmt_time(act.min_interarrival)} .. {fmt_time(act.max_interarrival)}"
-        return _new_activation_info(task.id, "sporadic", rate, text,
-                                    interarrival=(act.min_interarrival, act.max_interarrival))
+        return _new_activation_info(task.id, act.kind, found[0], found[1], period=act.strict_period,
+                                    phase=act.fixed_phase)
+    if act.gaps is not None:
+        low, high = act.gaps
+        return _new_activation_info(task.id, act.kind, _new_rate_interval(1 / high, 1 / low), act.describe(),
+                                    interarrival=act.gaps)
     if isinstance(act, DataTriggered):
         sources = trigger_sources(system, task)
         rate, text = _trigger_rate(act, sources, known, in_cycle)
         return _new_activation_info(task.id, "trigger", rate, text, trigger_port=act.port, mode=act.mode,
                                     prescaler=act.prescaler, sources=sources, in_cycle=in_cycle)
-    return _new_activation_info(task.id, "hole", None, "not bounded: unresolved synthesis hole")
+    return _new_activation_info(task.id, act.kind, None, "not bounded: unresolved synthesis hole")
 
 
 def _trigger_rate(act: DataTriggered, sources: tuple[Source, ...], known: Mapping[str, ActivationInfo],
@@ -374,11 +371,8 @@ def source_event_model(task: TaskModel) -> EventModel:
     """Timer ``(T, 0, T, 0)``, first release at the phase (< T); sporadic ``(a⁻, 0, a⁺, 0)``, first
     release before a⁺ (§3)."""
     act = task.activation
-    if isinstance(act, Periodic):
-        first = act.phase if act.phase is not None else act.period
-        return _new_event_model(act.period, ZERO, act.period, ZERO, first)
-    if isinstance(act, SporadicSource):
-        return _new_event_model(act.min_interarrival, ZERO, act.max_interarrival, ZERO, act.max_interarrival)
+    if act.gaps is not None:
+        return _new_event_model(act.gaps[0], ZERO, act.gaps[1], ZERO, act.first_release_latest)
     return UNBOUNDED
 
 
@@ -564,8 +558,8 @@ def _sampling(system: SystemModel, link: LinkModel, reader: str,
     w, r = infos[link.writer].rate, infos[reader].rate
     act = system.task(reader).activation
     member = link.target.split(".", 1)[1]
-    if isinstance(act, DataTriggered) and act.mode == "single" and act.port == member:
-        k = Fraction(act.prescaler)
+    if act.single_port == member:
+        k = Fraction(act.release_every)
         return _new_link_sampling(link.source, link.target, link.writer, reader, w, r,
                                   "matched" if k == 1 else "undersampled", False, None, k > 1,
                                   k if k > 1 else None, by_trigger=True)
@@ -703,7 +697,7 @@ def check_compound_constraints(system: SystemModel, infos: Mapping[str, Activati
             if link is not None:
                 secondary.append(Label(link.span, f"`{link.writer}` writes `{member}` at {infos[link.writer].rate}"))
         triggered = [t.id for t in system.tasks if t.instance == compound.instance
-                     and isinstance(t.activation, DataTriggered) and t.activation.port == compound.name]
+                     and t.activation.trigger_port == compound.name]
         text = _constraint_text(compound)
         notes = [f"the constraint is {text}" + ("" if compound.changeable or text.endswith("fixed") else " fixed"),
                  "the analysis uses the propagated rate: nothing in the system enforces the constraint"]

@@ -22,7 +22,7 @@ from fractions import Fraction
 from typing import Mapping
 
 from ..diagnostics import DiagnosticSink, Label, name_list
-from ..model import DataTriggered, Hole, SystemModel, TaskModel
+from ..model import SystemModel, TaskModel
 from ..units import fmt_number, fmt_time
 from .rates import ActivationInfo, EventModel, ratio_sum
 
@@ -188,12 +188,12 @@ def causal_path(system: SystemModel, source: TaskModel, target: TaskModel,
     latency, seen, current = ZERO, {source.id}, source
     while True:
         act = current.activation
-        if not isinstance(act, DataTriggered) or act.mode != "single":
+        if act.single_port is None:
             return None
-        link = system.link_into(f"{current.instance}.{act.port}")
+        link = system.link_into(f"{current.instance}.{act.single_port}")
         if link is None:
             return None
-        prescalers.append(act.prescaler)
+        prescalers.append(act.release_every)
         latency += link.delay_max
         if link.writer == target.id:
             return tuple(prescalers), latency
@@ -354,7 +354,7 @@ def response_time(system: SystemModel, task: TaskModel, events: Mapping[str, Eve
     else:
         computed, q, crit, failure = wcrt(Demand(task.wcet, blocking, streams + remote,
                                                         events[task.id]), deadline)
-    if isinstance(task.activation, Hole):
+    if task.activation.unknown:
         failure = "its activation is an unresolved synthesis hole (run `synth` first)"
     if task.wcrt_bound is not None:
         used, rule = task.wcrt_bound, "user bound"

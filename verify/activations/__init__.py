@@ -1,0 +1,18 @@
+"""The activation kinds, one module each, and what they tell the stages (``base.Activation``).
+
+A new kind is one module here — a frozen dataclass deriving from ``Activation`` with its ``kind`` name,
+overriding the behaviour that applies to it — registered in ``KINDS`` below, plus its tests; the model
+builder (``verify.model``) makes it from its syntax.
+"""
+from __future__ import annotations
+
+from .base import Activation
+from .hole import Hole, HoleWhat
+from .sporadic import SporadicSource
+from .timer import Periodic
+from .trigger import DataTriggered
+
+#: every activation kind by its name
+KINDS: dict[str, type[Activation]] = {cls.kind: cls for cls in (Periodic, SporadicSource, DataTriggered, Hole)}
+
+__all__ = ["KINDS", "Activation", "DataTriggered", "Hole", "HoleWhat", "Periodic", "SporadicSource"]
