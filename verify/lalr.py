@@ -36,7 +36,10 @@ from __future__ import annotations
 
 import re
 from operator import itemgetter
-from typing import Any, Callable, Mapping
+from typing import TYPE_CHECKING, Any, Callable, Mapping, Sequence
+
+if TYPE_CHECKING:
+    from lark import Lark
 
 #: the terminal patterns (as Lark compiles them) this lexer reproduces
 LEXICAL_SHAPE = {  # (Lark writes white space into its patterns as the characters themselves)
@@ -76,8 +79,13 @@ _EXPAND1 = 2  # a ?rule: its only child, else a callback's value
 _PASS = 3  # a ?rule of one symbol: the child's value and position stay as they are (a shortcut)
 _APPEND = 4  # _rule -> _rule x: x appended to the list (left recursion of x* and x+; a shortcut)
 
+#: the children a rule keeps, from the values of its symbols (a list, or a tuple from ``itemgetter``)
+_Picker = Callable[[list[Any]], Sequence[Any]]
+#: a rule: (mode, origin, size, picker, may have empty children)
+_Rule = tuple[int, str, int, _Picker, bool]
 
-def _picker(include: tuple[tuple[int, bool], ...], size: int, as_list: bool):
+
+def _picker(include: tuple[tuple[int, bool], ...], size: int, as_list: bool) -> _Picker:
     """The children a rule keeps, as Lark's child filter gives them (``ChildFilterLALR_NoPlaceholders``:
     filtered tokens dropped, a ``_rule``'s children spliced, its list reused when it comes first)."""
     if not any(expand for _, expand in include):
@@ -92,8 +100,8 @@ def _picker(include: tuple[tuple[int, bool], ...], size: int, as_list: bool):
         get = itemgetter(*indices)
         return (lambda kids: list(get(kids))) if as_list else get
 
-    def pick(kids):
-        children = None
+    def pick(kids: list[Any]) -> list[Any]:
+        children: list[Any] | None = None
         for i, expand in include:
             if expand:
                 if children:
@@ -112,7 +120,9 @@ def _picker(include: tuple[tuple[int, bool], ...], size: int, as_list: bool):
 class FastParser:
     """Lark's LALR table for one grammar with the lexer above; ``parse`` is reentrant."""
 
-    def __init__(self, rows, start, end, rules, names, keywords, punct, lexeme):
+    def __init__(self, rows: list[dict[str, int]], start: int, end: int, rules: list[_Rule],
+                 names: list[str | None], keywords: dict[str, str], punct: dict[str, str],
+                 lexeme: re.Pattern[str]) -> None:
         self.rows = rows  # per state: {terminal or rule name: state (shift, goto) or ~rule (reduce)}
         self.start = start
         self.end = end
@@ -123,7 +133,7 @@ class FastParser:
         self.lexeme = lexeme
 
     @classmethod
-    def build(cls, lark) -> "FastParser | None":
+    def build(cls, lark: Lark) -> FastParser | None:
         """The fast path for a Lark LALR parser, or None if its grammar is not the shape it handles."""
         try:
             table = lark.parser.parser.parser.parse_table
@@ -170,16 +180,17 @@ class FastParser:
                 break
             nullable |= more
         rule_index: dict[Any, int] = {}
-        rules, names = [], []
+        rules: list[_Rule] = []
+        names: list[str | None] = []
         for rule in lark.rules:
             options = rule.options
             if options.keep_all_tokens or any(options.empty_indices or ()):
                 return None
-            include = []
+            kept: list[tuple[int, bool]] = []
             for i, sym in enumerate(rule.expansion):
-                if not (sym.is_term and sym.filter_out):
-                    include.append((i, not sym.is_term and sym.name.startswith("_")))
-            include = tuple(include)
+                if not (sym.is_term and sym.filter_out):  # type: ignore[attr-defined]  # (a terminal has it)
+                    kept.append((i, not sym.is_term and sym.name.startswith("_")))
+            include = tuple(kept)
             size = len(rule.expansion)
             may_be_empty = any(not sym.is_term and str(sym.name) in nullable for sym in rule.expansion)
             inline = rule.origin.name.startswith("_")
@@ -212,7 +223,7 @@ class FastParser:
         return {name for name in self.names if name is not None}
 
     def parse(self, text: str, callbacks: Mapping[str, Callable[[int | None, int | None, Any], Any]],
-              tokens: Mapping[str, Callable[[str, int, int], Any]], max_tokens: int | None = None):
+              tokens: Mapping[str, Callable[[str, int, int], Any]], max_tokens: int | None = None) -> Any:
         """The value of the start rule, or :class:`Unparsable`. ``callbacks[name](start, end, children)``
         builds the value of a rule from its positions and its children (a list or a tuple);
         ``tokens[terminal](text, start, end)`` the value of a token (default: its text). More than
@@ -224,9 +235,9 @@ class FastParser:
         match = self.lexeme.match
         end_state = self.end
         stack = [self.start]  # parser states
-        values: list = []
-        starts: list = []  # positions
-        ends: list = []
+        values: list[Any] = []
+        starts: list[int | None] = []  # positions
+        ends: list[int | None] = []
         push_state, push_value, push_start, push_end = stack.append, values.append, starts.append, ends.append
         row = rows[self.start]
         pos = 0
@@ -237,6 +248,7 @@ class FastParser:
         next_newline = text.find("\n")
         if next_newline < 0:
             next_newline = size_text
+        term: str | None
         while True:
             m = match(text, pos)
             if m is None:
@@ -312,7 +324,8 @@ class FastParser:
                 else:
                     children, first, last = [], None, None
                 if mode == _NODE or (mode == _EXPAND1 and len(children) != 1):
-                    node = build[~code](first, last, children)
+                    # (a _NODE or _EXPAND1 rule has a name, so a callback)
+                    node = build[~code](first, last, children)  # type: ignore[misc]
                 elif mode == _INLINE:
                     node = children
                 else:

@@ -10,11 +10,14 @@ import contextvars
 import copy
 import functools
 import re
+from collections.abc import Iterable, Iterator
 from importlib import resources
+from typing import cast
 
 from lark import Lark, Token
 from lark.lark import PostLex
 from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken
+from lark.parsers.lalr_interactive_parser import InteractiveParser
 
 from .diagnostics import DiagnosticSink, Label
 from .lalr import TooManyTokens, position
@@ -49,7 +52,7 @@ class _WholeWords(PostLex):
 
     always_accept = ("NAME",)
 
-    def process(self, stream):
+    def process(self, stream: Iterator[Token]) -> Iterator[Token]:
         budget = _TOKEN_BUDGET.get()
         if budget is None:
             return stream
@@ -62,11 +65,12 @@ class _TokenBudget:
     def __init__(self, limit: int):
         self.left = limit
 
-    def count(self, stream):
+    def count(self, stream: Iterator[Token]) -> Iterator[Token]:
         for tok in stream:
             self.left -= 1
             if self.left < 0:
-                raise TooManyTokens(position(tok.line, tok.column))
+                # (a lexed token has its line and column)
+                raise TooManyTokens(position(tok.line, tok.column))  # type: ignore[arg-type]
             yield tok
 
 
@@ -74,7 +78,7 @@ _TOKEN_BUDGET: contextvars.ContextVar[_TokenBudget | None] = contextvars.Context
 
 
 @contextlib.contextmanager
-def counting_tokens(limit: int):
+def counting_tokens(limit: int) -> Iterator[None]:
     """Within the block, a parse by ``_parser()`` raises ``TooManyTokens`` at its ``limit + 1``-th token."""
     reset = _TOKEN_BUDGET.set(_TokenBudget(limit))
     try:
@@ -102,7 +106,7 @@ def describe_token_type(name: str) -> str:
     return _TOKEN_WORDS.get(name) or _literal_words().get(name) or name.lower()
 
 
-def _describe_expected(names) -> str:
+def _describe_expected(names: Iterable[str]) -> str:
     words = sorted({describe_token_type(n) for n in names if not n.startswith("__IGNORE")})
     if not words:
         return "nothing more here"
@@ -132,7 +136,7 @@ def token_span(path: str, tok: Token) -> Span:
     return Span(path, line, col, end_line, end_col)
 
 
-def _number_before(text: str, token: Token):
+def _number_before(text: str, token: Token) -> tuple[str, tuple[int, int, int, int]] | None:
     """The number just before ``token`` (white space between), as (text, (line, col, end_line, end_col))."""
     pos = token.start_pos if token.type != "$END" and token.start_pos is not None else len(text)
     before = text[:pos].rstrip()
@@ -167,7 +171,7 @@ _UNITS = ("kHz", "Hz", "ms", "us", "ns", "s")
 
 def _next_types(text: str, pos: int) -> list[str]:
     """The terminals the lexeme at ``pos`` (after white space and comments) may be, for trial feeds."""
-    pos = _SKIP.match(text, pos).end()
+    pos = _SKIP.match(text, pos).end()  # type: ignore[union-attr]  # (it matches the empty string)
     if pos >= len(text):
         return ["$END"]
     if m := _WORD_RE.match(text, pos):
@@ -189,7 +193,7 @@ def _lookahead(text: str, pos: int, count: int = 2) -> list[list[Token]]:
     combination of alternatives, or fewer lexemes where the text ends or a lexeme is not recognised."""
     combos: list[list[Token]] = [[]]
     for _ in range(count):
-        pos = _SKIP.match(text, pos).end()
+        pos = _SKIP.match(text, pos).end()  # type: ignore[union-attr]  # (it matches the empty string)
         kinds = _next_types(text, pos)
         if not kinds:
             break
@@ -207,16 +211,16 @@ def _lookahead(text: str, pos: int, count: int = 2) -> list[list[Token]]:
     return combos
 
 
-def _fits(parser, tokens: list[Token], text: str, pos: int) -> bool:
+def _fits(parser: InteractiveParser, tokens: list[Token], text: str, pos: int) -> bool:
     """Whether ``parser`` accepts ``tokens`` followed by the next lexemes of the text from ``pos``."""
     return any(_feeds(parser, tokens + more) for more in _lookahead(text, pos))
 
 
-def _feeds(parser, tokens: list[Token]) -> bool:
+def _feeds(parser: InteractiveParser, tokens: list[Token]) -> bool:
     """Whether a copy of ``parser`` accepts ``tokens``. The copy shares the parser's values, so it runs
     without callbacks (as Lark's own ``accepts``): a callback may extend the child list of a tree on the
     stack in place, which would change the tree error recovery goes on to build (``parse.Parsed.partial``)."""
-    trial = parser.copy(deepcopy_values=False)
+    trial = parser.copy(deepcopy_values=False)  # type: ignore[no-untyped-call]  # (Lark leaves it unannotated)
     conf = copy.copy(trial.parser_state.parse_conf)
     conf.callbacks = {}
     trial.parser_state.parse_conf = conf
@@ -282,7 +286,8 @@ def _misspelt_keyword(word: str, accepted: set[str]) -> str | None:
     return best[1] if best else None
 
 
-def _syntax_help(expected: set[str], token: Token, glued: tuple | None = None, repair: str | None = None) -> str:
+def _syntax_help(expected: set[str], token: Token, glued: tuple[str, Token, Token] | None = None,
+                 repair: str | None = None) -> str:
     """The help of an E001: specific where the slip is recognised, else what to do in general."""
     word = str(token) if token.type != "$END" else ""
     if glued is not None:
@@ -332,7 +337,7 @@ def _accepted(err: UnexpectedInput) -> set[str]:
         return fallback
 
 
-def _exponent_after(text: str, number: tuple) -> str | None:
+def _exponent_after(text: str, number: tuple[str, tuple[int, int, int, int]]) -> str | None:
     """``e5`` in ``1e5`` (exponent notation right after the number), or None."""
     (digits, (line, col, _, end_col)) = number
     offset = sum(len(l) + 1 for l in text.split("\n")[:line - 1]) + end_col - 1
@@ -418,7 +423,7 @@ def _report_unexpected(sink: DiagnosticSink, path: str, err: UnexpectedInput, te
             help=_syntax_help(expected, err.token, glued, getattr(err, "verify_inserted", None)),
         )
     elif isinstance(err, UnexpectedCharacters):
-        pos = err.pos_in_stream
+        pos = cast(int, err.pos_in_stream)  # (Lark declares it None in UnexpectedInput; this subclass sets it)
         ch = text[pos] if pos < len(text) else ""
         span = Span(path, err.line, err.column, err.line, err.column + 1)
         if text.startswith("/*", pos):
@@ -481,7 +486,7 @@ def _repair(err: UnexpectedToken, text: str) -> None:
                                                          _INSERTION_ORDER.index(n) if n in _INSERTION_ORDER else 0, n))
     inserted = _insert_one(parser, err.token, [n for n in expected if n not in keyword_names])
     if inserted is not None:
-        err.verify_inserted = inserted
+        err.verify_inserted = inserted  # type: ignore[attr-defined]  # (ours, read back with getattr)
         return
     tok = err.token
     if tok.type == "NAME" and tok.end_pos is not None:
@@ -506,7 +511,7 @@ def _repair(err: UnexpectedToken, text: str) -> None:
     _insert_one(parser, err.token, [n for n in expected if n in keyword_names])
 
 
-def _insert_one(parser, token: Token, names: list[str]) -> str | None:
+def _insert_one(parser: InteractiveParser, token: Token, names: list[str]) -> str | None:
     """Insert the first of ``names`` after which ``token`` fits, then ``token``; the one inserted."""
     for name in names:
         filler = Token(name, _placeholder(name), line=token.line, column=token.column)

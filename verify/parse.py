@@ -8,11 +8,14 @@ The transformer only builds nodes.
 from __future__ import annotations
 
 import functools
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
+from typing import Any, Literal, cast
 
 from lark import Token, Tree
 from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken
+from lark.tree import Meta
 
 from . import syntax as s
 from .construct import direct_constructor
@@ -46,7 +49,7 @@ def looks_like_model(text: str) -> bool:
     """The first word of ``text`` (after white space and comments) can start a model, or it has none."""
     if text.startswith("\ufeff"):
         text = text[1:]
-    pos = _SKIP.match(text).end()
+    pos = _SKIP.match(text).end()  # type: ignore[union-attr]  # (it matches the empty string)
     if pos >= len(text):
         return True
     word = _WORD_RE.match(text, pos)
@@ -108,7 +111,7 @@ def _lark_parse(text: str, path: str, sink: DiagnosticSink,
     that fails). Syntax errors go to ``sink``."""
     errors: list[UnexpectedInput] = []
     last_line = [-1]
-    completed: list[Tree | None] = [None]
+    completed: list[Tree[Token] | None] = [None]
 
     def give_up(err: UnexpectedInput) -> bool:
         completed[0] = _complete_at_end(err)
@@ -124,9 +127,10 @@ def _lark_parse(text: str, path: str, sink: DiagnosticSink,
                 # a state that does not accept it lexes a keyword as a NAME (``_WholeWords``): recovery
                 # and messages treat it as the keyword it is, as Lark's root lexer would
                 err.token = Token.new_borrow_pos(_keyword_terminals()[str(tok)], str(tok), tok)
-            err.verify_glued = _glued_keyword(err, text)  # (before the repair changes the parser)
+            # (before the repair changes the parser; ours, read back with getattr)
+            err.verify_glued = _glued_keyword(err, text)  # type: ignore[attr-defined]
         if line != last_line[0] or at_end:
-            err.verify_accepted = _accepted(err)
+            err.verify_accepted = _accepted(err)  # type: ignore[attr-defined]  # (ours, read back with getattr)
             errors.append(err)
             last_line[0] = line
         if isinstance(err, UnexpectedToken):
@@ -141,6 +145,7 @@ def _lark_parse(text: str, path: str, sink: DiagnosticSink,
         return len(errors) < limits.syntax_errors or give_up(err)
 
     too_many = None
+    tree: Tree[Token] | None
     try:
         with counting_tokens(limits.tokens):
             tree = _parser().parse(text, on_error=on_error)
@@ -150,8 +155,8 @@ def _lark_parse(text: str, path: str, sink: DiagnosticSink,
         tree = completed[0]
     except TooManyTokens as err:
         too_many, tree = err, None
-    for err in errors:
-        _report_unexpected(sink, path, err, text)
+    for error in errors:
+        _report_unexpected(sink, path, error, text)
     if too_many is not None:
         sink.add(_too_many_tokens(path, too_many.at, limits))
     if errors or tree is None:
@@ -167,7 +172,7 @@ def _lark_parse(text: str, path: str, sink: DiagnosticSink,
 _COMPLETION_ORDER = ("RBRACE", "NAME", "NUMBER", "UNIT", "STRING")
 
 
-def _complete_at_end(err: UnexpectedInput) -> Tree | None:
+def _complete_at_end(err: UnexpectedInput) -> Tree[Token] | None:
     """The tree the parser at ``err`` reaches when the text ends there, after inserting placeholder
     tokens (a missing ``}``, a name, a number ...) until the end is accepted; None if it cannot."""
     parser = getattr(err, "interactive_parser", None)
@@ -181,7 +186,7 @@ def _complete_at_end(err: UnexpectedInput) -> Tree | None:
         for _ in range(64):
             accepted = parser.accepts()
             if "$END" in accepted:
-                return parser.feed_eof(where)
+                return cast("Tree[Token]", parser.feed_eof(where))  # (the tree of the start rule)
             pick = next((n for n in _COMPLETION_ORDER if n in accepted), None) or min(accepted, default=None)
             if pick is None:
                 return None
@@ -192,12 +197,13 @@ def _complete_at_end(err: UnexpectedInput) -> Tree | None:
     return None
 
 
-def _partial(tree: Tree | None, path: str, limits: Limits) -> s.Module | None:
+def _partial(tree: Tree[Token] | None, path: str, limits: Limits) -> s.Module | None:
     """The syntax tree of a recovered Lark tree (placeholders included), or None."""
     if tree is None:
         return None
     try:
-        return _Builder(path, DiagnosticSink(), limits).transform(tree)
+        module: s.Module = _Builder(path, DiagnosticSink(), limits).transform(tree)
+        return module
     except Exception:  # best effort: a tree recovery made need not build (an impossible number, ...)
         return None
 
@@ -216,12 +222,18 @@ class _NumberError(Exception):
     pass
 
 
+#: a position (``lalr.position``), None for an empty rule; a clause's positions; a rule's children
+_Pos = int | None
+_Where = tuple[_Pos, _Pos]
+_Children = Sequence[Any]
+
+
 def parse_number(tok: Token, path: str, sink: DiagnosticSink, limits: Limits = DEFAULT_LIMITS) -> Fraction:
     """The exact value of a NUMBER token (E005 into ``sink`` and ``_NumberError`` if it has none)."""
     return _exact(str(tok), lambda: token_span(path, tok), sink, limits.number_length)
 
 
-def _exact(text: str, where, sink: DiagnosticSink, max_length: int) -> Fraction:
+def _exact(text: str, where: Callable[[], Span], sink: DiagnosticSink, max_length: int) -> Fraction:
     """The value of NUMBER ``text``; ``where()`` gives its span for a report."""
     if text.isascii() and text.isdigit() and len(text) <= max_length:  # common; no regex (Fraction(str))
         return Fraction(int(text))
@@ -244,7 +256,9 @@ def _text(text: str, start: int, end: int) -> str:
     return text
 
 
-def _token_builders(path: str, sink: DiagnosticSink, limits: Limits):
+def _token_builders(path: str, sink: DiagnosticSink, limits: Limits) -> tuple[
+        Callable[[_Pos, _Pos], Span], Callable[[str, int, int], s.Name],
+        Callable[[str, int, int], tuple[Fraction, int, int]]]:
     """The three functions the parser calls most, as closures over the file: ``span(start, end)``, the
     span between two positions (``lalr.position``; the file's first position if empty), and the values of
     a NAME and of a NUMBER token, ``name(text, start, end)`` and ``number(text, start, end)``."""
@@ -255,7 +269,8 @@ def _token_builders(path: str, sink: DiagnosticSink, limits: Limits):
     def span(start: int | None, end: int | None) -> Span:
         if start is None:
             return Span(path, 1, 1, 1, 1)
-        return new_span(path, start >> 32, start & 0xFFFFFFFF, end >> 32, end & 0xFFFFFFFF)
+        # (an empty rule has neither position, any other both)
+        return new_span(path, start >> 32, start & 0xFFFFFFFF, end >> 32, end & 0xFFFFFFFF)  # type: ignore[operator]
 
     def name(text: str, start: int, end: int) -> s.Name:
         return new_name(text, new_span(path, start >> 32, start & 0xFFFFFFFF, end >> 32, end & 0xFFFFFFFF))
@@ -269,7 +284,7 @@ def _token_builders(path: str, sink: DiagnosticSink, limits: Limits):
     return span, name, number
 
 
-def _positions(where) -> tuple[int, int]:
+def _positions(where: Token | Meta) -> tuple[int, int]:
     """The start and end positions of a token or a tree's meta (a token error recovery inserted lacks
     its end, and so may the tree around it)."""
     line, column = where.line or 1, where.column or 1
@@ -286,15 +301,16 @@ class _Builder:
     its ``Span``), a UNIT its text). ``verify.lalr`` calls them while parsing; ``transform`` applies them to a Lark tree (the
     error-recovering path)."""
 
-    def __init__(self, path: str, sink: DiagnosticSink, limits: Limits = DEFAULT_LIMITS):
+    def __init__(self, path: str, sink: DiagnosticSink, limits: Limits = DEFAULT_LIMITS) -> None:
         self.path = path
         self.sink = sink
         self._span, self._name, self._number_token = _token_builders(path, sink, limits)
 
-    def callbacks(self) -> dict:
-        return {name: getattr(self, name) for name in _fast_parser().callback_names()}
+    def callbacks(self) -> dict[str, Callable[[_Pos, _Pos, _Children], Any]]:
+        # (called only where the fast path exists)
+        return {name: getattr(self, name) for name in _fast_parser().callback_names()}  # type: ignore[union-attr]
 
-    def transform(self, tree: Tree):
+    def transform(self, tree: Tree[Token]) -> Any:
         """The value of a Lark tree (built with positions), bottom-up as Lark's Transformer does."""
         tokens = self.tokens()
         children = [self.transform(c) if isinstance(c, Tree) else tokens.get(c.type, _text)(c.value, *_positions(c))
@@ -305,7 +321,7 @@ class _Builder:
         return getattr(self, tree.data)(*_positions(meta), children)
 
     # ---------------------------------------------------------------- helpers
-    def tokens(self) -> dict:
+    def tokens(self) -> dict[str, Callable[[str, int, int], Any]]:
         """The value of each kind of token the tree keeps (``lalr.FastParser.parse``)."""
         return {"NAME": self._name, "NUMBER": self._number_token, "RBRACE": self._span_of, "STRING": self._string}
 
@@ -320,23 +336,23 @@ class _Builder:
         return s.Number(value, self._span(start, end))
 
     # ---------------------------------------------------------------- file
-    def start(self, start, end, items):
+    def start(self, start: _Pos, end: _Pos, items: _Children) -> s.Module:
         imports = tuple(i for i in items if isinstance(i, s.Import))
         comps = tuple(i for i in items if isinstance(i, s.Component))
         systems = tuple(i for i in items if isinstance(i, s.System))
         return s.Module(self.path, imports, comps, systems, self._span(start, end))
 
-    def import_decl(self, start, end, children):
+    def import_decl(self, start: _Pos, end: _Pos, children: _Children) -> s.Import:
         text, where = children[0]
         return s.Import(text[1:-1], self._span(start, end), where)
 
     # ---------------------------------------------------------------- quantities
-    def quantity(self, start, end, children):
+    def quantity(self, start: _Pos, end: _Pos, children: _Children) -> s.Quantity:
         num, unit = children
         return s.Quantity(num[0], unit, self._span(start, end))
 
     # ---------------------------------------------------------------- components
-    def component(self, start, end, children):
+    def component(self, start: _Pos, end: _Pos, children: _Children) -> s.Component:
         name, *members, rbrace = children
         return s.Component(
             name,
@@ -348,36 +364,36 @@ class _Builder:
             rbrace,
         )
 
-    def in_port(self, start, end, children):
+    def in_port(self, start: _Pos, end: _Pos, children: _Children) -> s.InPort:
         return s.InPort(children[0], children[1], self._span(start, end))
 
-    def out_port(self, start, end, children):
+    def out_port(self, start: _Pos, end: _Pos, children: _Children) -> s.OutPort:
         return s.OutPort(children[0], children[1], self._span(start, end))
 
-    def _compound(self, start, end, children, mode):
+    def _compound(self, start: _Pos, end: _Pos, children: _Children, mode: Literal["and", "or"]) -> s.CompoundPort:
         name, *rest = children
         constraint = rest.pop()[1] if rest and isinstance(rest[-1], tuple) else None
         members = tuple(t for t in rest if isinstance(t, s.Name))
         return s.CompoundPort(name, mode, members, constraint, self._span(start, end))
 
-    def compound_and(self, start, end, children):
+    def compound_and(self, start: _Pos, end: _Pos, children: _Children) -> s.CompoundPort:
         return self._compound(start, end, children, "and")
 
-    def compound_or(self, start, end, children):
+    def compound_or(self, start: _Pos, end: _Pos, children: _Children) -> s.CompoundPort:
         return self._compound(start, end, children, "or")
 
-    def preemptive(self, start, end, children):
+    def preemptive(self, start: _Pos, end: _Pos, children: _Children) -> Literal["preemptive"]:
         return "preemptive"
 
-    def cooperative(self, start, end, children):
+    def cooperative(self, start: _Pos, end: _Pos, children: _Children) -> Literal["cooperative"]:
         return "cooperative"
 
-    def task(self, start, end, children):
+    def task(self, start: _Pos, end: _Pos, children: _Children) -> s.Task:
         name, *clauses, rbrace = children
-        kind = "preemptive"
+        kind: Literal["preemptive", "cooperative"] = "preemptive"
         if clauses and isinstance(clauses[0], str):
             kind = clauses.pop(0)
-        fields: dict = {"reads": [], "produces": []}
+        fields: dict[str, Any] = {"reads": [], "produces": []}
         repeated: list[Span] = []
         for tag, value, where in clauses:
             if tag in ("reads", "produces"):
@@ -391,69 +407,69 @@ class _Builder:
             span=self._span(start, end), repeated=tuple(repeated), end=rbrace, **fields,
         )
 
-    def reads(self, start, end, children):
+    def reads(self, start: _Pos, end: _Pos, children: _Children) -> tuple[str, list[s.Read], _Where]:
         port, *options = children
-        opts: dict = {}
+        opts: dict[str, Any] = {}
         for key, value in options:
             opts[key] = value
         read = s.Read(port, span=self._span(start, end), **opts)
         return ("reads", [read], (start, end))
 
-    def optional(self, start, end, children):
+    def optional(self, start: _Pos, end: _Pos, children: _Children) -> tuple[str, bool]:
         return ("optional", True)
 
-    def required(self, start, end, children):
+    def required(self, start: _Pos, end: _Pos, children: _Children) -> tuple[str, bool]:
         return ("optional", False)
 
-    def oversampling(self, start, end, children):
+    def oversampling(self, start: _Pos, end: _Pos, children: _Children) -> tuple[str, s.Tolerance]:
         return ("oversampling", children[0])
 
-    def undersampling(self, start, end, children):
+    def undersampling(self, start: _Pos, end: _Pos, children: _Children) -> tuple[str, s.Tolerance]:
         return ("undersampling", children[0])
 
-    def tol_ok(self, start, end, children):
+    def tol_ok(self, start: _Pos, end: _Pos, children: _Children) -> s.Tolerance:
         return s.Tolerance("ok", None, self._span(start, end))
 
-    def tol_forbidden(self, start, end, children):
+    def tol_forbidden(self, start: _Pos, end: _Pos, children: _Children) -> s.Tolerance:
         return s.Tolerance("forbidden", None, self._span(start, end))
 
-    def tol_max(self, start, end, children):
+    def tol_max(self, start: _Pos, end: _Pos, children: _Children) -> s.Tolerance:
         return s.Tolerance("max", self._number(children[0]), self._span(start, end))
 
-    def produces(self, start, end, children):
+    def produces(self, start: _Pos, end: _Pos, children: _Children) -> tuple[str, list[s.Name], _Where]:
         return ("produces", list(children), (start, end))
 
-    def bcet(self, start, end, children):
+    def bcet(self, start: _Pos, end: _Pos, children: _Children) -> tuple[str, s.Quantity, _Where]:
         return ("bcet", children[0], (start, end))
 
-    def wcet(self, start, end, children):
+    def wcet(self, start: _Pos, end: _Pos, children: _Children) -> tuple[str, s.Quantity, _Where]:
         return ("wcet", children[0], (start, end))
 
-    def act_constraint(self, start, end, children):
+    def act_constraint(self, start: _Pos, end: _Pos, children: _Children) -> tuple[str, s.ActivationConstraint, _Where]:
         (low, high), *rest = children
         changeable = rest[0] if rest else True
         return ("constraint", s.ActivationConstraint(low, high, changeable, self._span(start, end)), (start, end))
 
-    def bounds_range(self, start, end, children):
+    def bounds_range(self, start: _Pos, end: _Pos, children: _Children) -> tuple[s.Quantity, s.Quantity]:
         return (children[0], children[1])
 
-    def bounds_exact(self, start, end, children):
+    def bounds_exact(self, start: _Pos, end: _Pos, children: _Children) -> tuple[s.Quantity, s.Quantity]:
         return (children[0], children[0])
 
-    def bounds_min(self, start, end, children):
+    def bounds_min(self, start: _Pos, end: _Pos, children: _Children) -> tuple[s.Quantity, None]:
         return (children[0], None)
 
-    def bounds_max(self, start, end, children):
+    def bounds_max(self, start: _Pos, end: _Pos, children: _Children) -> tuple[None, s.Quantity]:
         return (None, children[0])
 
-    def fixed(self, start, end, children):
+    def fixed(self, start: _Pos, end: _Pos, children: _Children) -> bool:
         return False
 
-    def changeable(self, start, end, children):
+    def changeable(self, start: _Pos, end: _Pos, children: _Children) -> bool:
         return True
 
     # ---------------------------------------------------------------- systems
-    def system(self, start, end, children):
+    def system(self, start: _Pos, end: _Pos, children: _Children) -> s.System:
         name, *members, rbrace = children
         return s.System(
             name,
@@ -465,14 +481,14 @@ class _Builder:
             rbrace,
         )
 
-    def core(self, start, end, children):
+    def core(self, start: _Pos, end: _Pos, children: _Children) -> s.Core:
         policy = children[1] if len(children) > 1 else None
         return s.Core(children[0], policy, self._span(start, end))
 
-    def instance(self, start, end, children):
+    def instance(self, start: _Pos, end: _Pos, children: _Children) -> s.Instance:
         name, comp, *rest = children
-        core = None
-        bindings: tuple = ()
+        core: s.Name | None = None
+        bindings: tuple[s.TaskBinding, ...] = ()
         body_end = None
         for r in rest:
             if isinstance(r, s.Name):
@@ -481,13 +497,13 @@ class _Builder:
                 bindings, body_end = r
         return s.Instance(name, comp, core, bindings, self._span(start, end), body_end)
 
-    def instance_body(self, start, end, children):
+    def instance_body(self, start: _Pos, end: _Pos, children: _Children) -> tuple[tuple[s.TaskBinding, ...], Span]:
         *bindings, rbrace = children
         return tuple(bindings), rbrace
 
-    def binding(self, start, end, children):
+    def binding(self, start: _Pos, end: _Pos, children: _Children) -> s.TaskBinding:
         name, *clauses = children
-        fields: dict = {"activations": []}
+        fields: dict[str, Any] = {"activations": []}
         repeated: list[Span] = []
         for tag, value, where in clauses:
             if tag == "activations":
@@ -499,57 +515,58 @@ class _Builder:
         fields["activations"] = tuple(fields["activations"])
         return s.TaskBinding(name, span=self._span(start, end), repeated=tuple(repeated), **fields)
 
-    def priority(self, start, end, children):
+    def priority(self, start: _Pos, end: _Pos, children: _Children) -> tuple[str, s.Number, _Where]:
         return ("priority", self._number(children[0]), (start, end))
 
-    def task_core(self, start, end, children):
+    def task_core(self, start: _Pos, end: _Pos, children: _Children) -> tuple[str, s.Name, _Where]:
         return ("core", children[0], (start, end))
 
-    def wcrt(self, start, end, children):
+    def wcrt(self, start: _Pos, end: _Pos, children: _Children) -> tuple[str, s.Quantity, _Where]:
         return ("wcrt", children[0], (start, end))
 
-    def deadline(self, start, end, children):
+    def deadline(self, start: _Pos, end: _Pos, children: _Children) -> tuple[str, s.Quantity, _Where]:
         return ("deadline", children[0], (start, end))
 
-    def timer(self, start, end, children):
+    def timer(self, start: _Pos, end: _Pos, children: _Children) -> tuple[str, s.Timer, _Where]:
         phase = children[1] if len(children) > 1 else None
         return ("activations", s.Timer(children[0], phase, self._span(start, end)), (start, end))
 
-    def period_hole(self, start, end, children):
+    def period_hole(self, start: _Pos, end: _Pos, children: _Children) -> s.PeriodHole:
         low, high, step = (list(children) + [None, None, None])[:3]
         return s.PeriodHole(low, high, step, self._span(start, end))
 
-    def trigger(self, start, end, children):
+    def trigger(self, start: _Pos, end: _Pos, children: _Children) -> tuple[str, s.Trigger, _Where]:
         port = children[0]
         prescaler = children[1] if len(children) > 1 else s.Number(Fraction(1))
         return ("activations", s.Trigger(port, prescaler, self._span(start, end)), (start, end))
 
-    def prescaler_number(self, start, end, children):
+    def prescaler_number(self, start: _Pos, end: _Pos, children: _Children) -> s.Number:
         return self._number(children[0])
 
-    def prescaler_hole(self, start, end, children):
+    def prescaler_hole(self, start: _Pos, end: _Pos, children: _Children) -> s.PrescalerHole:
         if children:
             return s.PrescalerHole(self._number(children[0]), self._number(children[1]), self._span(start, end))
         return s.PrescalerHole(span=self._span(start, end))
 
-    def sporadic(self, start, end, children):
+    def sporadic(self, start: _Pos, end: _Pos, children: _Children) -> tuple[str, s.Sporadic, _Where]:
         return ("activations", s.Sporadic(children[0], children[1], self._span(start, end)), (start, end))
 
-    def unknown_activation(self, start, end, children):
+    def unknown_activation(self, start: _Pos, end: _Pos,
+                           children: _Children) -> tuple[str, s.UnknownActivation, _Where]:
         return ("activations", s.UnknownActivation(self._span(start, end)), (start, end))
 
-    def connection(self, start, end, children):
+    def connection(self, start: _Pos, end: _Pos, children: _Children) -> s.Connection:
         src, dst, *delay = children
         low, high = delay[0] if delay else (None, None)
         return s.Connection(src, dst, low, high, self._span(start, end))
 
-    def delay_exact(self, start, end, children):
+    def delay_exact(self, start: _Pos, end: _Pos, children: _Children) -> tuple[s.Quantity, s.Quantity]:
         return (children[0], children[0])
 
-    def delay_range(self, start, end, children):
+    def delay_range(self, start: _Pos, end: _Pos, children: _Children) -> tuple[s.Quantity, s.Quantity]:
         return (children[0], children[1])
 
-    def chain(self, start, end, children):
+    def chain(self, start: _Pos, end: _Pos, children: _Children) -> s.Chain:
         name, *rest = children
         refs = tuple(r for r in rest if isinstance(r, s.PortRef))
         specs, body_end = (), None
@@ -557,18 +574,18 @@ class _Builder:
             specs, body_end = rest[-1]
         return s.Chain(name, refs, specs, self._span(start, end), body_end)
 
-    def chain_body(self, start, end, children):
+    def chain_body(self, start: _Pos, end: _Pos, children: _Children) -> tuple[tuple[s.Spec, ...], Span]:
         *specs, rbrace = children
         return tuple(specs), rbrace
 
-    def spec_reaction_time(self, start, end, children):
+    def spec_reaction_time(self, start: _Pos, end: _Pos, children: _Children) -> s.Spec:
         return s.Spec("reaction_time", children[0], self._span(start, end))
 
-    def spec_data_age(self, start, end, children):
+    def spec_data_age(self, start: _Pos, end: _Pos, children: _Children) -> s.Spec:
         return s.Spec("data_age", children[0], self._span(start, end))
 
-    def spec_jitter(self, start, end, children):
+    def spec_jitter(self, start: _Pos, end: _Pos, children: _Children) -> s.Spec:
         return s.Spec("jitter", children[0], self._span(start, end))
 
-    def port_ref(self, start, end, children):
+    def port_ref(self, start: _Pos, end: _Pos, children: _Children) -> s.PortRef:
         return s.PortRef(children[0], children[1], self._span(start, end))
