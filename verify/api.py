@@ -20,7 +20,7 @@ from .limits import DEFAULT_LIMITS, Limits
 from .loader import Overlay, Project, load_project, project_from_text
 from .roots import project_roots
 from .model import SystemModel, build_system
-from .resolve import Resolution, resolve
+from .resolve import Resolution, SystemScope, resolve
 from .source import SourceFile, Span
 from .validate import validate, validate_chains
 
@@ -71,8 +71,9 @@ class LoadResult:
         if name is None:
             if len(names) != 1:
                 found = ", ".join(f"`{n}`" for n in names) or "none"
-                first, *others = list(systems.values()) or [None]
-                secondary = ()
+                # (None only to unpack no system: ``first`` is read only when ``others`` holds a system)
+                first, *others = list(systems.values()) or [None]  # type: ignore[list-item]
+                secondary: tuple[Label, ...] = ()
                 if others:  # point at the second system, the first one as context
                     where, secondary = others[0].name.span, (Label(first.name.span, "first system"),)
                 sink.emit("E105", f"{self.project.root} must hold exactly one system to choose from "
@@ -147,7 +148,7 @@ def check_propagated_rates(model: SystemModel, sink: DiagnosticSink) -> None:
             sink.add(d)
 
 
-def _clean(scope, sink: DiagnosticSink) -> bool:
+def _clean(scope: SystemScope, sink: DiagnosticSink) -> bool:
     """No error lies inside the system or inside a component it instantiates."""
     files_lines = [scope.system.span] + [c.component.span for c in scope.component_of.values()]
     for d in sink.items:

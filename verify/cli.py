@@ -10,6 +10,8 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+from collections.abc import Callable
+from types import ModuleType
 
 from .commands import COMMANDS, command
 from .commands.common import EXIT_INTERNAL, EXIT_INVALID, EXIT_OK
@@ -17,7 +19,7 @@ from .commands.common import EXIT_INTERNAL, EXIT_INVALID, EXIT_OK
 __all__ = ["main", "prove_main", "synth_main"]
 
 
-def _model_options(p: argparse.ArgumentParser, module) -> None:
+def _model_options(p: argparse.ArgumentParser, module: ModuleType) -> None:
     from .outputs import formats
 
     p.add_argument("file", metavar="FILE", help="the .vfy file (imports are followed)")
@@ -45,7 +47,7 @@ def _parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _runner(name: str):
+def _runner(name: str) -> Callable[[argparse.Namespace], int]:
     def run(args: argparse.Namespace) -> int:
         return int(command(name).run(args))
 

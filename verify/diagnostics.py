@@ -6,6 +6,7 @@ minimal failing example.
 """
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 from enum import Enum
 
@@ -38,7 +39,7 @@ class Diagnostic:
     def span(self) -> Span:
         return self.primary.span
 
-    def sort_key(self) -> tuple:
+    def sort_key(self) -> tuple[str, int, int, str, str]:
         s = self.primary.span
         return (s.file, s.line, s.column, self.code, self.message)
 
@@ -80,7 +81,7 @@ def has_errors(diagnostics: list[Diagnostic] | tuple[Diagnostic, ...]) -> bool:
     return any(d.severity is Severity.ERROR for d in diagnostics)
 
 
-def suggest(word: str, candidates) -> str | None:
+def suggest(word: str, candidates: Iterable[str]) -> str | None:
     """The closest candidate for a misspelt name ("did you mean ...?"), or None."""
     import difflib
 
@@ -94,7 +95,7 @@ def suggest(word: str, candidates) -> str | None:
     return matches[0]
 
 
-def name_list(names, limit: int = 12) -> str:
+def name_list(names: Iterable[str], limit: int = 12) -> str:
     """Names for a message, each in backquotes: at most ``limit`` of them, then how many more (a
     diagnostic about a task on a crowded core stays readable)."""
     names = list(names)

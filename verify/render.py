@@ -14,6 +14,9 @@ model but its offending token (``SourceFile.only``).
 """
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
+from typing import Any
+
 from .codes import spec_anchor
 from .diagnostics import Diagnostic, Label, Severity
 from .source import SourceFile, Span, excerpt
@@ -24,7 +27,7 @@ def _gutter_width(d: Diagnostic) -> int:
     return max(len(str(n)) for n in lines)
 
 
-def _snippet(label: Label, marker: str, sources: dict[str, SourceFile], width: int) -> list[str]:
+def _snippet(label: Label, marker: str, sources: Mapping[str, SourceFile], width: int) -> list[str]:
     span = label.span
     source = sources.get(span.file)
     if source is None or span.line < 1:
@@ -41,7 +44,7 @@ def _snippet(label: Label, marker: str, sources: dict[str, SourceFile], width: i
     return [f"{str(span.line).rjust(width)} | {text}", f"{pad} | {underline}"]
 
 
-def render_text(d: Diagnostic, sources: dict[str, SourceFile]) -> str:
+def render_text(d: Diagnostic, sources: Mapping[str, SourceFile]) -> str:
     """One diagnostic, rustc-style."""
     width = _gutter_width(d)
     pad = " " * width
@@ -70,7 +73,7 @@ def _where(span: Span) -> str:
     return f"{span.file}:{span.line}:{span.column}" if span.line > 0 else span.file
 
 
-def summary_line(diagnostics) -> str:
+def summary_line(diagnostics: Sequence[Diagnostic]) -> str:
     errors = sum(1 for d in diagnostics if d.severity is Severity.ERROR)
     warnings = sum(1 for d in diagnostics if d.severity is Severity.WARNING)
     parts = []
@@ -81,19 +84,19 @@ def summary_line(diagnostics) -> str:
     return ", ".join(parts)
 
 
-def render_all_text(diagnostics, sources: dict[str, SourceFile]) -> str:
+def render_all_text(diagnostics: Sequence[Diagnostic], sources: Mapping[str, SourceFile]) -> str:
     blocks = [render_text(d, sources) for d in diagnostics]
     if blocks:
         blocks.append(summary_line(diagnostics))
     return "\n\n".join(blocks)
 
 
-def _span_json(span: Span) -> dict:
+def _span_json(span: Span) -> dict[str, str | int]:
     return {"file": span.file, "line": span.line, "column": span.column,
             "end_line": span.end_line, "end_column": span.end_column}
 
 
-def diagnostic_json(d: Diagnostic) -> dict:
+def diagnostic_json(d: Diagnostic) -> dict[str, Any]:
     return {
         "code": d.code,
         "severity": d.severity.value,
@@ -107,7 +110,7 @@ def diagnostic_json(d: Diagnostic) -> dict:
     }
 
 
-def diagnostics_json(diagnostics) -> dict:
+def diagnostics_json(diagnostics: Sequence[Diagnostic]) -> dict[str, Any]:
     return {
         "schema": "verify.diagnostics/1",
         "diagnostics": [diagnostic_json(d) for d in diagnostics],

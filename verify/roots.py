@@ -14,6 +14,7 @@ project and is untrusted too: the directories it names must lie inside its own d
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from .source import Span
@@ -223,7 +224,7 @@ def _toml_position(message: str) -> tuple[int, int]:
     return (int(m.group(1)), int(m.group(2))) if m else (1, 1)
 
 
-def _key_span(path: str, text: str):
+def _key_span(path: str, text: str) -> Callable[[str], Span]:
     """A function giving the span of a key of the ``[tool.verify]`` table in ``text`` (the table's
     header when the key is not found on a line of its own)."""
     import re

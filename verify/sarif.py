@@ -12,6 +12,7 @@ from __future__ import annotations
 import os
 import pathlib
 import re
+from typing import Any
 from urllib.parse import quote
 
 from . import __version__ as VERSION
@@ -37,13 +38,13 @@ def _uri(path: str) -> str:
     return quote(rel.replace(os.sep, "/"), safe="/")
 
 
-def _location(span: Span, message: str | None = None, ident: int | None = None) -> dict:
+def _location(span: Span, message: str | None = None, ident: int | None = None) -> dict[str, Any]:
     region = {"startLine": max(span.line, 1), "startColumn": max(span.column, 1)}
     if span.end_line >= span.line and span.end_line > 0:
         region["endLine"] = span.end_line
         if span.end_column > 0 and (span.end_line > span.line or span.end_column > span.column):
             region["endColumn"] = span.end_column
-    loc: dict = {"physicalLocation": {"artifactLocation": {"uri": _uri(span.file)}, "region": region}}
+    loc: dict[str, Any] = {"physicalLocation": {"artifactLocation": {"uri": _uri(span.file)}, "region": region}}
     if ident is not None:
         loc["id"] = ident
     if message:
@@ -55,7 +56,7 @@ def _rule_name(title: str) -> str:
     return "".join(w.capitalize() for w in re.findall(r"[A-Za-z0-9]+", title))
 
 
-def to_sarif(diagnostics: list[Diagnostic] | tuple[Diagnostic, ...]) -> dict:
+def to_sarif(diagnostics: list[Diagnostic] | tuple[Diagnostic, ...]) -> dict[str, Any]:
     codes = sorted({d.code for d in diagnostics})
     rules = [{"id": c, "name": _rule_name(CODES[c].title), "shortDescription": {"text": CODES[c].title},
               "fullDescription": {"text": f"{CODES[c].title}; explained in {spec_anchor(c)} "

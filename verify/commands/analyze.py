@@ -2,7 +2,9 @@
 from __future__ import annotations
 
 import argparse
+from collections.abc import Iterable
 
+from ..diagnostics import Diagnostic
 from ..outputs import Report, render
 from .common import EXIT_INVALID, EXIT_OK, EXIT_VIOLATED, load_configured, show
 
@@ -34,7 +36,7 @@ def run(args: argparse.Namespace) -> int:
     return analysis_exit_code(problems)
 
 
-def analysis_exit_code(problems) -> int:
+def analysis_exit_code(problems: Iterable[Diagnostic]) -> int:
     errors = {d.code for d in problems if d.severity.value == "error"}
     if not errors:
         return EXIT_OK

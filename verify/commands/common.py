@@ -15,14 +15,14 @@ import os
 import stat
 import sys
 import tempfile
-from typing import Sequence
+from typing import Mapping, Sequence
 
 from .. import api
 from ..diagnostics import Diagnostic, DiagnosticSink
 from ..model import SystemModel
 from ..outputs import Output, Report, render
 from ..render import render_all_text
-from ..source import Span
+from ..source import SourceFile, Span
 
 EXIT_OK, EXIT_VIOLATED, EXIT_INVALID, EXIT_UNDECIDED, EXIT_INTERNAL = 0, 1, 2, 3, 70
 
@@ -40,7 +40,8 @@ def show(output: Output) -> None:
         sys.stderr.write(output.stderr)
 
 
-def show_diagnostics(args: argparse.Namespace, diagnostics: Sequence[Diagnostic], sources) -> None:
+def show_diagnostics(args: argparse.Namespace, diagnostics: Sequence[Diagnostic],
+                     sources: Mapping[str, SourceFile]) -> None:
     """Diagnostics of a model that does not load, in the command's ``--format``."""
     fmt = getattr(args, "format", "text")
     show(render("diagnostics", fmt, Report("diagnostics", args.file, tuple(diagnostics), sources)))

@@ -12,10 +12,18 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING
 
 from .. import api
+from ..diagnostics import Diagnostic
+from ..model import SystemModel
 from ..outputs import Output, Report, render
+from ..source import SourceFile
 from .common import EXIT_INVALID, EXIT_OK, fail, load_args
+
+if TYPE_CHECKING:
+    from ..prove.verdict import ProofResult
 
 HELP = "prove every latency spec and deadline of a configured system"
 RESULT = "proof"
@@ -42,7 +50,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 FORMAT_HELP = "output format: text, json (schema verify.proof/1) or sarif (SARIF 2.1.0)"
 
 
-def _emit(output: Output, args) -> int:
+def _emit(output: Output, args: argparse.Namespace) -> int:
     """The report's standard output part to ``-o`` or standard output, then its standard error part."""
     status = EXIT_OK
     if args.output and output.stdout:
@@ -58,7 +66,7 @@ def _emit(output: Output, args) -> int:
     return status
 
 
-def _check_paths(args) -> int | None:
+def _check_paths(args: argparse.Namespace) -> int | None:
     if args.budget < 1:
         return fail("--budget must be at least 1")
     if args.timeout is not None and not args.timeout > 0:
@@ -79,7 +87,7 @@ def _check_paths(args) -> int | None:
     return None
 
 
-def _invalid(diagnostics, sources, args) -> int:
+def _invalid(diagnostics: Sequence[Diagnostic], sources: Mapping[str, SourceFile], args: argparse.Namespace) -> int:
     """Report input problems in the chosen format; exit 2."""
     _emit(render(RESULT, args.format, Report(RESULT, args.file, tuple(diagnostics), sources)), args)
     return EXIT_INVALID
@@ -112,7 +120,7 @@ def run(args: argparse.Namespace) -> int:
     return proof.exit_code
 
 
-def _trace_svg(model, proof, args) -> int | None:
+def _trace_svg(model: SystemModel, proof: ProofResult, args: argparse.Namespace) -> int | None:
     drawn = [v for v in proof.verdicts if v.counterexample is not None]
     if not drawn:
         print(f"note: no counterexample, so nothing was drawn to {args.trace_svg}", file=sys.stderr)

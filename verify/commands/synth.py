@@ -17,10 +17,17 @@ from __future__ import annotations
 
 import argparse
 import sys
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
+from ..api import LoadResult
+from ..diagnostics import Diagnostic
 from ..outputs import Report, render
 from .common import (EXIT_INVALID, EXIT_OK, EXIT_UNDECIDED, EXIT_VIOLATED, load_or_fail, replace_file, select, show,
                      write_new_file)
+
+if TYPE_CHECKING:
+    from ..synth.driver import SynthResult
 
 HELP = "synthesize periods, prescalers and activation kinds, or explain why no configuration exists"
 RESULT = "synthesis"
@@ -90,12 +97,13 @@ def run(args: argparse.Namespace) -> int:
     return _write_back(args, loaded, result, code)
 
 
-def _show(args, loaded, diagnostics, result, **extra) -> None:
+def _show(args: argparse.Namespace, loaded: LoadResult, diagnostics: Sequence[Diagnostic], result: SynthResult | None,
+          **extra: str | None) -> None:
     show(render(RESULT, args.format, Report(RESULT, args.file, tuple(diagnostics), loaded.sources, result,
                                             extra=extra)))
 
 
-def _write_back(args, loaded, result, code: int) -> int:
+def _write_back(args: argparse.Namespace, loaded: LoadResult, result: SynthResult, code: int) -> int:
     from ..synth.writeback import completed_text, recheck, unified_diff
 
     text = completed_text(loaded, result.system, result.choices, canonical=args.canonical)

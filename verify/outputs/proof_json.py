@@ -3,6 +3,7 @@ input the same schema with no verdicts, the diagnostics and exit code 2."""
 from __future__ import annotations
 
 import json
+from typing import Any
 
 from ..render import diagnostics_json
 from ..prove.report import SCHEMA, to_json
@@ -11,7 +12,7 @@ from . import Output, Report
 
 def render(report: Report) -> Output:
     if report.result is None:
-        doc: dict = {"schema": SCHEMA, "system": None, "verdicts": []}
+        doc: dict[str, Any] = {"schema": SCHEMA, "system": None, "verdicts": []}
         doc.update(diagnostics_json(report.diagnostics))
         doc["exit_code"] = 2
     else:
