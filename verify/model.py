@@ -13,12 +13,16 @@ own result objects.
 """
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Literal, Union
+from typing import Literal, TypedDict, Union
 
 from . import syntax as s
-from .activations import KINDS, Activation, DataTriggered, Hole, HoleWhat, Periodic, SporadicSource  # noqa: F401
+from .activations import KINDS as KINDS
+from .activations import Activation as Activation
+from .activations import DataTriggered, Hole, Periodic, SporadicSource
+from .activations import HoleWhat as HoleWhat
 from .construct import direct_constructor
 from .ids import PortId, TaskId
 from .resolve import SystemScope
@@ -229,6 +233,23 @@ class CoreModel:
     span: Span = _span()
 
 
+class _Index(TypedDict):
+    """``SystemModel``'s lookup tables."""
+
+    tasks: dict[str, TaskModel]
+    producers: dict[str, TaskId]  # out-port "inst.port" -> the task producing it
+    into: dict[str, LinkModel]  # in-port -> its connection
+    out_of: dict[str, list[LinkModel]]  # out-port -> its connections, in source order
+    ports: dict[str, PortModel]
+    instances: dict[str, InstanceModel]
+    components: dict[str, ComponentModel]
+
+
+#: why a chain's element cannot be reached from the previous one (``chain_path``): its index, the kind
+#: of problem and the reader(s) concerned
+ChainProblem = tuple[int, Literal["unreachable", "ambiguous", "no-reader"], "TaskId | tuple[TaskId, ...] | None"]
+
+
 @dataclass(frozen=True)
 class SystemModel:
     name: str
@@ -257,12 +278,12 @@ class SystemModel:
     def component(self, name: str) -> ComponentModel:
         return self._index()["components"][name]
 
-    def _index(self) -> dict:
+    def _index(self) -> _Index:
         """Lookup tables, built once per model (the model is immutable, so they never go stale)."""
-        index = self.__dict__.get("_lookup")
+        index: _Index | None = self.__dict__.get("_lookup")
         if index is None:
-            producers = {f"{t.instance}.{p}": t.id for t in self.tasks for p in t.produces}
-            into = {lk.target: lk for lk in self.links}
+            producers: dict[str, TaskId] = {f"{t.instance}.{p}": t.id for t in self.tasks for p in t.produces}
+            into: dict[str, LinkModel] = {lk.target: lk for lk in self.links}
             out_of: dict[str, list[LinkModel]] = {}
             for lk in self.links:
                 out_of.setdefault(lk.source, []).append(lk)
@@ -289,7 +310,7 @@ class SystemModel:
         """The connections out of out-port ``inst.port``, in source order."""
         return tuple(self._index()["out_of"].get(port, ()))
 
-    def producer(self, port: str) -> str | None:
+    def producer(self, port: str) -> TaskId | None:
         """The task id producing out-port ``inst.port``."""
         return self._index()["producers"].get(port)
 
@@ -368,7 +389,7 @@ def activation_model(act: s.Activation, component: s.Component) -> ActivationMod
     return Hole.of(act)
 
 
-def _trigger_members(component: s.Component, port: str) -> tuple[str, tuple[str, ...]]:
+def _trigger_members(component: s.Component, port: str) -> tuple[Literal["single", "and", "or"], tuple[str, ...]]:
     """(mode, member in-ports) of the trigger port ``port``: a compound's, else ("single", (port,)) for
     an in-port (the last declaration of a name counts, as in a dict of them)."""
     for c in reversed(component.compounds):
@@ -389,7 +410,7 @@ def build_system(scope: SystemScope) -> SystemModel:
             binding = scope.bindings[(inst.name.text, task.name.text)]
             tasks.append(_task_model(inst, task, binding, component))
     producers = {f"{t.instance}.{p}": t.id for t in tasks for p in t.produces}
-    readers: dict[str, list[str]] = {}
+    readers: dict[str, list[TaskId]] = {}
     for t in tasks:
         for r in t.reads:
             readers.setdefault(f"{t.instance}.{r.port}", []).append(t.id)
@@ -407,7 +428,12 @@ def build_system(scope: SystemScope) -> SystemModel:
 
 
 def _task_model(inst: s.Instance, task: s.Task, binding: s.TaskBinding, component: s.Component) -> TaskModel:
-    core = (binding.core or inst.core).text  # validation guarantees one of them
+    # validation guarantees a core (the binding's or the instance's), a priority, a WCET and an activation
+    core_name = binding.core or inst.core
+    assert core_name is not None and binding.priority is not None and task.wcet is not None
+    activation = binding.activation
+    assert activation is not None
+    core = core_name.text
     c = task.constraint
     return _new_task(
         id=TaskId(f"{inst.name.text}.{task.name.text}"),
@@ -422,7 +448,7 @@ def _task_model(inst: s.Instance, task: s.Task, binding: s.TaskBinding, componen
         reads=tuple([_new_read(r.port.text, r.optional, r.oversampling, r.undersampling, r.span)
                      for r in task.reads]),
         produces=tuple(p.text for p in task.produces),
-        activation=activation_model(binding.activation, component),
+        activation=activation_model(activation, component),
         min_rate=quantity_hertz(c.min) if c and c.min else None,
         max_rate=quantity_hertz(c.max) if c and c.max else None,
         changeable=c.changeable if c else True,
@@ -452,8 +478,8 @@ def _compound_models(inst: s.Instance, component: s.Component) -> list[CompoundM
     return out
 
 
-def _link_model(conn: s.Connection, producers: dict[str, str], readers: dict[str, list[str]],
-                types: dict[PortId, str]) -> LinkModel:
+def _link_model(conn: s.Connection, producers: Mapping[str, TaskId], readers: Mapping[str, list[TaskId]],
+                types: Mapping[PortId, str]) -> LinkModel:
     low = _seconds(conn.delay_min) or Fraction(0)
     high = _seconds(conn.delay_max) or Fraction(0)
     source = PortId(str(conn.source))
@@ -505,11 +531,13 @@ def _structure(scope: SystemScope) -> tuple[tuple[InstanceModel, ...], tuple[Com
     return tuple(instances), tuple(components.values()), tuple(ports)
 
 
-def chain_path(chain: s.Chain, model: SystemModel, scope: SystemScope):
+def chain_path(chain: s.Chain, model: SystemModel,
+               scope: SystemScope) -> tuple[list[TaskId], list[HopModel], ChainProblem | None]:
     """Walk a chain. Returns (tasks, hops, problem) where problem is None or
     (index of the element that cannot be reached, kind 'unreachable'|'ambiguous'|'no-reader', detail)."""
     refs = chain.refs
     first = model.producer(str(refs[0]))
+    assert first is not None  # a chain starts at an out-port, and a task produces every out-port (E202)
     tasks = [first]
     hops: list[HopModel] = []
     for i in range(1, len(refs)):
@@ -521,7 +549,7 @@ def chain_path(chain: s.Chain, model: SystemModel, scope: SystemScope):
             reader = model.producer(str(ref))
             candidates = [lk for lk in outgoing if reader in lk.readers]
         elif kind == "task":
-            reader = str(ref)
+            reader = TaskId(str(ref))
             candidates = [lk for lk in outgoing if reader in lk.readers]
         else:  # in-port closing the chain
             candidates = [lk for lk in outgoing if lk.target == str(ref)]
@@ -533,6 +561,7 @@ def chain_path(chain: s.Chain, model: SystemModel, scope: SystemScope):
             reader = readers[0]
         if not candidates:
             return tasks, hops, (i, "unreachable", reader)
+        assert reader is not None  # it reads a candidate
         hops.append(_new_hop(tasks[-1], reader, candidates[0], ref.span))
         tasks.append(reader)
     return tasks, hops, None

@@ -6,20 +6,24 @@ run only on systems whose names all resolved.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Iterable, Literal
+from collections.abc import Callable, Iterable
+from typing import Literal, TypeVar
 
 from . import syntax as s
 from .diagnostics import DiagnosticSink, Label, suggest
 from .loader import Project
 
 MemberKind = Literal["in-port", "out-port", "compound in-port", "task"]
+#: what a member name of a component declares
+MemberNode = s.InPort | s.OutPort | s.CompoundPort | s.Task
+_Node = TypeVar("_Node")
 KNOWN_POLICIES = ("fixed_priority",)
 
 
 @dataclass(frozen=True)
 class ComponentScope:
     component: s.Component
-    members: dict[str, tuple[MemberKind, object]] = field(compare=False)
+    members: dict[str, tuple[MemberKind, MemberNode]] = field(compare=False)
 
     @property
     def name(self) -> str:
@@ -29,7 +33,7 @@ class ComponentScope:
         entry = self.members.get(name)
         return entry[0] if entry else None
 
-    def get(self, name: str):
+    def get(self, name: str) -> MemberNode | None:
         entry = self.members.get(name)
         return entry[1] if entry else None
 
@@ -70,9 +74,9 @@ def _duplicate(sink: DiagnosticSink, what: str, name: s.Name, first: s.Name, *, 
 
 
 def _scope_component(comp: s.Component, sink: DiagnosticSink) -> ComponentScope:
-    members: dict[str, tuple[MemberKind, object]] = {}
+    members: dict[str, tuple[MemberKind, MemberNode]] = {}
     first: dict[str, s.Name] = {}
-    entries: list[tuple[MemberKind, s.Name, object]] = (
+    entries: list[tuple[MemberKind, s.Name, MemberNode]] = (
         [("in-port", p.name, p) for p in comp.in_ports]
         + [("out-port", p.name, p) for p in comp.out_ports]
         + [("compound in-port", p.name, p) for p in comp.compounds]
@@ -118,7 +122,7 @@ def _article(kind: str) -> str:
     return ("an " if kind[0] in "aeiou" else "a ") + kind
 
 
-def _kind_help(kinds, scope: ComponentScope, word: str) -> str:
+def _kind_help(kinds: tuple[MemberKind, ...], scope: ComponentScope, word: str) -> str:
     options = scope.names(*kinds)
     hint = suggest(word, options)
     if hint:
@@ -180,7 +184,8 @@ def _scope_system(system: s.System, components: dict[str, ComponentScope], sink:
     return SystemScope(system, cores, instances, component_of, bindings, resolved=after == before)
 
 
-def _resolve_bindings(inst: s.Instance, scope: ComponentScope, cores, bindings, sink: DiagnosticSink) -> None:
+def _resolve_bindings(inst: s.Instance, scope: ComponentScope, cores: dict[str, s.Core],
+                      bindings: dict[tuple[str, str], s.TaskBinding], sink: DiagnosticSink) -> None:
     for binding in inst.bindings:
         if not _expect_member(scope, binding.task, ("task",), "E101", sink, "task"):
             continue
@@ -198,7 +203,8 @@ def _resolve_bindings(inst: s.Instance, scope: ComponentScope, cores, bindings, 
                 _expect_member(scope, act.port, ("in-port", "compound in-port"), "E101", sink, "trigger port")
 
 
-def _resolve_ref(ref: s.PortRef, kinds, instances, component_of, sink: DiagnosticSink, role: str) -> bool:
+def _resolve_ref(ref: s.PortRef, kinds: tuple[MemberKind, ...], instances: dict[str, s.Instance],
+                 component_of: dict[str, ComponentScope], sink: DiagnosticSink, role: str) -> bool:
     if ref.instance.text not in instances:
         _unknown(sink, "instance", ref.instance, instances)
         return False
@@ -208,8 +214,9 @@ def _resolve_ref(ref: s.PortRef, kinds, instances, component_of, sink: Diagnosti
     return _expect_member(scope, ref.member, kinds, "E101", sink, role)
 
 
-def _unique(nodes, key, what: str, sink: DiagnosticSink) -> dict:
-    table: dict = {}
+def _unique(nodes: Iterable[_Node], key: Callable[[_Node], s.Name], what: str,
+            sink: DiagnosticSink) -> dict[str, _Node]:
+    table: dict[str, _Node] = {}
     for node in nodes:
         name = key(node)
         if name.text in table:

@@ -147,7 +147,8 @@ def _system(scope: SystemScope, components: dict[str, tuple[Symbol, dict[str, Sy
         _use(references, ref.member, _members_of(scope, ref.instance.text, components))
 
 
-def _members_of(scope: SystemScope, instance: str, components) -> dict[str, Symbol]:
+def _members_of(scope: SystemScope, instance: str,
+                components: dict[str, tuple[Symbol, dict[str, Symbol]]]) -> dict[str, Symbol]:
     comp = scope.component_of.get(instance)
     if comp is None or comp.name not in components:
         return {}

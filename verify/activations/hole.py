@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import ClassVar, Literal
+from typing import ClassVar, Literal, TypedDict
 
 from .. import syntax as s
 from ..source import NO_SPAN, Span
@@ -64,28 +64,47 @@ class Hole(Activation):
         return self.low is not None
 
 
-def _hole_fields(node: s.Activation) -> dict:
+class _HoleFields(TypedDict, total=False):
+    """The fields of a ``Hole`` read from its syntax node."""
+
+    what: HoleWhat
+    low: Fraction
+    high: Fraction
+    step: Fraction | None
+    phase: Fraction | None
+    port: str
+    text: str
+    range_text: str
+    span: Span
+    range_span: Span
+
+
+def _hole_fields(node: s.Activation) -> _HoleFields:
     from ..fmt import format_activation, format_number, format_quantity
 
     text = format_activation(node)
     if isinstance(node, s.Timer) and isinstance(node.period, s.PeriodHole):
         h = node.period
-        bounds = {}
+        bounds: _HoleFields = {}
         range_text = ""
         if h.low is not None and h.high is not None:
             bounds = {"low": h.low.seconds(), "high": h.high.seconds(),
                       "step": h.step.seconds() if h.step is not None else None}
             range_text = f"{format_quantity(h.low)} .. {format_quantity(h.high)}" + (
                 f" step {format_quantity(h.step)}" if h.step is not None else "")
-        return dict(what="period", phase=_seconds(node.phase), text=text, range_text=range_text, span=node.span,
-                    range_span=h.span, **bounds)
+        fields: _HoleFields = {"what": "period", "phase": _seconds(node.phase), "text": text,
+                               "range_text": range_text, "span": node.span, "range_span": h.span}
+        fields.update(bounds)
+        return fields
     if isinstance(node, s.Trigger) and isinstance(node.prescaler, s.PrescalerHole):
-        h = node.prescaler
+        ph = node.prescaler
         bounds = {}
         range_text = ""
-        if h.low is not None and h.high is not None:
-            bounds = {"low": Fraction(h.low.value), "high": Fraction(h.high.value)}
-            range_text = f"{format_number(h.low.value)} .. {format_number(h.high.value)}"
-        return dict(what="prescaler", port=node.port.text, text=text, range_text=range_text, span=node.span,
-                    range_span=h.span, **bounds)
-    return dict(what="kind", text=text, span=node.span, range_span=node.span)
+        if ph.low is not None and ph.high is not None:
+            bounds = {"low": Fraction(ph.low.value), "high": Fraction(ph.high.value)}
+            range_text = f"{format_number(ph.low.value)} .. {format_number(ph.high.value)}"
+        fields = {"what": "prescaler", "port": node.port.text, "text": text, "range_text": range_text,
+                  "span": node.span, "range_span": ph.span}
+        fields.update(bounds)
+        return fields
+    return {"what": "kind", "text": text, "span": node.span, "range_span": node.span}
