@@ -26,9 +26,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from fractions import Fraction
+from typing import Literal
 
 from ..diagnostics import Diagnostic, DiagnosticSink
-from ..model import DataTriggered, Hole, Periodic, SystemModel, TaskModel
+from ..activations import DataTriggered, Hole, Periodic
+from ..model import SystemModel, TaskModel
 from ..resolve import SystemScope
 from ..units import fmt_number, fmt_time
 from .statements import Statement, statement_index
@@ -39,6 +41,9 @@ DEFAULT_PERIODS: tuple[Fraction, ...] = tuple(ms * MS for ms in (1, 2, 5, 10, 20
 #: or a prescaler range) may take besides its own values
 DEFAULT_PRESCALERS: tuple[int, ...] = (1, 2, 3, 4, 5, 6, 8, 10, 12, 16, 20, 25, 50, 100)
 MAX_CANDIDATES = 4096  # per choice; a finer grid is refused (E403)
+
+#: how a data trigger's members make an activation event (``DataTriggered.mode``)
+TriggerMode = Literal["single", "and", "or"]
 
 
 @dataclass(frozen=True)
@@ -51,7 +56,7 @@ class Candidate:
     phase: Fraction | None = None
     port: str | None = None
     members: tuple[str, ...] = ()
-    mode: str = "single"
+    mode: TriggerMode = "single"
     prescaler: int = 1
 
     @property
@@ -62,20 +67,20 @@ class Candidate:
     @property
     def speed(self) -> Fraction:
         """Smaller is faster: the period of a timer, the prescaler of a trigger."""
-        return self.period if self.kind == "timer" else Fraction(self.prescaler)
+        return self.period if self.kind == "timer" else Fraction(self.prescaler)  # type: ignore[return-value]  # a timer has one
 
-    def sort_key(self) -> tuple:
+    def sort_key(self) -> tuple[bool, str, Fraction]:
         return (self.kind != "timer", self.port or "", self.speed)
 
-    def activation(self):
+    def activation(self) -> Periodic | DataTriggered:
         if self.kind == "timer":
-            return Periodic(self.period, self.phase)
-        return DataTriggered(self.port, self.members, self.mode, self.prescaler)
+            return Periodic(self.period, self.phase)  # type: ignore[arg-type]  # a timer has its period
+        return DataTriggered(self.port, self.members, self.mode, self.prescaler)  # type: ignore[arg-type]  # and a trigger its port
 
     @property
     def rate(self) -> Fraction | None:
         """The activation rate of a timer candidate (a trigger's depends on its writers)."""
-        return 1 / self.period if self.kind == "timer" else None
+        return 1 / self.period if self.kind == "timer" else None  # type: ignore[operator, return-value]  # a timer has one
 
     def text(self) -> str:
         if self.kind == "timer":
@@ -117,10 +122,11 @@ class TooManyCandidates(ValueError):
 # ================================================================== trigger ports
 
 
-def trigger_ports(model: SystemModel, task: TaskModel, scope: SystemScope | None) -> dict[str, tuple[str, tuple[str, ...]]]:
+def trigger_ports(model: SystemModel, task: TaskModel,
+                  scope: SystemScope | None) -> dict[str, tuple[TriggerMode, tuple[str, ...]]]:
     """The ports ``task`` may be data-triggered on, by name: (mode, members). Validation's rules: the
     task reads every member, the members are connected (for OR, at least one)."""
-    ports: dict[str, tuple[str, tuple[str, ...]]] = {}
+    ports: dict[str, tuple[TriggerMode, tuple[str, ...]]] = {}
     comp = scope.component_of.get(task.instance) if scope is not None else None
     if comp is not None:
         for p in comp.component.in_ports:
@@ -186,12 +192,12 @@ class _Builder:
         self.items: dict[Candidate, set[str]] = {}
 
     def add(self, cand: Candidate, *excluders: str | None) -> None:
-        if cand.kind == "timer" and cand.phase is not None and cand.period <= cand.phase:
+        if cand.kind == "timer" and cand.phase is not None and cand.period <= cand.phase:  # type: ignore[operator]
             return  # a phase lies in [0, period)
         keys = self.items.setdefault(cand, set())
         keys.update(k for k in excluders if k)
         if cand.kind == "timer":
-            keys.update(self._constraint_excluders(cand.rate))
+            keys.update(self._constraint_excluders(cand.rate))  # type: ignore[arg-type]  # a timer's rate
 
     def _constraint_excluders(self, rate: Fraction) -> list[str]:
         t, out = self.task, []
@@ -263,11 +269,11 @@ def _hole_candidates(b: _Builder, model: SystemModel, task: TaskModel, hole: Hol
                 b.add(Candidate("timer", p, hole.phase), rng if p not in own else None)
     elif hole.what == "prescaler" and hole.port is not None:
         mode, members = trigger_ports(model, task, scope).get(hole.port, ("single", (hole.port,)))
-        own, values = prescaler_values(hole, task)
-        extra = DEFAULT_PRESCALERS if tracked and own is not None else ()
-        for k in sorted(set(values) | set(extra)):
+        own_k, ks = prescaler_values(hole, task)
+        extra = DEFAULT_PRESCALERS if tracked and own_k is not None else ()
+        for k in sorted(set(ks) | set(extra)):
             b.add(Candidate("trigger", port=hole.port, members=members, mode=mode, prescaler=k),
-                  rng if own is not None and k not in own else None)
+                  rng if own_k is not None and k not in own_k else None)
     else:  # activation ?
         for p in _timer_defaults(task):
             b.add(Candidate("timer", p))
@@ -293,4 +299,5 @@ def describe_hole(choice: Choice) -> str:
 
 
 def value_text(c: Candidate) -> str:
-    return c.text() if c.kind == "timer" or c.prescaler == 1 else f"trigger {c.port} every {fmt_number(c.prescaler)}"
+    return (c.text() if c.kind == "timer" or c.prescaler == 1
+            else f"trigger {c.port} every {fmt_number(Fraction(c.prescaler))}")

@@ -22,18 +22,23 @@ from __future__ import annotations
 
 import math
 from fractions import Fraction
-from typing import Mapping
+from typing import Mapping, TypeAlias
 
 import z3
 
-from ..model import LinkModel, SystemModel, TaskModel
+from .. import syntax as s
+from ..activations import Activation, DataTriggered
+from ..model import ChainModel, HopModel, LinkModel, SystemModel, TaskModel
 from ..timebase import TimeBase
 from ..timing.chains import same_core_reason
 from .candidates import Choice
 from .statements import Statement, statement_index
 from .structure import Structure, activation_options, member_links
 
-Term = "int | z3.ArithRef"
+#: a linear term: a Python int, or a Z3 integer expression once a variable is involved
+Term: TypeAlias = "int | z3.ArithRef"
+#: a constraint: a Python bool when decided without Z3, else a Z3 Boolean expression
+Cond: TypeAlias = "bool | z3.BoolRef"
 
 
 # ================================================================== scale
@@ -101,10 +106,10 @@ class Terms:
     def __init__(self, ctx: z3.Context):
         self.ctx = ctx
 
-    def lift(self, x):
+    def lift(self, x: Term) -> z3.ArithRef:
         return z3.IntVal(x, self.ctx) if isinstance(x, int) else x
 
-    def add(self, *xs):
+    def add(self, *xs: Term) -> Term:
         const = sum(x for x in xs if isinstance(x, int))
         rest = [x for x in xs if not isinstance(x, int)]
         if not rest:
@@ -114,30 +119,30 @@ class Terms:
             total = total + x
         return total + const if const else total
 
-    def mul(self, k: int, x):
+    def mul(self, k: int, x: Term) -> Term:
         return k * x if isinstance(x, int) else (x if k == 1 else k * x)
 
-    def max(self, a, b):
+    def max(self, a: Term, b: Term) -> Term:
         if isinstance(a, int) and isinstance(b, int):
             return max(a, b)
         return z3.If(self.lift(a) >= self.lift(b), self.lift(a), self.lift(b))
 
-    def min(self, a, b):
+    def min(self, a: Term, b: Term) -> Term:
         if isinstance(a, int) and isinstance(b, int):
             return min(a, b)
         return z3.If(self.lift(a) <= self.lift(b), self.lift(a), self.lift(b))
 
-    def ite(self, cond, a, b):
+    def ite(self, cond: Cond, a: Term, b: Term) -> Term:
         if isinstance(cond, bool):
             return a if cond else b
         return z3.If(cond, self.lift(a), self.lift(b))
 
-    def le(self, a, b):
+    def le(self, a: Term, b: Term) -> Cond:
         if isinstance(a, int) and isinstance(b, int):
             return a <= b
         return self.lift(a) <= self.lift(b)
 
-    def eq(self, a, b):
+    def eq(self, a: Term, b: Term) -> Cond:
         if isinstance(a, int) and isinstance(b, int):
             return a == b
         return self.lift(a) == self.lift(b)
@@ -160,17 +165,17 @@ class Encoding:
         self.ctx = ctx
         self.t = Terms(ctx)
         self.slots = statement_index(statements)
-        self.hard: list = []
+        self.hard: list[z3.BoolRef] = []
         self._given = 0
         self.lits: dict[str, z3.BoolRef] = {}
         self.sel: dict[str, list[z3.BoolRef]] = {}
-        self.R: dict[str, object] = {}
-        self.events: dict[str, tuple] = {}
-        self.rates: dict[str, tuple] = {}
-        self.C: dict[str, object] = {}
-        self.latency: dict[tuple[str, str], object] = {}
-        self.specs: list[tuple[Statement, object, int]] = []  # (statement, latency term, bound ticks)
-        self.ladders: dict[str, list] = {}
+        self.R: dict[str, Term] = {}
+        self.events: dict[str, tuple[Term, Term, Term]] = {}  # (P⁺, J⁺, F)
+        self.rates: dict[str, tuple[Term, Term]] = {}  # (k·fl, k·fh)
+        self.C: dict[str, Term] = {}
+        self.latency: dict[tuple[str, str], Term] = {}
+        self.specs: list[tuple[Statement, Term, int]] = []  # (statement, latency term, bound ticks)
+        self.ladders: dict[str, list[z3.BoolRef | None]] = {}
         self._floors: dict[str, Fraction] | None = None
         self._build()
 
@@ -180,7 +185,7 @@ class Encoding:
         """``x`` in ticks of the problem (``verify.timebase``)."""
         return self.base.ticks(x)
 
-    def add(self, c) -> None:
+    def add(self, c: Cond) -> None:
         if c is True:
             return
         self.hard.append(z3.BoolVal(False, self.ctx) if c is False else c)
@@ -191,12 +196,12 @@ class Encoding:
             self._floors = first_job_bounds(self.model, self.choices, relaxed=self.tracked)
         return math.ceil(self._floors[tid] / self.tick)
 
-    def take_new(self) -> list:
+    def take_new(self) -> list[z3.BoolRef]:
         new = self.hard[self._given:]
         self._given = len(self.hard)
         return new
 
-    def lit(self, key: str | None):
+    def lit(self, key: str | None) -> z3.BoolRef | None:
         """The assumption literal of a tracked statement; None (always on) when untracked."""
         if key is None or not self.tracked:
             return None
@@ -204,7 +209,7 @@ class Encoding:
             self.lits[key] = z3.Bool(f"stmt|{key}", self.ctx)
         return self.lits[key]
 
-    def guard(self, key: str | None, c, *conds) -> None:
+    def guard(self, key: str | None, c: Cond, *conds: z3.BoolRef) -> None:
         """Assert ``c`` under the statement ``key`` (tracked) and the candidate literals ``conds``."""
         if c is True:
             return
@@ -242,14 +247,14 @@ class Encoding:
         for chain in sorted(self.model.chains, key=lambda c: c.name):
             self._chain(chain)
 
-    def _cost(self, task: TaskModel):
+    def _cost(self, task: TaskModel) -> Term:
         wcet, bcet = self.ticks(task.wcet) if task.wcet else 0, self.ticks(task.bcet) if task.bcet else 0
         key = self.slot(task.id, "wcet")
         if not self.tracked or key is None or wcet == bcet:
             return wcet
         return z3.If(self.lit(key), self.t.lift(wcet), self.t.lift(bcet))
 
-    def _response_var(self, task: TaskModel):
+    def _response_var(self, task: TaskModel) -> Term:
         if task.wcrt_bound is not None:
             return self.ticks(task.wcrt_bound)
         if not self.structure.cones.get(task.id) and not self.tracked:
@@ -300,11 +305,12 @@ class Encoding:
             for c in cs:
                 self.guard(None, c, *([cond] if cond is not None else []))
 
-    def _source(self, task: TaskModel, act) -> tuple[tuple, tuple]:
+    def _source(self, task: TaskModel, act: Activation) -> tuple[tuple[Term, Term, Term], tuple[Term, Term]]:
         """(P⁺, J⁺, F) in ticks and (k·fl, k·fh) in rate units for one activation (§5.2)."""
         if act.gaps is not None:  # released by time: (a⁺, 0, first release at the latest)
             lo, hi = self.ticks(act.gaps[0]), self.ticks(act.gaps[1])
-            return (hi, 0, self.ticks(act.first_release_latest)), (self.M // hi, self.M // lo)
+            return (hi, 0, self.ticks(act.first_release_latest)), (self.M // hi, self.M // lo)  # type: ignore[arg-type]
+        assert isinstance(act, DataTriggered)  # the rest releases by data
         arrivals = [(self.arrival(link), self.rates[link.writer])
                     for _, link in member_links(self.model, task, act) if link is not None]
         stream = self._stream([a for a, _ in arrivals], act.mode)
@@ -330,10 +336,10 @@ class Encoding:
         else:
             fl, fh = rates[0]
         if not self._varflags.get(task.id) and isinstance(fl, int):
-            return (t.mul(k, P), J, F), (fl // k, fh // k)
+            return (t.mul(k, P), J, F), (fl // k, fh // k)  # type: ignore[operator]  # (set with fl)
         return (t.mul(k, P), J, F), (fl, fh)
 
-    def arrival(self, link: LinkModel) -> tuple:
+    def arrival(self, link: LinkModel) -> tuple[Term, Term, Term]:
         """The arrival stream on ``link.target`` (§5.2): the writer's period, its jitter plus the output
         jitter ``R − B + d⁺ − d⁻``, first arrival ``F + R + d⁺``."""
         w = link.writer
@@ -344,7 +350,7 @@ class Encoding:
         t = self.t
         return P, t.add(J, R, -B, dmax - dmin), t.add(F, R, dmax)
 
-    def _stream(self, arrivals: list[tuple], mode: str) -> tuple:
+    def _stream(self, arrivals: list[tuple[Term, Term, Term]], mode: str) -> tuple[Term, Term, Term]:
         t = self.t
         if mode == "and":
             P = F = None
@@ -354,7 +360,7 @@ class Encoding:
                 F = aF if F is None else t.max(F, aF)
             return P, 0, F
         if mode == "or" and len(arrivals) > 1:
-            best = None
+            best: tuple[Term, ...] | None = None
             for aP, aJ, aF in arrivals:
                 wait = t.max(t.add(aP, aJ), aF)
                 if best is None:
@@ -363,7 +369,7 @@ class Encoding:
                 bP, bJ, bF, bW = best
                 better = _lt_pair(t, (wait, aP), (bW, bP))
                 best = tuple(t.ite(better, x, y) for x, y in zip((aP, aJ, aF, wait), best))
-            bP, bJ, bF, _ = best
+            bP, bJ, bF, _ = best  # type: ignore[misc]  # set: there are several arrivals
             first = None
             for _, _, aF in arrivals:
                 first = aF if first is None else t.min(first, aF)
@@ -382,11 +388,11 @@ class Encoding:
 
     # -------------------------------------------------------------- constraints
 
-    def a_max(self, tid: str):
+    def a_max(self, tid: str) -> Term:
         P, J, _ = self.events[tid]
         return self.t.add(P, J)
 
-    def wait(self, tid: str):
+    def wait(self, tid: str) -> Term:
         """W⁺ = max(A⁺, F)."""
         return self.t.max(self.a_max(tid), self.events[tid][2])
 
@@ -429,8 +435,8 @@ class Encoding:
                     if tol is not None and tol.kind != "ok":
                         self._tolerance(link, reader, port, direction, tol)
 
-    def _tolerance(self, link: LinkModel, reader: TaskModel, port: str, direction: str, tol) -> None:
-        limit = Fraction(1) if tol.kind == "forbidden" else max(Fraction(1), Fraction(tol.factor.value))
+    def _tolerance(self, link: LinkModel, reader: TaskModel, port: str, direction: str, tol: s.Tolerance) -> None:
+        limit = Fraction(1) if tol.kind == "forbidden" else max(Fraction(1), Fraction(tol.factor.value))  # type: ignore[union-attr]
         key = self.slot(reader.id, f"tolerance:{port}:{direction}")
         general = []
         for index, act in activation_options(reader, self.choices.get(reader.id)):
@@ -460,7 +466,7 @@ class Encoding:
         by_core: dict[str, list[TaskModel]] = {}
         for t in sorted(self.model.tasks, key=lambda t: t.id):
             by_core.setdefault(t.core, []).append(t)
-        self.util_terms: dict[str, object] = {}
+        self.util_terms: dict[str, Term] = {}
         for core in sorted(by_core):
             parts = []
             for task in by_core[core]:
@@ -476,7 +482,7 @@ class Encoding:
             self.add(self.t.le(total, self.M))
         self.utilisation = self.t.add(*(self._demand(t) for t in sorted(self.model.tasks, key=lambda t: t.id)))
 
-    def _demand(self, task: TaskModel):
+    def _demand(self, task: TaskModel) -> Term:
         C, fh = self.C[task.id], self.rates[task.id][1]
         if isinstance(C, int):
             return self.t.mul(C, fh) if isinstance(fh, int) or C != 0 else 0
@@ -486,7 +492,7 @@ class Encoding:
 
     # -------------------------------------------------------------- chains (§7)
 
-    def _chain(self, chain) -> None:
+    def _chain(self, chain: ChainModel) -> None:
         t = self.t
         first, last = chain.tasks[0], chain.tasks[-1]
         reaction = [t.add(self.wait(first), self.R[first])]
@@ -505,19 +511,20 @@ class Encoding:
         self.latency[(chain.name, "data_age")] = totals["data_age"]
         self.latency[(chain.name, "jitter")] = totals["jitter"]
         for st in self.statements:
-            if st.kind == "spec" and st.chain == chain.name and getattr(chain, st.spec_kind) is not None:
-                bound = self.ticks(getattr(chain, st.spec_kind))
-                self.specs.append((st, totals[st.spec_kind], bound))
-                self.guard(st.key, t.le(totals[st.spec_kind], bound))
+            # (a spec statement names its ``spec_kind``)
+            if st.kind == "spec" and st.chain == chain.name and getattr(chain, st.spec_kind) is not None:  # type: ignore[arg-type]
+                bound = self.ticks(getattr(chain, st.spec_kind))  # type: ignore[arg-type]
+                self.specs.append((st, totals[st.spec_kind], bound))  # type: ignore[index]
+                self.guard(st.key, t.le(totals[st.spec_kind], bound))  # type: ignore[index]
 
-    def _named(self, name: str, term):
+    def _named(self, name: str, term: Term) -> Term:
         if isinstance(term, int):
             return term
         var = z3.Int(name, self.ctx)
         self.add(var == term)
         return var
 
-    def _hop(self, chain: str, n: int, hop):
+    def _hop(self, chain: str, n: int, hop: HopModel) -> tuple[Term, Term]:
         """(reaction term, data-age term) of one hop, by the reader's activation (§7.3)."""
         reader = self.model.task(hop.reader)
         options = activation_options(reader, self.choices.get(reader.id))
@@ -525,12 +532,12 @@ class Encoding:
         if len(terms) == 1:
             return terms[0][1]
         hr, ha = z3.Int(f"hop|{chain}|{n}|r", self.ctx), z3.Int(f"hop|{chain}|{n}|a", self.ctx)
-        for index, (r, a) in terms:
-            self.guard(None, self.t.eq(hr, r), self.sel[reader.id][index])
-            self.guard(None, self.t.eq(ha, a), self.sel[reader.id][index])
+        for index, (r, a) in terms:  # (several options: the candidates of a choice, each with its index)
+            self.guard(None, self.t.eq(hr, r), self.sel[reader.id][index])  # type: ignore[index]
+            self.guard(None, self.t.eq(ha, a), self.sel[reader.id][index])  # type: ignore[index]
         return hr, ha
 
-    def _hop_terms(self, hop, act):
+    def _hop_terms(self, hop: HopModel, act: Activation) -> tuple[Term, Term]:
         t = self.t
         p, i = hop.writer, hop.reader
         d = self.ticks(hop.link.delay_max) if hop.link.delay_max else 0
@@ -539,6 +546,7 @@ class Encoding:
         member = hop.link.target.split(".", 1)[1]
         if not act.listens_to(member):
             return self._same_core(hop, register_r, register_a)
+        assert isinstance(act, DataTriggered)  # (it listens to a member)
         k = act.prescaler
         if act.mode == "and":
             trig = t.add(d, self._and_wait(hop, act), self._and_join(hop, act, k), self.R[i])
@@ -547,7 +555,7 @@ class Encoding:
         reaction = t.min(trig, register_r)
         return self._same_core(hop, reaction, t.add(d, self.R[p]) if act.mode == "single" else register_a)
 
-    def _same_core(self, hop, reaction, age):
+    def _same_core(self, hop: HopModel, reaction: Term, age: Term) -> tuple[Term, Term]:
         """The same-core priority rule (specs/timing.md §7.6) where it applies, as the analysis
         chooses it: the smaller of the term and ``W⁺ᵢ + Rᵢ − Rₚ`` (reaction) or ``A⁺ₚ`` (data age)."""
         if same_core_reason(self.model, hop) is not None:
@@ -556,7 +564,7 @@ class Encoding:
         return (t.min(reaction, t.add(self.wait(i), self.R[i], t.mul(-1, self.R[p]))),
                 t.min(age, self.a_max(p)))
 
-    def _delta_plus(self, writer: str, k: int):
+    def _delta_plus(self, writer: str, k: int) -> Term:
         """δ⁺ₚ(k) = 0 for k = 1, else (k−1)·P⁺ₚ + J⁺ₚ + Rₚ − Bₚ."""
         if k == 1:
             return 0
@@ -564,11 +572,11 @@ class Encoding:
         B = self.ticks(self.model.task(writer).bcet) if self.model.task(writer).bcet else 0
         return self.t.add(self.t.mul(k - 1, P), J, self.R[writer], -B)
 
-    def _and_arrivals(self, hop, act):
+    def _and_arrivals(self, hop: HopModel, act: DataTriggered) -> list[tuple[str, tuple[Term, Term, Term]]]:
         reader = self.model.task(hop.reader)
         return [(m, self.arrival(link)) for m, link in member_links(self.model, reader, act) if link is not None]
 
-    def _and_wait(self, hop, act):
+    def _and_wait(self, hop: HopModel, act: DataTriggered) -> Term:
         t = self.t
         member = hop.link.target.split(".", 1)[1]
         wait = 0
@@ -577,7 +585,7 @@ class Encoding:
                 wait = t.max(wait, t.max(t.add(aP, aJ), aF))
         return wait
 
-    def _and_join(self, hop, act, k: int):
+    def _and_join(self, hop: HopModel, act: DataTriggered, k: int) -> Term:
         if k == 1:
             return 0
         t = self.t
@@ -605,8 +613,8 @@ def first_job_bounds(model: SystemModel, choices: Mapping[str, Choice], *, relax
         periods = []
         for t in tasks:
             acts = [a for _, a in activation_options(t, choices.get(t.id))]
-            periods.append(max(a.strict_period for a in acts) if all(a.strict_period is not None for a in acts)
-                           else None)
+            periods.append(max(a.strict_period for a in acts)  # type: ignore[type-var]  # (none is None)
+                           if all(a.strict_period is not None for a in acts) else None)
         scale = 1
         for x in cost + [p for p in periods if p is not None]:
             scale = math.lcm(scale, x.denominator)
@@ -617,7 +625,7 @@ def first_job_bounds(model: SystemModel, choices: Mapping[str, Choice], *, relax
             hp = [m for m, o in enumerate(tasks) if m != n and o.priority >= t.priority]
             w = c[n] + sum(c[m] for m in hp)
             for _ in range(1000):
-                new = c[n] + sum(c[m] * (-(-w // per[m]) if per[m] else 1) for m in hp)
+                new = c[n] + sum(c[m] * (-(-w // per[m]) if per[m] else 1) for m in hp)  # type: ignore[operator, misc]  # per[m] is set
                 if new == w or new > limit:
                     break
                 w = new
@@ -625,7 +633,7 @@ def first_job_bounds(model: SystemModel, choices: Mapping[str, Choice], *, relax
     return out
 
 
-def _lt_pair(t: Terms, a: tuple, b: tuple):
+def _lt_pair(t: Terms, a: tuple[Term, Term], b: tuple[Term, Term]) -> Cond:
     """(a0, a1) < (b0, b1) lexicographically."""
     if all(isinstance(x, int) for x in (*a, *b)):
         return a < b

@@ -20,14 +20,18 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Mapping
+from typing import Callable, Mapping, TypeAlias
 
-from ..model import ChainModel, DataTriggered, SystemModel, TaskModel
+from ..activations import Activation, DataTriggered
+from ..model import ChainModel, HopModel, SystemModel, TaskModel
 from ..timing.chains import same_core_reason
-from .candidates import Choice, make_choice
+from .candidates import Candidate, Choice, make_choice
 from .structure import activation_options, member_links
 
 ZERO = Fraction(0)
+
+#: a range (least, greatest) of a rate
+Range: TypeAlias = tuple[Fraction, Fraction]
 
 
 @dataclass(frozen=True)
@@ -53,12 +57,13 @@ _FIXED_TRIGGER = _Trigger()
 def _hull(items: list[Bounds]) -> Bounds:
     if not items:
         return UNKNOWN
-    fl = None if any(b.fl is None for b in items) else (min(b.fl[0] for b in items), max(b.fl[1] for b in items))
-    fh = None if any(b.fh is None for b in items) else (min(b.fh[0] for b in items), max(b.fh[1] for b in items))
+    # (the ranges are indexed once none is None)
+    fl = None if any(b.fl is None for b in items) else (min(b.fl[0] for b in items), max(b.fl[1] for b in items))  # type: ignore[index]
+    fh = None if any(b.fh is None for b in items) else (min(b.fh[0] for b in items), max(b.fh[1] for b in items))  # type: ignore[index]
     return Bounds(fl, fh, min(b.p_min for b in items))
 
 
-def activation_bounds(model: SystemModel, task: TaskModel, act, known: Mapping[str, Bounds]) -> Bounds:
+def activation_bounds(model: SystemModel, task: TaskModel, act: Activation, known: Mapping[str, Bounds]) -> Bounds:
     """The bounds of one activation of ``task`` given its writers' bounds (specs/timing.md §5.1)."""
     if act.gaps is not None:  # released by time
         lo, hi = 1 / act.gaps[1], 1 / act.gaps[0]
@@ -79,16 +84,16 @@ def activation_bounds(model: SystemModel, task: TaskModel, act, known: Mapping[s
         p_min = min(m.p_min for m in members)
     else:
         fl, fh, p_min = members[0].fl, members[0].fh, members[0].p_min
-    div = (lambda r: None if r is None else (r[0] / k, r[1] / k))
+    div: Callable[[Range | None], Range | None] = (lambda r: None if r is None else (r[0] / k, r[1] / k))
     return Bounds(div(fl), div(fh), k * p_min)
 
 
-def _combine(ranges, how) -> tuple[Fraction, Fraction] | None:
+def _combine(ranges: list[Range | None], how: Callable[..., object]) -> Range | None:
     if any(r is None for r in ranges):
         return None
     if how is sum:
-        return (sum((r[0] for r in ranges), ZERO), sum((r[1] for r in ranges), ZERO))
-    return (min(r[0] for r in ranges), min(r[1] for r in ranges))
+        return (sum((r[0] for r in ranges), ZERO), sum((r[1] for r in ranges), ZERO))  # type: ignore[index]
+    return (min(r[0] for r in ranges), min(r[1] for r in ranges))  # type: ignore[index]  # (none is None)
 
 
 class Pruner:
@@ -182,19 +187,19 @@ class Pruner:
                 continue
             choice = self.choices.get(task.id)
             for i, c in enumerate(choice.candidates if choice else ()):
-                if c.kind == "timer" and floor > c.period:
+                if c.kind == "timer" and floor > c.period:  # type: ignore[operator]  # a timer has its period
                     dead.add((task.id, i))
         return dead
 
     @staticmethod
-    def _rate_ok(task: TaskModel, cand, b: Bounds) -> bool:
+    def _rate_ok(task: TaskModel, cand: Candidate | _Trigger, b: Bounds) -> bool:
         if cand.kind != "trigger":
             return True  # timer candidates outside the constraint were excluded already
         if task.min_rate is not None and b.fl is not None and b.fl[1] < task.min_rate:
             return False
         return not (task.max_rate is not None and b.fh is not None and b.fh[0] > task.max_rate)
 
-    def _sampling(self, tasks, per) -> set[tuple[str, int]]:
+    def _sampling(self, tasks: dict[str, Bounds], per: dict[tuple[str, int], Bounds]) -> set[tuple[str, int]]:
         dead: set[tuple[str, int]] = set()
         for link in sorted(self.model.links, key=lambda lk: (lk.source, lk.target)):
             for reader_id in sorted(link.readers):
@@ -206,12 +211,12 @@ class Pruner:
                 for direction, tol in (("over", read.oversampling), ("under", read.undersampling)):
                     if tol is None or tol.kind == "ok":
                         continue
-                    limit = Fraction(1) if tol.kind == "forbidden" else max(Fraction(1), tol.factor.value)
+                    limit = Fraction(1) if tol.kind == "forbidden" else max(Fraction(1), tol.factor.value)  # type: ignore[union-attr]
                     dead |= self._tolerance(link.writer, reader, port, direction, limit, tasks, per)
         return dead
 
     def _tolerance(self, writer: str, reader: TaskModel, port: str, direction: str, limit: Fraction,
-                   tasks, per) -> set[tuple[str, int]]:
+                   tasks: dict[str, Bounds], per: dict[tuple[str, int], Bounds]) -> set[tuple[str, int]]:
         dead: set[tuple[str, int]] = set()
         choice = self.choices.get(reader.id)
         options = activation_options(reader, choice)
@@ -235,7 +240,7 @@ class Pruner:
                     dead.add((writer, index))
         return dead
 
-    def _utilisation(self, tasks, per) -> set[tuple[str, int]]:
+    def _utilisation(self, tasks: dict[str, Bounds], per: dict[tuple[str, int], Bounds]) -> set[tuple[str, int]]:
         dead: set[tuple[str, int]] = set()
         by_core: dict[str, list[TaskModel]] = {}
         for t in self.model.tasks:
@@ -253,14 +258,14 @@ class Pruner:
                 choice = self.choices.get(t.id)
                 if choice is None:
                     continue
-                own = tasks[t.id].fh[0] if tasks[t.id].fh is not None else ZERO
+                own = tasks[t.id].fh[0] if tasks[t.id].fh is not None else ZERO  # type: ignore[index]
                 for i in range(len(choice.candidates)):
                     b = per.get((t.id, i), UNKNOWN)
                     if b.fh is not None and floor - t.wcet * own + t.wcet * b.fh[0] > 1:
                         dead.add((t.id, i))
         return dead
 
-    def _latency(self, tasks, per) -> set[tuple[str, int]]:
+    def _latency(self, tasks: dict[str, Bounds], per: dict[tuple[str, int], Bounds]) -> set[tuple[str, int]]:
         dead: set[tuple[str, int]] = set()
         for chain in sorted(self.model.chains, key=lambda c: c.name):
             for bound, kind in ((chain.reaction_time, "reaction"), (chain.data_age, "age")):
@@ -311,11 +316,13 @@ class ChainLowerBound:
     (§7.6), bounded by ``_same_core_term``. The bound is a sum of terms, each depending on at most two
     tasks, so pinning one task recomputes only its own terms."""
 
-    def __init__(self, p: Pruner, chain: ChainModel, kind: str, tasks, per):
+    def __init__(self, p: Pruner, chain: ChainModel, kind: str, tasks: dict[str, Bounds],
+                 per: dict[tuple[str, int], Bounds]):
         self.p, self.chain, self.kind, self.tasks, self.per = p, chain, kind, tasks, per
         self.same_core = [same_core_reason(p.model, hop) is None for hop in chain.hops]
-        self._options = {tid: self.options(tid, None) for tid in dict.fromkeys(chain.tasks)}
-        self._p_min = {tid: min(pm for _, pm in opts) for tid, opts in self._options.items()}
+        self._options: dict[str, list[tuple[Activation, Fraction]]] = {
+            tid: self.options(tid, None) for tid in dict.fromkeys(chain.tasks)}
+        self._p_min: dict[str, Fraction] = {tid: min(pm for _, pm in opts) for tid, opts in self._options.items()}
         self.terms = [self.term(n, None) for n in range(len(chain.hops) + 1)]
         self.total = sum(self.terms, ZERO)
         self._involved: dict[str, list[int]] = {}
@@ -323,11 +330,12 @@ class ChainLowerBound:
             for tid in self.involves(n):
                 self._involved.setdefault(tid, []).append(n)
 
-    def options(self, tid: str, fixed):
+    def options(self, tid: str, fixed: tuple[str, int] | None) -> list[tuple[Activation, Fraction]]:
         p = self.p
         choice = p.choices.get(tid)
         if fixed is not None and fixed[0] == tid:
-            return [(choice.candidates[fixed[1]].activation(), self.per.get(fixed, UNKNOWN).p_min)]
+            return [(choice.candidates[fixed[1]].activation(),  # type: ignore[union-attr]  # a pinned task's choice
+                     self.per.get(fixed, UNKNOWN).p_min)]
         if choice is None:
             return [(p.model.task(tid).activation, self.tasks.get(tid, UNKNOWN).p_min)]
         return [(c.activation(), self.per.get((tid, i), UNKNOWN).p_min) for i, c in enumerate(choice.candidates)]
@@ -339,12 +347,12 @@ class ChainLowerBound:
         hop = self.chain.hops[n - 1]
         return (hop.reader, hop.writer)
 
-    def term(self, n: int, fixed) -> Fraction:
+    def term(self, n: int, fixed: tuple[str, int] | None) -> Fraction:
         """Term 0: the first task's wait and response (reaction time) or the last task's response
         (data age); term n ≥ 1: hop n − 1."""
         model = self.p.model
 
-        def options(tid: str):
+        def options(tid: str) -> list[tuple[Activation, Fraction]]:
             return self.options(tid, fixed) if fixed is not None and fixed[0] == tid else self._options[tid]
 
         def p_min(tid: str) -> Fraction:
@@ -375,7 +383,7 @@ class ChainLowerBound:
                                                     p_min(hop.writer)))
         return lower
 
-    def _same_core_term(self, hop, reader_wait: Fraction, writer_p_min: Fraction) -> Fraction:
+    def _same_core_term(self, hop: HopModel, reader_wait: Fraction, writer_p_min: Fraction) -> Fraction:
         """The least value of the same-core priority terms (specs/timing.md §7.6). Data age: ``A⁺ₚ ≥
         P⁺ₚ``. Reaction: ``W⁺ᵢ + Rᵢ − Rₚ``, which alone has no positive lower bound; but the term
         before it always ends in ``+ Rₚ`` (every reaction term ends with the R of the task it

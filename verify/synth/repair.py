@@ -13,6 +13,8 @@ independent analysis like every other answer, and when it finds none the solver 
 """
 from __future__ import annotations
 
+from collections.abc import Iterable
+
 from ..model import SystemModel
 from .candidates import Choice
 from .problem import Config, Evaluation, Problem
@@ -23,6 +25,8 @@ ROUNDS = 6
 
 def rate_misses(problem: Problem, ev: Evaluation) -> tuple[set[str], set[str]]:
     """(tasks activated below their minimum rate, tasks activated above their maximum) in ``ev``."""
+    below: set[str]
+    above: set[str]
     below, above = set(), set()
     for t in problem.model.tasks:
         rate = ev.result.task(t.id).rate
@@ -47,7 +51,7 @@ def fitted_prescaler(problem: Problem, ev: Evaluation, tid: str, index: int) -> 
     return max(fitting, key=lambda i: choice.candidates[i].prescaler) if fitting else None
 
 
-def upstream(model: SystemModel, tasks) -> set[str]:
+def upstream(model: SystemModel, tasks: Iterable[str]) -> set[str]:
     """``tasks`` and every task whose output triggers one of them, transitively, in ``model``."""
     seen, stack = set(), list(tasks)
     while stack:

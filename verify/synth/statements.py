@@ -14,10 +14,12 @@ its own. ``configured_model`` builds the semantic model of a configuration with 
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from typing import Mapping
+from fractions import Fraction
+from typing import Mapping, TypedDict, TypeGuard
 
 from .. import syntax as s
-from ..model import ChainModel, CoreModel, DataTriggered, Hole, Periodic, ReadModel, SystemModel, TaskModel
+from ..activations import DataTriggered, Hole, Periodic
+from ..model import ActivationModel, ChainModel, CoreModel, ReadModel, SystemModel, TaskModel
 from ..resolve import SystemScope
 from ..source import NO_SPAN, Span
 from ..units import fmt_number, fmt_quantity, fmt_rate, fmt_time
@@ -48,12 +50,12 @@ class Statement:
     def rank(self) -> int:
         return RANKS[self.kind]
 
-    def order_key(self) -> tuple:
+    def order_key(self) -> tuple[str, int, int, str]:
         """Source order (file, line, column), then the key: deterministic whatever the input order."""
         return (self.span.file, self.span.line, self.span.column, self.key)
 
 
-def _real(span: Span | None) -> bool:
+def _real(span: Span | None) -> TypeGuard[Span]:
     return span is not None and span.line > 0
 
 
@@ -88,7 +90,8 @@ def collect_statements(model: SystemModel, scope: SystemScope | None) -> tuple[S
     return tuple(sorted(found.values(), key=Statement.order_key))
 
 
-def _syntax(task: TaskModel, scope: SystemScope | None):
+def _syntax(task: TaskModel,
+            scope: SystemScope | None) -> tuple[s.Task | None, s.TaskBinding | None, s.Instance | None]:
     """(component task node, binding, instance) of ``task``, or Nones without a scope."""
     if scope is None:
         return None, None, None
@@ -123,7 +126,7 @@ def _task_statements(model: SystemModel, task: TaskModel, scope: SystemScope | N
             if tol is None or tol.kind == "ok":
                 continue
             what = f"{direction}sampling " + ("forbidden" if tol.kind == "forbidden"
-                                              else f"at most {fmt_number(tol.factor.value)}")
+                                              else f"at most {fmt_number(tol.factor.value)}")  # type: ignore[union-attr]  # "max" has one
             out.append(Statement(f"tolerance:{comp_key}.{read.port}.{direction}", "tolerance", _span(tol.span),
                                  f"{what} on `{read.port}`", f"reads {read.port} {what}", (task.id,),
                                  port=read.port, direction=direction))
@@ -134,7 +137,8 @@ def _task_statements(model: SystemModel, task: TaskModel, scope: SystemScope | N
     return out
 
 
-def _rate_statement(task: TaskModel, node, binding, comp_key: str) -> Statement | None:
+def _rate_statement(task: TaskModel, node: s.Task | None, binding: s.TaskBinding | None,
+                    comp_key: str) -> Statement | None:
     """A fixed rate: a component's ``fixed`` constraint, else a timer binding or an explicit prescaler."""
     act = task.activation
     if not task.changeable and isinstance(act, (Periodic, DataTriggered)):
@@ -170,7 +174,7 @@ def _range_statement(task: TaskModel) -> Statement | None:
                      f"prescaler in {hole.range_text}", f"every ? in {hole.range_text}", (task.id,))
 
 
-def _core_statement(task: TaskModel, binding, inst) -> Statement:
+def _core_statement(task: TaskModel, binding: s.TaskBinding | None, inst: s.Instance | None) -> Statement:
     if binding is not None and binding.core is not None:
         return Statement(f"core:{task.id}", "core", binding.core.span, f"on {task.core}", f"on {task.core}", (task.id,))
     span = inst.core.span if inst is not None and inst.core is not None else NO_SPAN
@@ -190,7 +194,7 @@ def _constraint_text(task: TaskModel) -> str:
 # ================================================================== configured models
 
 
-_INDEX: dict[int, tuple] = {}
+_INDEX: dict[int, tuple[tuple[Statement, ...], dict[str, dict[str, str]]]] = {}
 
 
 def statement_index(statements: tuple[Statement, ...]) -> dict[str, dict[str, str]]:
@@ -239,11 +243,23 @@ def configured_model(model: SystemModel, activations: Mapping[str, object],
                        model.instances, model.components, model.ports)
 
 
-def _configured_task(task: TaskModel, choice, slots: dict[str, str], off: frozenset[str]) -> TaskModel:
-    changes: dict = {}
+class _TaskChanges(TypedDict, total=False):
+    """The fields of a ``TaskModel`` a configuration changes (keyword arguments of ``replace``)."""
+
+    activation: ActivationModel
+    wcet: Fraction
+    core: str
+    min_rate: Fraction | None
+    max_rate: Fraction | None
+    changeable: bool
+    reads: tuple[ReadModel, ...]
+
+
+def _configured_task(task: TaskModel, choice: object, slots: dict[str, str], off: frozenset[str]) -> TaskModel:
+    changes: _TaskChanges = {}
     if choice is not None:
         changes["activation"] = choice.activation() if hasattr(choice, "activation") and callable(
-            choice.activation) else choice
+            choice.activation) else choice  # type: ignore[typeddict-item]  # an activation model or a Candidate
     if off:
         if slots.get("wcet") in off:
             changes["wcet"] = task.bcet
@@ -251,7 +267,7 @@ def _configured_task(task: TaskModel, choice, slots: dict[str, str], off: frozen
             changes["core"] = private_core(task.id)
         rate = slots.get("rate")
         if rate in off and rate.startswith("fixed:"):
-            changes.update(min_rate=None, max_rate=None, changeable=True)
+            changes.update({"min_rate": None, "max_rate": None, "changeable": True})
         if slots.get("min_rate") in off:
             changes["min_rate"] = None
         if slots.get("max_rate") in off:
@@ -272,4 +288,4 @@ def _configured_read(read: ReadModel, slots: dict[str, str], off: frozenset[str]
 
 def _configured_chain(chain: ChainModel, off: frozenset[str]) -> ChainModel:
     dropped = {k: None for k in SPEC_KINDS if f"spec:{chain.name}:{k}" in off}
-    return replace(chain, **dropped) if dropped else chain
+    return replace(chain, **dropped) if dropped else chain  # type: ignore[arg-type]  # keys: the spec fields (Fraction | None)

@@ -12,22 +12,26 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Mapping
+from typing import Mapping, TypeAlias
 
-import networkx as nx
+import networkx as nx  # type: ignore[import-untyped, unused-ignore]  # types-networkx: not installed yet
 
+from ..activations import Activation
 from ..model import LinkModel, SystemModel, TaskModel
 from .candidates import Choice
 
+#: a node of the dependency graph: ("em", task), ("r", task) or ("hp", core, priority)
+DepNode: TypeAlias = "tuple[str, str] | tuple[str, str, int]"
 
-def activation_options(task: TaskModel, choice: Choice | None) -> list[tuple[int | None, object]]:
+
+def activation_options(task: TaskModel, choice: Choice | None) -> list[tuple[int | None, Activation]]:
     """(candidate index or None, activation model) for every activation ``task`` may take."""
     if choice is None:
         return [(None, task.activation)]
     return [(i, c.activation()) for i, c in enumerate(choice.candidates)]
 
 
-def member_links(model: SystemModel, task: TaskModel, act) -> list[tuple[str, LinkModel | None]]:
+def member_links(model: SystemModel, task: TaskModel, act: Activation) -> list[tuple[str, LinkModel | None]]:
     """(member in-port, connection into it or None) of a data-triggered activation."""
     return [(m, model.link_into(f"{task.instance}.{m}")) for m in act.trigger_members]
 
@@ -41,10 +45,11 @@ class Structure:
     exact_only: frozenset[str]  # choices whose lemmas must name the exact candidate (AND feeders)
 
 
-def trigger_graph(model: SystemModel, choices: Mapping[str, Choice]) -> tuple[nx.DiGraph, list]:
-    graph = nx.DiGraph()
+def trigger_graph(model: SystemModel,
+                  choices: Mapping[str, Choice]) -> tuple[nx.DiGraph[str], list[tuple[str, str, int | None]]]:
+    graph: nx.DiGraph[str] = nx.DiGraph()
     graph.add_nodes_from(sorted(t.id for t in model.tasks))
-    edges = []
+    edges: list[tuple[str, str, int | None]] = []
     for task in sorted(model.tasks, key=lambda t: t.id):
         for index, act in activation_options(task, choices.get(task.id)):
             for _, link in member_links(model, task, act):
@@ -54,7 +59,7 @@ def trigger_graph(model: SystemModel, choices: Mapping[str, Choice]) -> tuple[nx
     return graph, edges
 
 
-def topological(graph: nx.DiGraph) -> tuple[tuple[str, ...], frozenset[str]]:
+def topological(graph: nx.DiGraph[str]) -> tuple[tuple[str, ...], frozenset[str]]:
     """Every node, writers before readers; the members of a cycle together, by id."""
     condensed = nx.condensation(graph)
     cyclic: set[str] = set()
@@ -67,14 +72,14 @@ def topological(graph: nx.DiGraph) -> tuple[tuple[str, ...], frozenset[str]]:
     return tuple(order), frozenset(cyclic)
 
 
-def dependency_graph(model: SystemModel, trigger: nx.DiGraph) -> nx.DiGraph:
+def dependency_graph(model: SystemModel, trigger: nx.DiGraph[str]) -> nx.DiGraph[DepNode]:
     """What a response time depends on (specs/timing.md §5.2, §6): nodes ("em", t) for the event model
     of t, ("r", t) for its response time, ("hp", core, priority) for "the event models of every task
     of that core at this priority or higher". Edges: em(w), r(w) → em(t) for every trigger writer w
     of t; em(t) → r(t); hp(core, p(t)) → r(t); em(t) → hp(core, p(t)); hp level → next lower level;
     and r(j) → r(i) where i's analysis reads j's response time: a cooperative sibling, or a
     cooperative task of higher priority (its suspension jitter)."""
-    graph = nx.DiGraph()
+    graph: nx.DiGraph[DepNode] = nx.DiGraph()
     for w, r in trigger.edges:
         graph.add_edge(("em", w), ("em", r))
         graph.add_edge(("r", w), ("em", r))
@@ -107,7 +112,7 @@ def dependency_graph(model: SystemModel, trigger: nx.DiGraph) -> nx.DiGraph:
     return graph
 
 
-def dependency_cones(graph: nx.DiGraph, atoms: Mapping[str, int]) -> dict[str, int]:
+def dependency_cones(graph: nx.DiGraph[DepNode], atoms: Mapping[str, int]) -> dict[str, int]:
     """Per task: the OR of ``atoms`` (attached to the task's event model) over everything its
     response time depends on."""
     condensed = nx.condensation(graph)
@@ -124,7 +129,7 @@ def dependency_cones(graph: nx.DiGraph, atoms: Mapping[str, int]) -> dict[str, i
     return {node[1]: bits[mapping[node]] for node in graph.nodes if node[0] == "r"}
 
 
-def and_feeders(model: SystemModel, choices: Mapping[str, Choice], trigger: nx.DiGraph) -> frozenset[str]:
+def and_feeders(model: SystemModel, choices: Mapping[str, Choice], trigger: nx.DiGraph[str]) -> frozenset[str]:
     """Choices upstream (inclusive) of a writer into an AND compound: the minimum-distance model of an
     AND join follows its slowest member (specs/timing.md §5.2), which is not monotone in the members'
     periods, so lemmas generalise only to the exact candidate there (specs/synthesis.md §4)."""

@@ -24,9 +24,10 @@ from ..api import LoadResult, _finish
 from ..diagnostics import DiagnosticSink
 from ..fmt import blank_lines, collect_comments, format_activation, format_module, format_number, format_quantity
 from ..loader import Project
+from ..model import SystemModel
 from ..parse import parse_text
-from ..source import SourceFile
-from ..timing import analyze
+from ..source import SourceFile, Span
+from ..timing import AnalysisResult, analyze
 from .candidates import Candidate
 
 
@@ -44,11 +45,11 @@ def filled_activation(hole: s.Activation, cand: Candidate) -> s.Activation:
     """The syntax of ``cand`` in place of the hole ``hole`` (same span)."""
     if cand.kind == "timer":
         phase = hole.phase if isinstance(hole, s.Timer) else None
-        return s.Timer(_timer_period(cand.period, hole), phase, hole.span)
+        return s.Timer(_timer_period(cand.period, hole), phase, hole.span)  # type: ignore[arg-type]  # a timer's period
     prescaler = s.Number(Fraction(cand.prescaler))
     if isinstance(hole, s.Trigger):
         return replace(hole, prescaler=prescaler)
-    return s.Trigger(s.Name(cand.port), prescaler, hole.span)
+    return s.Trigger(s.Name(cand.port), prescaler, hole.span)  # type: ignore[arg-type]  # a trigger's port
 
 
 def filled_module(module: s.Module, system: str, choices: Mapping[str, Candidate]) -> s.Module:
@@ -77,10 +78,10 @@ def completed_text(load: LoadResult, system: str, choices: Mapping[str, Candidat
     whole file canonically formatted with its comments kept."""
     root = load.project.root_module
     source = load.project.sources[load.project.root]
-    filled = filled_module(root, system, choices)
+    filled = filled_module(root, system, choices)  # type: ignore[arg-type]  # (a loaded project has its root)
     if canonical:
         return format_module(filled, collect_comments(source.text), blank_lines(source.text))
-    edited = apply_edits(source.text, hole_edits(source, root, system, choices))
+    edited = apply_edits(source.text, hole_edits(source, root, system, choices))  # type: ignore[arg-type]
     again = parse_text(edited, load.project.root, DiagnosticSink())
     if again != filled:  # (a tree compares without its spans)
         raise RuntimeError("filling the holes in the text did not give the configuration chosen")
@@ -119,13 +120,13 @@ def hole_edits(source: SourceFile, module: s.Module, system: str, choices: Mappi
     return sorted(edits, key=lambda e: e.start)
 
 
-def _replaced(hole: s.Activation, filled: s.Activation):
+def _replaced(hole: s.Activation, filled: s.Activation) -> tuple[Span, str]:
     """(the part of ``hole`` that is replaced, its new text): the period hole and its range, the
     prescaler hole and its range, or the whole ``activation ?``."""
     if isinstance(hole, s.Timer) and isinstance(hole.period, s.PeriodHole) and isinstance(filled, s.Timer):
-        return hole.period.span, format_quantity(filled.period)
+        return hole.period.span, format_quantity(filled.period)  # type: ignore[arg-type]  # filled: a period
     if isinstance(hole, s.Trigger) and isinstance(hole.prescaler, s.PrescalerHole) and isinstance(filled, s.Trigger):
-        return hole.prescaler.span, format_number(filled.prescaler.value)
+        return hole.prescaler.span, format_number(filled.prescaler.value)  # type: ignore[union-attr]  # a number
     return hole.span, format_activation(filled)
 
 
@@ -140,7 +141,8 @@ def apply_edits(text: str, edits: list[Edit]) -> str:
     return "".join(parts)
 
 
-def recheck(load: LoadResult, system: str, text: str):
+def recheck(load: LoadResult, system: str,
+            text: str) -> tuple[LoadResult | None, SystemModel | None, AnalysisResult | None, list[str]]:
     """Load ``text`` as the root file (imports as before) and analyse ``system``: (LoadResult, model,
     analysis, problems) where ``problems`` lists why it would be rejected (empty: accepted)."""
     sink = DiagnosticSink()
