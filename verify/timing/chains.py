@@ -27,10 +27,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 from fractions import Fraction
 from functools import cached_property
-from typing import Mapping
+from collections.abc import Iterable, Mapping
 
 from ..construct import direct_constructor
-from ..model import ChainModel, DataTriggered, HopModel, SystemModel
+from ..activations import DataTriggered
+from ..model import ChainModel, HopModel, SystemModel
 from ..units import fmt_time
 from .rates import ActivationInfo, EventModel, arrival_model, combine_and, exact_sum
 from .rta import TaskResponse
@@ -202,12 +203,12 @@ class Timing:
         return cooperative_counts(self.system)
 
 
-def _total(parts) -> Fraction | None:
+def _total(parts: Iterable[tuple[str, Fraction | None]]) -> Fraction | None:
     values = [v for _, v in parts]
-    return None if any(v is None for v in values) else exact_sum(values)
+    return None if any(v is None for v in values) else exact_sum(values)  # type: ignore[arg-type]  # no None
 
 
-def _term(rule: str, parts, note: str = "") -> Term:
+def _term(rule: str, parts: Iterable[tuple[str, Fraction | None]], note: str = "") -> Term:
     return _new_term(rule, _total(parts), tuple(parts), note)
 
 
@@ -284,7 +285,8 @@ def and_reaction(t: Timing, hop: HopModel, k: int) -> Term:
     member has a new arrival (each within its arrival stream's W⁺), then k − 1 further joins."""
     info = t.infos[hop.reader]
     member = hop.link.target.split(".", 1)[1]
-    arrivals, waits = [], []
+    arrivals: list[EventModel | None] = []
+    waits: list[Fraction | None] = []
     for src in info.sources:
         if src.writer is None or src.link is None:
             arrivals.append(None)
@@ -295,8 +297,9 @@ def and_reaction(t: Timing, hop: HopModel, k: int) -> Term:
         arrivals.append(model)
         if src.member != member:
             waits.append(model.sampling_wait)
-    wait = None if any(w is None for w in waits) else max(waits, default=ZERO)
-    join = None if any(a is None for a in arrivals) else combine_and(arrivals).delta_plus(k)
+    # (no None in waits or arrivals where they are used: checked)
+    wait = None if any(w is None for w in waits) else max(waits, default=ZERO)  # type: ignore[type-var]
+    join = None if any(a is None for a in arrivals) else combine_and(arrivals).delta_plus(k)  # type: ignore[arg-type]
     i = hop.reader
     return _term(AND_JOIN, (("d⁺", hop.link.delay_max), ("wait for the other members", wait),
                             (f"δ⁺_AND({k})", join), (f"R({i})", t.R(i))))
@@ -415,7 +418,7 @@ def hop_step(t: Timing, hop: HopModel) -> Step:
 
 def _sum_terms(terms: list[Term]) -> Fraction | None:
     values = [x.value for x in terms]
-    return None if any(v is None for v in values) else exact_sum(values)
+    return None if any(v is None for v in values) else exact_sum(values)  # type: ignore[arg-type]  # no None
 
 
 def reaction_time(steps: tuple[Step, ...]) -> Fraction | None:
@@ -477,7 +480,9 @@ def chain_bounds(t: Timing, chain: ChainModel, variant: str = "reduced") -> Chai
         reaction_time=_new_bound(reaction, best, "§7.5 W⁺₁ + R₁ + Σ hop reaction terms"),
         reaction_time_reduced=_new_bound(_minus(reaction, wait), best, "§7.5 R₁ + Σ hop reaction terms"),
         data_age_reduced=_new_bound(data_age(steps), best, "§7.5 Σ hop data-age terms + Rₙ"),
-        data_age_non_reduced=_new_bound(data_age_non_reduced(steps), best + steps[0].best_non_reduced.value,
+        # τ₁'s step has best_non_reduced, with a value (``first_step``, ``read_gap_min``)
+        data_age_non_reduced=_new_bound(data_age_non_reduced(steps),
+                                        best + steps[0].best_non_reduced.value,  # type: ignore[union-attr, operator]
                                         "§7.5 A⁺₁ + Σ hop data-age terms + Rₙ"),
     )
     specs = _spec_checks(chain, bounds, variant)

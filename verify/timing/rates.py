@@ -22,24 +22,28 @@ import math
 from dataclasses import dataclass
 from functools import cached_property
 from fractions import Fraction
-from typing import Mapping
+from collections.abc import Iterable, Mapping
+from typing import Any
 
 
 from ..construct import direct_constructor
 from ..diagnostics import DiagnosticSink, Label, name_list
-from ..model import CompoundModel, DataTriggered, LinkModel, SystemModel, TaskModel
+from ..syntax import Tolerance
+from ..activations import DataTriggered
+from ..ids import TaskId
+from ..model import CompoundModel, LinkModel, SystemModel, TaskModel
 from ..units import fmt_number, fmt_rate
 
 ZERO = Fraction(0)
 
 
-def exact_sum(values) -> Fraction:
+def exact_sum(values: Iterable[Fraction | int]) -> Fraction:
     """``sum(values, Fraction(0))`` for Fractions and ints, computed on one common denominator with a
     single normalisation at the end (a ``Fraction`` addition costs two gcds and a new object)."""
     return ratio_sum(v.as_integer_ratio() for v in values)
 
 
-def ratio_sum(pairs) -> Fraction:
+def ratio_sum(pairs: Iterable[tuple[int, int]]) -> Fraction:
     """Σ n/d over (n, d) pairs (d > 0), exactly."""
     num, den = 0, 1
     for n, d in pairs:
@@ -81,7 +85,7 @@ class Source:
 
     member: str  # local in-port name
     port: str  # "inst.port"
-    writer: str | None  # None: the in-port is not connected
+    writer: TaskId | None  # None: the in-port is not connected
     link: LinkModel | None
 
 
@@ -219,23 +223,27 @@ def activation_rates(system: SystemModel, order: tuple[tuple[str, ...], frozense
                      ) -> dict[str, ActivationInfo]:
     """The rate of every task, propagated in trigger order (§5.1); ``order``: ``trigger_order(system)``
     if already known."""
-    order, cyclic = order or trigger_order(system)
+    ids, cyclic = order or trigger_order(system)
     infos: dict[str, ActivationInfo] = {}
-    timers: dict = {}  # period -> (rate interval, derivation): a system has few distinct periods
-    for tid in order:
+    timers: _Timers = {}  # a system has few distinct periods
+    for tid in ids:
         infos[tid] = _activation_info(system, system.task(tid), infos, tid in cyclic, timers)
     return infos
 
 
+#: a timer period (as an integer ratio) -> its (rate interval, derivation)
+_Timers = dict[tuple[int, int], tuple[RateInterval, str]]
+
+
 def _activation_info(system: SystemModel, task: TaskModel, known: Mapping[str, ActivationInfo],
-                     in_cycle: bool, timers: dict | None = None) -> ActivationInfo:
+                     in_cycle: bool, timers: _Timers | None = None) -> ActivationInfo:
     act = task.activation
     if act.strict_period is not None:
         key = act.strict_period.as_integer_ratio()
         found = timers.get(key) if timers is not None else None
         if found is None:
-            rate = Fraction(1) / act.strict_period
-            found = (_new_rate_interval(rate, rate), act.describe())
+            hz = Fraction(1) / act.strict_period
+            found = (_new_rate_interval(hz, hz), act.describe())
             if timers is not None:
                 timers[key] = found
         return _new_activation_info(task.id, act.kind, found[0], found[1], period=act.strict_period,
@@ -279,11 +287,13 @@ def _event_rate(mode: str, sources: tuple[Source, ...], known: Mapping[str, Acti
              for s, r in zip(sources, rates)]
     if any(r is None for r in rates):
         return None, "not bounded: a writer's rate is not bounded"
+    bounded: list[RateInterval] = rates  # type: ignore[assignment]  # no None (checked above)
+    combined: RateInterval | None
     if mode == "and":
-        combined = _new_rate_interval(min(r.low for r in rates), min(r.high for r in rates))
+        combined = _new_rate_interval(min(r.low for r in bounded), min(r.high for r in bounded))
         text = f"min({', '.join(parts)})"
     elif mode == "or":
-        combined = _new_rate_interval(sum((r.low for r in rates), ZERO), sum((r.high for r in rates), ZERO))
+        combined = _new_rate_interval(sum((r.low for r in bounded), ZERO), sum((r.high for r in bounded), ZERO))
         text = " + ".join(parts)
     else:
         combined, text = rates[0], parts[0]
@@ -407,12 +417,16 @@ def combine_or(members: list[EventModel]) -> EventModel:
     if any(m.period_min is None or m.jitter_min is None for m in live):
         period = jitter = None
     else:
-        period = 1 / sum((1 / m.period_min for m in live), ZERO)
-        jitter = period * (sum((m.jitter_min / m.period_min for m in live), ZERO) + len(live) - 1)
+        # every live member has period_min and jitter_min (checked above)
+        period = 1 / sum((1 / m.period_min for m in live), ZERO)  # type: ignore[operator]
+        jitter = period * (sum((m.jitter_min / m.period_min for m in live), ZERO)  # type: ignore[operator]
+                           + len(live) - 1)
     bounded = [m for m in live if m.sampling_wait is not None]
     best = min(bounded, key=lambda m: (m.sampling_wait, m.period_max)) if bounded else None
     firsts = [m.first_max for m in live if m.first_max is not None]
-    jitter_max = None if best is None else best.jitter_max + max(ZERO, best.first_max - best.period_max)
+    # best has a sampling wait, so a first release and a maximum period and jitter (``delta_plus``)
+    jitter_max = (None if best is None
+                  else best.jitter_max + max(ZERO, best.first_max - best.period_max))  # type: ignore[operator]
     return _new_event_model(period, jitter, best.period_max if best else None, jitter_max,
                             min(firsts) if firsts else None)
 
@@ -424,13 +438,14 @@ def combine_and(members: list[EventModel]) -> EventModel:
     if not members or any(m.silent for m in members):
         return SILENT
     known = [m for m in members if m.period_min is not None and m.jitter_min is not None]
-    slowest = max(known, key=lambda m: (m.period_min, -m.jitter_min)) if known else None
+    # (the known members have period_min and jitter_min; gap and first: no None, checked)
+    slowest = max(known, key=lambda m: (m.period_min, -m.jitter_min)) if known else None  # type: ignore[operator]
     gaps = [m.a_max for m in members]
-    gap = None if any(g is None for g in gaps) else max(gaps)
+    gap = None if any(g is None for g in gaps) else max(gaps)  # type: ignore[type-var]
     firsts = [m.first_max for m in members]
-    first = None if any(f is None for f in firsts) else max(firsts)
+    first = None if any(f is None for f in firsts) else max(firsts)  # type: ignore[type-var]
     return _new_event_model(slowest.period_min if slowest else None,
-                            slowest.jitter_min + slowest.period_min if slowest else None,
+                            slowest.jitter_min + slowest.period_min if slowest else None,  # type: ignore[operator]
                             gap, ZERO if gap is not None else None, first)
 
 
@@ -440,8 +455,8 @@ def first_of_k(stream: EventModel, members: list[EventModel], mode: str, k: int)
         return stream.first_max
     if mode == "or":
         bounds = [_add(m.first_max, m.delta_plus(k)) for m in members if not m.silent]
-        bounds = [b for b in bounds if b is not None]
-        return min(bounds) if bounds else None
+        known = [b for b in bounds if b is not None]
+        return min(known) if known else None
     return _add(stream.first_max, stream.delta_plus(k))
 
 
@@ -449,7 +464,9 @@ def prescaled(stream: EventModel, k: int, first: Fraction | None) -> EventModel:
     """Every k-th event: ``δ(n) = δ_stream((n−1)·k + 1)``, i.e. periods times k, jitters unchanged."""
     if stream.silent or k == 1:
         return stream if k == 1 else SILENT
-    mul = lambda p: None if p is None else p * k  # noqa: E731
+    def mul(p: Fraction | None) -> Fraction | None:
+        return None if p is None else p * k
+
     return _new_event_model(mul(stream.period_min), stream.jitter_min, mul(stream.period_max),
                             stream.jitter_max, first)
 
@@ -465,12 +482,13 @@ def trigger_stream(members: list[EventModel], mode: str) -> EventModel:
 
 def event_models(system: SystemModel, infos: Mapping[str, ActivationInfo], order: tuple[str, ...],
                  wcrt: Mapping[str, Fraction | None], bcrt: Mapping[str, Fraction],
-                 memo: dict | None = None) -> dict[str, EventModel]:
+                 memo: dict[str, Any] | None = None) -> dict[str, EventModel]:
     """The activation event model of every task, given response-time estimates (§5.2).
 
     ``memo``, kept by the caller across CPA rounds, lets a task keep last round's model *object* when
     nothing it depends on changed (the values are the same either way), so that what is derived from
-    it (``a_max`` and the like, ``fastrta``'s per-task data) need not be computed again."""
+    it (``a_max`` and the like, ``fastrta``'s per-task data) need not be computed again. Its entry for a
+    source is its ``EventModel``; for a trigger (what its model was computed from, the model)."""
     models: dict[str, EventModel] = {}
     for tid in order:
         info = infos[tid]
@@ -583,7 +601,7 @@ def _factor_text(value: Fraction | None) -> str:
     return "an unbounded factor" if value is None else f"a factor of {fmt_number(value)}"
 
 
-def _tolerance_violation(tol, flagged: bool, factor: Fraction | None) -> str | None:
+def _tolerance_violation(tol: Tolerance | None, flagged: bool, factor: Fraction | None) -> str | None:
     """The tolerance's wording if a flagged factor violates it, else None."""
     if tol is None or not flagged or tol.kind == "ok":
         return None
@@ -598,9 +616,12 @@ def _tolerance_violation(tol, flagged: bool, factor: Fraction | None) -> str | N
 
 
 def _rates_text(s: LinkSampling, direction: str) -> str:
+    # only a flagged relation is described: a prescaler above 1, or both rates known
     if s.by_trigger:
+        assert s.undersampling is not None
         return f"triggered by this port with prescaler {fmt_number(s.undersampling)}"
     w, r = s.writer_rate, s.reader_rate
+    assert w is not None and r is not None
     if direction == "over":
         text = f"reader {fmt_rate(r.high)} / writer {fmt_rate(w.low)}"
     else:
@@ -623,9 +644,10 @@ def check_sampling(system: SystemModel, samplings: tuple[LinkSampling, ...], sin
             allowed = _tolerance_violation(tol, flagged, factor)
             if allowed is None:
                 continue
+            assert tol is not None  # a violated tolerance exists
             link = system.link_into(s.target)
-            secondary = (Label(link.span, f"`{s.writer}` writes here"),) if link else ()
-            if tol.span is not None and getattr(tol.span, "line", 0):
+            secondary: tuple[Label, ...] = (Label(link.span, f"`{s.writer}` writes here"),) if link else ()
+            if tol.span is not None and getattr(tol.span, "line", None):
                 secondary += (Label(tol.span, "the tolerance"),)
             sink.emit("E310", f"`{s.reader}` reads `{port}` {direction}sampled by {_factor_text(factor)} "
                       f"({_rates_text(s, direction)}); its {direction}sampling tolerance is {allowed}",
@@ -714,6 +736,7 @@ def _constraint_text(task: TaskModel | CompoundModel) -> str:
     low = fmt_rate(task.min_rate) if task.min_rate is not None else None
     high = fmt_rate(task.max_rate) if task.max_rate is not None else None
     if task.min_rate is not None and task.min_rate == task.max_rate:
+        assert low is not None
         return f"{low} fixed" if not task.changeable else low
     if low and high:
         return f"{low} .. {high}"

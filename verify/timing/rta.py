@@ -91,7 +91,8 @@ def core_loads(system: SystemModel, infos: Mapping[str, ActivationInfo]) -> tupl
         if any(r is None for r in rates):
             total = None
         else:  # Σ wcet·high as exact integer ratios, normalised once
-            total = ratio_sum(_times(t.wcet.as_integer_ratio(), r.high.as_integer_ratio())
+            total = ratio_sum(_times(t.wcet.as_integer_ratio(),
+                                     r.high.as_integer_ratio())  # type: ignore[union-attr]  # no None (checked)
                               for t, r in zip(tasks, rates))
         loads.append(CoreLoad(core, total, tuple(t.id for t in tasks)))
     return tuple(loads)
@@ -124,9 +125,11 @@ def check_utilisation(system: SystemModel, loads: tuple[CoreLoad, ...], infos: M
     """E311: a core whose utilisation exceeds 1."""
     spans = {c.name: c.span for c in system.cores}
     for load in loads:
-        if not load.overloaded:
+        if not load.overloaded or load.utilisation is None:  # (an overloaded core has a utilisation)
             continue
-        shares = [f"`{t}` {fmt_number(system.task(t).wcet * infos[t].rate.high)}" for t in load.tasks]
+        # an overloaded core's tasks have bounded rates (else it has no utilisation)
+        shares = [f"`{t}` {fmt_number(system.task(t).wcet * infos[t].rate.high)}"  # type: ignore[union-attr]
+                  for t in load.tasks]
         secondary = tuple(Label(system.task(t).span, f"`{t}` on `{load.core}`") for t in load.tasks)
         sink.emit("E311", f"core `{load.core}` is utilised {ratio(load.utilisation)} "
                   f"({percent(load.utilisation)}) by " + name_list(load.tasks),
@@ -157,7 +160,8 @@ class Interferer:
             return ZERO
         cap = self.causal_cap(q)
         if self.cost is None or self.period is None or self.jitter is None:
-            return None if cap is None else cap * self.cost
+            # a capped stream (``causally_capped``) costs the task's wcet: never None
+            return None if cap is None else cap * self.cost  # type: ignore[operator, return-value]
         count = -((-(window + self.jitter)) // self.period)
         return (count if cap is None else min(count, cap)) * self.cost
 
@@ -200,7 +204,7 @@ def causal_path(system: SystemModel, source: TaskModel, target: TaskModel,
         if link.writer in seen or estimates.get(link.writer) is None:
             return None
         seen.add(link.writer)
-        latency += estimates[link.writer]
+        latency += estimates[link.writer]  # type: ignore[operator]  # not None (checked above)
         current = system.task(link.writer)
 
 
@@ -276,7 +280,7 @@ def least_fixed_point(base: Fraction, start: Fraction, streams: list[Interferer]
         if any(d is None for d in demand):
             bad = next(s.task for s, d in zip(streams, demand) if d is None)
             return None, f"the activations of `{bad}` are not bounded"
-        new = base + sum(demand, ZERO)
+        new = base + sum(demand, ZERO)  # type: ignore[type-var, operator]  # no None (checked above)
         if new == w:
             return w, None
         w = new
@@ -285,7 +289,7 @@ def least_fixed_point(base: Fraction, start: Fraction, streams: list[Interferer]
 
 def _load(streams: list[Interferer]) -> Fraction | None:
     rates = [s.rate() for s in streams]
-    return None if any(r is None for r in rates) else sum(rates, ZERO)
+    return None if any(r is None for r in rates) else sum(rates, ZERO)  # type: ignore[type-var]  # no None
 
 
 def hold_time(system: SystemModel, task: TaskModel, events: Mapping[str, EventModel],
@@ -314,16 +318,20 @@ def wcrt(d: Demand, deadline: Fraction | None) -> tuple[Fraction | None, int | N
         return None, None, None, ("its activations are not bounded" if d.own.period_min is None else
                                   "its activation jitter is not bounded (a writer upstream has no WCRT bound)")
     own = Interferer("", d.cost + d.blocking, d.own.period_min, ZERO, d.own.silent)
-    if deadline is None and _load(d.streams + [own]) is not None and _load(d.streams + [own]) >= 1:
+    if (deadline is None and _load(d.streams + [own]) is not None
+            and _load(d.streams + [own]) >= 1):  # type: ignore[operator]  # not None (the same load, checked)
         return None, None, None, "the utilisation of its level is 1 or more and it has no deadline"
     best: tuple[Fraction, int] | None = None
     w, budget = ZERO, Budget()
     for q in range(1, MAX_JOBS + 1):
-        offset = d.own.delta_min(q)
+        # δ⁻(q) is None only for a silent task and q > 1, and a silent task's window closes at q = 1
+        offset: Fraction = d.own.delta_min(q)  # type: ignore[assignment]
         limit = None if deadline is None else deadline + offset
-        w, why = least_fixed_point(q * (d.cost + d.blocking), w + d.cost + d.blocking, d.streams, limit, q, budget)
-        if w is None:
+        found, why = least_fixed_point(q * (d.cost + d.blocking), w + d.cost + d.blocking, d.streams, limit, q,
+                                       budget)
+        if found is None:
             return None, q, None, why
+        w = found
         if best is None or w - offset > best[0]:
             best = (w - offset, q)
         following = d.own.delta_min(q + 1)
@@ -349,6 +357,9 @@ def response_time(system: SystemModel, task: TaskModel, events: Mapping[str, Eve
     hold = hold_time(system, task, events, estimates, deadline)
     blocking, remote = cooperative_blocking(system, task, events, estimates)
     names = tuple(j.id for j in hp) + tuple(s.task for s in remote)
+    computed: Fraction | None
+    failure: str | None
+    used: Fraction | None
     if blocking is None:
         computed, q, crit, failure = None, None, None, "a cooperative sibling's hold time is not bounded"
     else:
@@ -388,7 +399,7 @@ def cooperative_blocking(system: SystemModel, task: TaskModel, events: Mapping[s
     holds = {s.id: hold_time(system, s, events, estimates, deadline_of(s, events[s.id])[0]) for s in sibs}
     blockers = [s for s in sibs if s.core != task.core or s.priority < task.priority]
     values = [holds[s.id] for s in blockers]
-    blocking = None if any(v is None for v in values) else max(values, default=ZERO)
+    blocking = None if any(v is None for v in values) else max(values, default=ZERO)  # type: ignore[type-var]
     remote = [token_stream(s, events[s.id], estimates.get(s.id), holds[s.id]) for s in sibs if s.core != task.core]
     return blocking, remote
 
