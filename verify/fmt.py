@@ -10,6 +10,7 @@ from __future__ import annotations
 import bisect
 import re
 from collections import defaultdict
+from collections.abc import Set
 from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import NamedTuple
@@ -108,7 +109,7 @@ def _constraint(c: s.ActivationConstraint) -> str:
     elif c.min is not None:
         bounds = f"min {format_quantity(c.min)}"
     else:
-        bounds = f"max {format_quantity(c.max)}"
+        bounds = f"max {format_quantity(c.max)}"  # type: ignore[arg-type]  # not None: _require above
     return f"activation {bounds}" + ("" if c.changeable else " fixed")
 
 
@@ -122,7 +123,7 @@ def _compound(c: s.CompoundPort) -> str:
 def _tolerance(t: s.Tolerance) -> str:
     if t.kind == "max":
         _require(t.factor is not None, "sampling tolerance `<=` without a factor")
-        return f"<= {format_number(t.factor.value)}"
+        return f"<= {format_number(t.factor.value)}"  # type: ignore[union-attr]  # _require above
     return t.kind
 
 
@@ -142,7 +143,7 @@ def _period(p: s.Quantity | s.PeriodHole) -> str:
              "period hole needs both bounds, and a step only with bounds")
     if p.low is None:
         return "?"
-    text = f"? in {format_quantity(p.low)} .. {format_quantity(p.high)}"
+    text = f"? in {format_quantity(p.low)} .. {format_quantity(p.high)}"  # type: ignore[arg-type]  # a range has both ends
     return text + (f" step {format_quantity(p.step)}" if p.step else "")
 
 
@@ -152,7 +153,7 @@ def _prescaler(p: s.Number | s.PrescalerHole) -> str:
     _require((p.low is None) == (p.high is None), "prescaler hole needs both bounds or none")
     if p.low is None:
         return " every ?"
-    return f" every ? in {format_number(p.low.value)} .. {format_number(p.high.value)}"
+    return f" every ? in {format_number(p.low.value)} .. {format_number(p.high.value)}"  # type: ignore[union-attr]  # both ends
 
 
 def format_activation(a: s.Activation) -> str:
@@ -184,7 +185,8 @@ def _binding(b: s.TaskBinding) -> str:
 def _connection(c: s.Connection) -> str:
     _require((c.delay_min is None) == (c.delay_max is None), "connection delay needs both bounds or none")
     text = f"connect {c.source} -> {c.target}"
-    return text if c.delay_min is None else f"{text} delay {_bounds(c.delay_min, c.delay_max)}"
+    return (text if c.delay_min is None
+            else f"{text} delay {_bounds(c.delay_min, c.delay_max)}")  # type: ignore[arg-type]  # both: _require
 
 
 def _spec(spec: s.Spec) -> str:
@@ -217,7 +219,7 @@ class _Printer:
     def __init__(self) -> None:
         self.lines: list[_Line] = []
 
-    def line(self, depth: int, text: str, *spans: Span | None, leaf: bool = True, **flags) -> None:
+    def line(self, depth: int, text: str, *spans: Span | None, leaf: bool = True, **flags: bool) -> None:
         real = [sp for sp in spans if sp is not None and sp.line > 0]
         self.lines.append(_Line(depth, text, [(sp.line, sp.column) for sp in real],
                                 [(sp.end_line, sp.end_column) if leaf else None for sp in real], **flags))
@@ -234,7 +236,7 @@ def _has_span(span: Span | None) -> bool:
 
 
 def _top_level_items(module: s.Module) -> list[s.Component | s.System]:
-    items = [*module.components, *module.systems]
+    items: list[s.Component | s.System] = [*module.components, *module.systems]
     if all(_has_span(item.span) for item in items):
         items.sort(key=lambda item: (item.span.line, item.span.column))
     return items
@@ -256,8 +258,8 @@ def _print_component(p: _Printer, c: s.Component) -> None:
     p.line(0, f"component {c.name} {{", c.span, leaf=False)
     for port in c.in_ports:
         p.line(1, f"in {port.name} : {port.type}", port.span)
-    for port in c.out_ports:
-        p.line(1, f"out {port.name} : {port.type}", port.span)
+    for out in c.out_ports:
+        p.line(1, f"out {out.name} : {out.type}", out.span)
     for compound in c.compounds:
         p.line(1, _compound(compound), compound.span)
     for task in c.tasks:
@@ -380,7 +382,7 @@ def _last_source_line(ln: _Line) -> int:
     return max(ends, default=0)
 
 
-def _wants_blank(ln: _Line, leading: list[Comment], prev_line: int, out: list[str], blanks: set[int]) -> bool:
+def _wants_blank(ln: _Line, leading: list[Comment], prev_line: int, out: list[str], blanks: Set[int]) -> bool:
     """Keep one blank line between two members of a block where the source had one (or more)."""
     if ln.closes or not ln.anchors or not out or not out[-1] or out[-1].endswith("{") or ln.depth == 0:
         return False
@@ -388,7 +390,7 @@ def _wants_blank(ln: _Line, leading: list[Comment], prev_line: int, out: list[st
     return any(prev_line < b < first for b in blanks)
 
 
-def _render(lines: list[_Line], comments: list[Comment], blanks: set[int] = frozenset()) -> str:
+def _render(lines: list[_Line], comments: list[Comment], blanks: Set[int] = frozenset()) -> str:
     placed = _place_comments(lines, comments)
     inline = _spill_trailing(lines, placed)
     kept = [not ln.optional or bool(placed.leading.get(i) or inline.get(i)) for i, ln in enumerate(lines)]
@@ -441,7 +443,7 @@ def format_text(text: str, path: str = "<text>") -> tuple[str | None, list[Diagn
 
 
 def _report_repeated(module: s.Module, sink: DiagnosticSink) -> bool:
-    nodes = [t for c in module.components for t in c.tasks]
+    nodes: list[s.Task | s.TaskBinding] = [t for c in module.components for t in c.tasks]
     nodes += [b for system in module.systems for inst in system.instances for b in inst.bindings]
     spans = sorted(span for node in nodes for span in node.repeated)
     for span in spans:
