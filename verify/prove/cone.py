@@ -16,11 +16,16 @@ only look at the cone.
 """
 from __future__ import annotations
 
+from collections.abc import Iterable
 from fractions import Fraction
+from typing import TYPE_CHECKING
 
-from ..model import SystemModel
+from ..model import SystemModel, TaskModel
 from .intsim import target_samples
-from .scenario import Target
+from .scenario import ConcreteScenario, Target
+
+if TYPE_CHECKING:
+    from .verdict import Counterexample
 
 
 class ConeIndex:
@@ -28,7 +33,7 @@ class ConeIndex:
     priority, highest first; per instance its cooperative tasks; per task its trigger writers."""
 
     def __init__(self, model: SystemModel):
-        self.by_core: dict[str, list] = {}
+        self.by_core: dict[str, list[TaskModel]] = {}
         self.siblings: dict[str, list[str]] = {}
         self.writers: dict[str, list[str]] = {}
         for t in model.tasks:
@@ -41,7 +46,7 @@ class ConeIndex:
                 self.writers[t.id] = [lk.writer for lk in links if lk is not None]
         for tasks in self.by_core.values():
             tasks.sort(key=lambda t: -t.priority)  # (stable: system order among equals)
-        self.tasks = {t.id: t for t in model.tasks}
+        self.tasks: dict[str, TaskModel] = {t.id: t for t in model.tasks}
 
     def cone(self, roots: list[str]) -> frozenset[str]:
         found = set(roots)
@@ -102,7 +107,7 @@ def slices(model: SystemModel, targets: list[Target]) -> list[tuple[SystemModel,
     index = ConeIndex(model)
     chains = {c.name: c for c in model.chains}
     for t in targets:
-        roots = [t.name] if t.kind == "response" else list(chains[t.name].tasks)
+        roots: list[str] = [t.name] if t.kind == "response" else list(chains[t.name].tasks)
         groups.setdefault(index.cone(roots), []).append(t)
     out = []
     for tasks, members in groups.items():
@@ -117,21 +122,21 @@ class SliceMismatch(AssertionError):
     """A run of a cone's subsystem whose sample the whole system does not reproduce (a bug)."""
 
 
-def check_all_carry_over(model: SystemModel, cexs) -> None:
+def check_all_carry_over(model: SystemModel, cexs: Iterable[Counterexample]) -> None:
     """Replay counterexamples found on a subsystem on the whole ``model``: the same scenario (tasks
     outside the cone take the simulator's defaults) must hold the same sample(s). One run of the
     whole system per distinct scenario, up to the last sample it must hold, by the integer simulator
     (``intsim.target_samples``: the samples the reference simulator's trace gives, at a fraction of
     its cost on a large system); ``SliceMismatch`` if a sample is missing."""
-    wanted: dict = {}  # scenario -> [(target, sample)]
+    wanted: dict[ConcreteScenario, list[tuple[Target, object]]] = {}  # scenario -> [(target, sample)]
     for cex in cexs:
         for scenario, sample in ((cex.scenario, cex.sample), (cex.best_scenario, cex.best_sample)):
             if scenario is not None:
                 wanted.setdefault(scenario, []).append((cex.target, sample))
     for scenario, pairs in wanted.items():
-        ends = [getattr(s, "end", None) if t.kind != "response" else s.finish for t, s in pairs]
+        ends = [getattr(s, "end", None) if t.kind != "response" else s.finish for t, s in pairs]  # type: ignore[attr-defined]
         if all(end is not None for end in ends):  # the run up to the last sample's last event will do
-            scenario = scenario.with_horizon(min(scenario.horizon, max(ends) + Fraction(1, 10**12)))
+            scenario = scenario.with_horizon(min(scenario.horizon, max(ends) + Fraction(1, 10**12)))  # type: ignore[type-var, operator]
         samples = target_samples(model, scenario, sorted({t for t, _ in pairs}))
         for target, sample in pairs:
             if sample not in samples[target]:

@@ -21,13 +21,14 @@ import random
 import time
 from dataclasses import dataclass, field
 from fractions import Fraction
+from collections.abc import Generator, Iterable
 from typing import Callable, Iterator
 
-from ..model import SystemModel
-from ..sim import SimulationError
+from ..model import SystemModel, TaskModel
+from ..sim import Sample, SimulationError
 from .parallel import ordered_map, resolve_workers
 from ..timebase import TimeBase, ceil_to, floor_to
-from .scenario import ConcreteScenario, Measured, Target, hyperperiod, measure, measure_periodic
+from .scenario import ConcreteScenario, Measured, ResponseSample, Target, hyperperiod, measure, measure_periodic
 
 ZERO = Fraction(0)
 
@@ -90,11 +91,11 @@ def tick_of(model: SystemModel) -> Fraction:
     return TimeBase.gcd_of(values).unit
 
 
-def free_timers(model: SystemModel) -> list:
+def free_timers(model: SystemModel) -> list[TaskModel]:
     return [t for t in model.tasks if t.activation.strict_period is not None and t.activation.fixed_phase is None]
 
 
-def counter_tasks(model: SystemModel) -> list:
+def counter_tasks(model: SystemModel) -> list[TaskModel]:
     return [t for t in model.tasks if t.activation.release_every > 1]
 
 
@@ -146,8 +147,9 @@ def grid_of(model: SystemModel) -> Grid:
     m = len(timers)
     fixed = any(t.activation.fixed_phase is not None for t in model.tasks)
     return Grid(tick, tick / (2 * m + 1), tuple(t.id for t in timers),
-                tuple(int(t.activation.strict_period / tick) for t in timers), not fixed,
-                tuple((t.id, t.activation.release_every) for t in counter_tasks(model)), hyperperiod(model))
+                tuple(int(t.activation.strict_period / tick) for t in timers), not fixed,  # type: ignore[operator]
+                tuple((t.id, t.activation.release_every) for t in counter_tasks(model)),
+                hyperperiod(model))  # type: ignore[arg-type]  # (a model of the exact class has one)
 
 
 def _u_ranges(grid: Grid, w: tuple[int, ...]) -> list[range]:
@@ -218,8 +220,8 @@ class ExactResult:
     evaluated completely (no periodic state within the window); ``explored`` scenarios."""
 
     method: str
-    worst: dict = field(default_factory=dict)
-    best: dict = field(default_factory=dict)
+    worst: dict[Target, Extreme] = field(default_factory=dict)
+    best: dict[Target, Extreme] = field(default_factory=dict)
     complete: bool = True
     explored: int = 0
     reason: str = ""
@@ -255,7 +257,7 @@ def enumerate_exact(model: SystemModel, targets: list[Target], budget: Budget,
         except SimulationError:
             return None
 
-    def measurements() -> Iterator[Measured | None]:
+    def measurements() -> Generator[Measured | None, None, None]:
         first = evaluate(0)
         yield first
         events = first.events if first is not None else 0
@@ -285,14 +287,15 @@ def enumerate_exact(model: SystemModel, targets: list[Target], budget: Budget,
     return result
 
 
-def _account(result: ExactResult, m: Measured, tick: Fraction, targets, want_best) -> None:
+def _account(result: ExactResult, m: Measured, tick: Fraction, targets: Iterable[Target],
+             want_best: Iterable[Target]) -> None:
     for t in targets:
         sample = m.values[t].worst
         if sample is None:
             continue
         value = ceil_to(sample.value, tick)
         cur = result.worst[t]
-        if cur.value is None or value > cur.value or (value == cur.value and sample.value > cur.raw):
+        if cur.value is None or value > cur.value or (value == cur.value and sample.value > cur.raw):  # type: ignore[operator]
             result.worst[t] = Extreme(value, sample.value, m)
     for t in want_best:
         sample = m.values[t].best
@@ -300,7 +303,7 @@ def _account(result: ExactResult, m: Measured, tick: Fraction, targets, want_bes
             continue
         value = floor_to(sample.value, tick)
         cur = result.best[t]
-        if cur.value is None or value < cur.value or (value == cur.value and sample.value < cur.raw):
+        if cur.value is None or value < cur.value or (value == cur.value and sample.value < cur.raw):  # type: ignore[operator]
             result.best[t] = Extreme(value, sample.value, m)
 
 
@@ -347,8 +350,8 @@ class Goal:
 
 @dataclass
 class SearchResult:
-    worst: dict = field(default_factory=dict)  # target -> Measured with the largest sample
-    best: dict = field(default_factory=dict)
+    worst: dict[Target, Measured] = field(default_factory=dict)  # target -> Measured with the largest sample
+    best: dict[Target, Measured] = field(default_factory=dict)
     explored: int = 0
 
 
@@ -365,14 +368,14 @@ def search_horizon(model: SystemModel, span: Fraction | None) -> Fraction:
 
 def _random_scenario(model: SystemModel, rng: random.Random, horizon: Fraction) -> ConcreteScenario:
     tick = tick_of(model)
-    phases = []
+    phases: list[tuple[str, Fraction]] = []
     for t in model.tasks:
         act = t.activation
         if act.offset_window is not None:
             phases.append((t.id, _grid_pick(rng, act.offset_window, tick)))
     counters = tuple((t.id, rng.randrange(t.activation.release_every)) for t in counter_tasks(model))
     mode = rng.random()
-    execs = []
+    execs: list[tuple[str, tuple[Fraction, ...]]] = []
     for t in model.tasks:
         if t.bcet == t.wcet or mode < 0.45:
             continue
@@ -384,7 +387,7 @@ def _random_scenario(model: SystemModel, rng: random.Random, horizon: Fraction) 
             mid = (t.bcet + t.wcet) / 2
             execs.append((t.id, tuple(rng.choice([t.bcet, t.wcet, t.wcet, mid]) for _ in range(rng.choice([3, 5, 7])))))
     dmode = rng.random()
-    delays = []
+    delays: list[tuple[tuple[str, str], tuple[Fraction, ...]]] = []
     for lk in model.links:
         if lk.delay_min == lk.delay_max:
             continue
@@ -395,7 +398,7 @@ def _random_scenario(model: SystemModel, rng: random.Random, horizon: Fraction) 
         else:
             delays.append(((lk.source, lk.target),
                            tuple(rng.choice([lk.delay_min, lk.delay_max]) for _ in range(rng.choice([2, 3, 5])))))
-    gaps = []
+    gaps: list[tuple[str, tuple[Fraction, ...]]] = []
     for t in model.tasks:
         act = t.activation
         if act.gaps is not None and act.gaps[0] != act.gaps[1]:
@@ -429,7 +432,7 @@ def _mutate(model: SystemModel, sc: ConcreteScenario, rng: random.Random) -> Con
     if phases and rng.random() < 0.7:
         task = rng.choice(sorted(phases))
         act = model.task(task).activation
-        length = act.gaps[1]  # the phase of a task released by time lies in [0, its greatest gap)
+        length = act.gaps[1]  # type: ignore[index]  # the phase of a task released by time lies in [0, its greatest gap)
         if rng.random() < 0.5:
             step = tick * Fraction(rng.choice([-4, -2, -1, 1, 2, 4]), rng.choice([1, 4, 16]))
             phases[task] = (phases[task] + step) % length
@@ -483,8 +486,9 @@ def search(model: SystemModel, goals: list[Goal], budget: Budget, horizon: Fract
             if g.below is not None and not _beyond(b, g.target, "best", g.below):
                 return False
             if g.spread is not None:
-                if w is None or b is None or not (w.values[g.target].worst.value
-                                                  - b.values[g.target].best.value > g.spread):
+                # (a run kept in the result has its sample)
+                if w is None or b is None or not (w.values[g.target].worst.value  # type: ignore[union-attr]
+                                                  - b.values[g.target].best.value > g.spread):  # type: ignore[union-attr]
                     return False
         return True
 
@@ -493,11 +497,11 @@ def search(model: SystemModel, goals: list[Goal], budget: Budget, horizon: Fract
         for t in targets:
             w, b = m.values[t].worst, m.values[t].best
             cur = result.worst.get(t)
-            if w is not None and (cur is None or w.value > cur.values[t].worst.value):
+            if w is not None and (cur is None or w.value > cur.values[t].worst.value):  # type: ignore[union-attr]
                 result.worst[t] = m
                 improved = True
             cur = result.best.get(t)
-            if b is not None and (cur is None or b.value < cur.values[t].best.value):
+            if b is not None and (cur is None or b.value < cur.values[t].best.value):  # type: ignore[union-attr]
                 result.best[t] = m
                 improved = True
         return improved
@@ -512,6 +516,7 @@ def search(model: SystemModel, goals: list[Goal], budget: Budget, horizon: Fract
         result.explored += 1
         return m
 
+    m: Measured | None
     for m in given:
         result.explored += 1
         consider(m)
@@ -543,7 +548,7 @@ def search(model: SystemModel, goals: list[Goal], budget: Budget, horizon: Fract
 def _beyond(m: Measured | None, target: Target, side: str, threshold: Fraction) -> bool:
     if m is None:
         return False
-    s = getattr(m.values[target], side)
+    s: Sample | ResponseSample | None = getattr(m.values[target], side)
     if s is None:
         return False
     return s.value > threshold if side == "worst" else s.value < threshold

@@ -21,24 +21,48 @@ from __future__ import annotations
 
 import heapq
 from bisect import bisect_left
+from collections.abc import Callable, Iterable, Sequence
 from fractions import Fraction
+from typing import TYPE_CHECKING, Protocol, TypeAlias
 
-from ..model import SystemModel
+from ..model import ChainModel, SystemModel, TaskModel
 from ..sim import (DEFAULT_MAX_EVENTS, JobRecord, Message, Sample, ScenarioError, SimulationError,
                    Trace)
 from ..timebase import TimeBase
 
+if TYPE_CHECKING:
+    from .scenario import ConcreteScenario, Extremes, Measured, ResponseSample, Target, TimingState
+
 _ARRIVAL, _RELEASE = 1, 2  # heap phases, as in verify.sim
+
+#: a message: (connection, index, writer task, writer job)
+_Msg: TypeAlias = "tuple[int, int, int, int]"
+#: a job's dispatch rank: (−priority, release, task, index)
+_Key: TypeAlias = "tuple[int, int, int, int]"
+#: a heap entry: (time, phase, sequence number, message of an arrival or task of a release)
+_Event: TypeAlias = "tuple[int, int, int, int | _Msg]"
+#: a chain sample in ticks: (value, begin, end, origin, stamp, last)
+IntSample: TypeAlias = "tuple[int, int, int, int, int, int]"
 
 
 class _Job:
     __slots__ = ("task", "index", "release", "remaining", "start", "finish", "reads", "key", "cost")
 
-    def __init__(self, task: int, index: int, release: int, exec_time: int, key: tuple):
+    task: int
+    index: int
+    release: int
+    remaining: int
+    start: int | None
+    finish: int | None
+    reads: tuple[_Msg | None, ...] | None
+    key: _Key
+    cost: int
+
+    def __init__(self, task: int, index: int, release: int, exec_time: int, key: _Key):
         self.task, self.index, self.release, self.remaining = task, index, release, exec_time
         self.cost = exec_time
         self.start = self.finish = None
-        self.reads: tuple | None = None
+        self.reads = None
         self.key = key
 
 
@@ -58,9 +82,10 @@ class IntSimulator:
     jobs of a core are a heap by dispatch rank; a completed job leaves it when it reaches the top.
     With ``log`` the arrivals are recorded too, for ``trace``."""
 
-    def __init__(self, model: SystemModel, phases: dict, counters: dict, max_events: int,
-                 extra_times=(), *, exec_times: dict | None = None, delays: dict | None = None,
-                 interarrivals: dict | None = None, log: bool = False):
+    def __init__(self, model: SystemModel, phases: dict[str, Fraction], counters: dict[str, int], max_events: int,
+                 extra_times: Iterable[Fraction] = (), *, exec_times: dict[str, tuple[Fraction, ...]] | None = None,
+                 delays: dict[tuple[str, str], tuple[Fraction, ...]] | None = None,
+                 interarrivals: dict[str, tuple[Fraction, ...]] | None = None, log: bool = False):
         if model.holes:
             raise ScenarioError(f"cannot simulate unresolved holes: {[t.id for t in model.holes]}")
         tasks = model.tasks
@@ -70,7 +95,7 @@ class IntSimulator:
         for t in tasks:
             act = t.activation
             if act.gaps is not None:  # released by time: the gaps a run takes, and a fixed phase
-                times += [act.gaps[0], act.fixed_phase or 0]
+                times += [act.gaps[0], act.fixed_phase or 0]  # type: ignore[list-item]  # (0 counts for nothing)
         legal_exec = {t.id: (t.bcet, t.wcet) for t in tasks}
         legal_delay = {(lk.source, lk.target): (lk.delay_min, lk.delay_max) for lk in model.links}
         legal_gap = {t.id: t.activation.gaps for t in tasks
@@ -78,13 +103,13 @@ class IntSimulator:
         for patterns, legal in ((exec_times, legal_exec), (delays, legal_delay), (interarrivals, legal_gap)):
             for key, pattern in patterns.items():
                 if key in legal:
-                    lo, hi = legal[key]
+                    lo, hi = legal[key]  # type: ignore[index]  # (each pattern with the ranges of its keys)
                     times += [v for v in pattern if lo <= v <= hi]
         self.base = base = TimeBase.gcd_of(times)
         self.unit = base.unit
         self.model, self.max_events = model, max_events
         self.ids = [t.id for t in tasks]
-        self.index_of = {t.id: i for i, t in enumerate(tasks)}
+        self.index_of: dict[str, int] = {t.id: i for i, t in enumerate(tasks)}
         cores = list(dict.fromkeys(t.core for t in tasks))
         self.core = [cores.index(t.core) for t in tasks]
         self.ncores = len(cores)
@@ -107,35 +132,36 @@ class IntSimulator:
                       for t in tasks]
         self.period: list[int | None] = [None] * len(tasks)
         self.gap: list[int | None] = [None] * len(tasks)  # a sporadic source's default gap
-        self.gap_pattern: list = [None] * len(tasks)
+        self.gap_pattern: list[_Pattern | None] = [None] * len(tasks)
         self.triggered: dict[str, list[tuple[int, str]]] = {}
         self.counter: dict[int, int] = {}
-        self.fresh: dict[int, set] = {}
+        self.fresh: dict[int, set[str]] = {}
         self.prescaler: dict[int, int] = {}
-        self.and_members: dict[int, frozenset] = {}
+        self.and_members: dict[int, frozenset[str]] = {}
         self.now = self.events = self.seq = 0
-        self.heap: list = []
+        self.heap: list[_Event] = []
         self.jobs: list[list[_Job]] = [[] for _ in tasks]
-        self.ready: list[list[tuple[tuple, _Job]]] = [[] for _ in cores]  # heaps of (rank, job)
+        self.ready: list[list[tuple[_Key, _Job]]] = [[] for _ in cores]  # heaps of (rank, job)
         self.running: list[_Job | None] = [None] * len(cores)
         self.holder: dict[str, _Job] = {}
-        self.registers: dict[str, tuple] = {}
+        self.registers: dict[str, _Msg] = {}
         self.sent = [0] * len(self.links)
         self.last_arrival: dict[int, int] = {}
-        self.arrivals: list[tuple[tuple, int]] | None = [] if log else None  # (message, arrival) for ``trace``
+        self.arrivals: list[tuple[_Msg, int]] | None = [] if log else None  # (message, arrival) for ``trace``
         for i, t in enumerate(tasks):
             self._init_activation(i, t, phases, counters, interarrivals, base)
 
     @classmethod
-    def of(cls, model: SystemModel, scenario, max_events: int, extra_times=(), log: bool = False) -> "IntSimulator":
+    def of(cls, model: SystemModel, scenario: ConcreteScenario, max_events: int,
+           extra_times: Iterable[Fraction] = (), log: bool = False) -> "IntSimulator":
         """The simulator of a ``scenario.ConcreteScenario`` (its horizon is not used here); with
         ``log`` it records the arrivals that ``trace`` needs."""
         return cls(model, dict(scenario.phases), dict(scenario.counters), max_events, extra_times,
                    exec_times=dict(scenario.exec_times), delays=dict(scenario.delays),
                    interarrivals=dict(scenario.interarrivals), log=log)
 
-    def _init_activation(self, i: int, t, phases: dict, counters: dict, interarrivals: dict,
-                         base: TimeBase) -> None:
+    def _init_activation(self, i: int, t: TaskModel, phases: dict[str, Fraction], counters: dict[str, int],
+                         interarrivals: dict[str, tuple[Fraction, ...]], base: TimeBase) -> None:
         act = t.activation
         if act.gaps is not None:  # released by time (specs/timing.md §3)
             phase = phases.get(t.id)
@@ -145,7 +171,7 @@ class IntSimulator:
                 phase = act.fixed_phase
             else:
                 phase = Fraction(0) if phase is None else phase
-                if not 0 <= phase < act.offset_window:
+                if not 0 <= phase < act.offset_window:  # type: ignore[operator]  # (free phase: a window)
                     raise ScenarioError(f"{t.id}: {act.offset_name} {phase} outside [0, {act.offset_window})")
             low, high = act.gaps
             if low == high:
@@ -166,7 +192,7 @@ class IntSimulator:
 
     # -------------------------------------------------------------- the event loop
 
-    def _push(self, time: int, phase: int, payload) -> None:
+    def _push(self, time: int, phase: int, payload: int | _Msg) -> None:
         self.seq += 1
         heapq.heappush(self.heap, (time, phase, self.seq, payload))
 
@@ -198,7 +224,7 @@ class IntSimulator:
                 break
             # advance, then complete every running job that is done (in task order)
             d = nxt - now
-            due = None
+            due: list[_Job] | None = None
             for job in running:
                 if job is not None:
                     job.remaining -= d
@@ -213,10 +239,10 @@ class IntSimulator:
                     self._complete(job)
             while heap and heap[0][0] == nxt and heap[0][1] == _ARRIVAL:
                 self._count()
-                self._arrive(pop(heap)[3])
+                self._arrive(pop(heap)[3])  # type: ignore[arg-type]  # an arrival carries its message
             while heap and heap[0][0] == nxt and heap[0][1] == _RELEASE:
                 self._count()
-                self._timed_release(pop(heap)[3])
+                self._timed_release(pop(heap)[3])  # type: ignore[arg-type]  # a release its task
             self._dispatch()
         if self.now < until:
             self._advance(until)
@@ -253,7 +279,7 @@ class IntSimulator:
             self.last_arrival[c] = arrival
             self._push(arrival, _ARRIVAL, (c, index, t, job.index))
 
-    def _arrive(self, msg: tuple) -> None:
+    def _arrive(self, msg: _Msg) -> None:
         port = self.target[msg[0]]
         self.registers[port] = msg
         if self.arrivals is not None:
@@ -283,8 +309,8 @@ class IntSimulator:
         else:
             act = self.model.tasks[t].activation
             gap = pattern.at(index, lambda v: f"{self.ids[t]}#{index}: inter-arrival {v} outside "
-                                              f"[{act.min_interarrival}, {act.max_interarrival}]")
-        self._push(self.now + gap, _RELEASE, t)
+                                              f"[{act.min_interarrival}, {act.max_interarrival}]")  # type: ignore[union-attr]
+        self._push(self.now + gap, _RELEASE, t)  # type: ignore[operator]  # (a sporadic source has its gap)
 
     def _release(self, t: int) -> _Job:
         jobs = self.jobs[t]
@@ -313,6 +339,8 @@ class IntSimulator:
         job = heap[0][1]
         if not self.coop[job.task] or job.start is not None or self.instance[job.task] not in self.holder:
             return job
+        skipped: list[tuple[_Key, _Job]]
+        best: _Job | None
         skipped, best = [], None  # rare: ineligible jobs on top
         while heap:
             entry = heapq.heappop(heap)
@@ -332,8 +360,9 @@ class IntSimulator:
         at a time in rank order (verify.sim ``_dispatch``)."""
         running, ready, coop, instance, holder = self.running, self.ready, self.coop, self.instance, self.holder
         pop = heapq.heappop
+        best: _Job | None
         while True:
-            starting = None
+            starting: _Job | None = None
             for core in range(self.ncores):
                 heap = ready[core]  # (``_best``, its common case inlined: the top is eligible)
                 while heap and heap[0][1].finish is not None:
@@ -363,7 +392,7 @@ class IntSimulator:
         """The released, uncompleted jobs of ``core``."""
         return [job for _key, job in self.ready[core] if job.finish is None]
 
-    def trace(self, horizon: Fraction, tasks=None) -> Trace:
+    def trace(self, horizon: Fraction, tasks: Iterable[str] | None = None) -> Trace:
         """The run so far as the reference simulator's ``Trace`` of a run over ``[0, horizon)``
         (jobs with their reads, arrived messages in arrival order), in ``Fraction`` seconds. With
         ``tasks`` (task ids), only the jobs of those tasks and the messages they read. Needs a
@@ -371,6 +400,7 @@ class IntSimulator:
         assert self.arrivals is not None, "the simulator was built without log=True"
         unit, ids, links, jobs = self.unit, self.ids, self.links, self.jobs
         chosen = range(len(jobs)) if tasks is None else sorted(self.index_of[t] for t in set(tasks))
+        wanted: set[tuple[int, int]] | None
         if tasks is None:
             wanted = None
         else:
@@ -380,14 +410,14 @@ class IntSimulator:
             if wanted is None or (c, index) in wanted:
                 lk = links[c]
                 messages[(c, index)] = Message(lk.source, lk.target, index, ids[writer], job,
-                                               jobs[writer][job].finish * unit, at * unit)
-        records = {}
+                                               jobs[writer][job].finish * unit, at * unit)  # type: ignore[operator]
+        records: dict[str, tuple[JobRecord, ...]] = {}
         for i in chosen:
             ports = self.read_ports[i]
             rows = []
             for j in jobs[i]:
                 reads = () if j.start is None else tuple(dict(zip(ports, (
-                    None if m is None else messages[(m[0], m[1])] for m in j.reads))).items())
+                    None if m is None else messages[(m[0], m[1])] for m in j.reads))).items())  # type: ignore[union-attr]
                 rows.append(JobRecord(ids[i], j.index, j.release * unit, j.cost * unit,
                                       None if j.start is None else j.start * unit,
                                       None if j.finish is None else j.finish * unit, reads))
@@ -396,13 +426,13 @@ class IntSimulator:
 
     # -------------------------------------------------------------- timing state (§4.3)
 
-    def timing_state(self, at: int) -> tuple:
+    def timing_state(self, at: int) -> TimingState:
         """What ``scenario.timing_state`` records, relative to ``at``, with tasks and connections by
         index (a bijection with their names, so equality of states is the same)."""
         ready = tuple(sorted((core, tuple(sorted((j.task, j.release - at, j.remaining, j.start is not None)
                                                  for j in self.pending(core)))) for core in range(self.ncores)))
         holders = tuple(sorted((inst, j.task, j.release - at) for inst, j in self.holder.items()))
-        heap = tuple(sorted((time - at, phase, payload if phase == _RELEASE else payload[0])
+        heap = tuple(sorted((time - at, phase, payload if phase == _RELEASE else payload[0])  # type: ignore[index]
                             for time, phase, _seq, payload in self.heap))
         back = tuple(sorted((k, v - at) for k, v in self.last_arrival.items() if v > at))
         counters = tuple(sorted(self.counter.items()))
@@ -410,12 +440,12 @@ class IntSimulator:
         return ready, holders, heap, back, counters, fresh
 
 
-class _Pattern(tuple):
+class _Pattern(tuple[int | None, ...]):
     """A per-job pattern in ticks; an entry outside the legal range is None (``values``: as given)."""
 
-    values: tuple
+    values: tuple[Fraction, ...]
 
-    def at(self, index: int, refusal) -> int:
+    def at(self, index: int, refusal: Callable[[Fraction], str]) -> int:
         """Entry ``index mod len``, or ``ScenarioError(refusal(value as given))`` if it is out of range."""
         value = self[index % len(self)]
         if value is None:
@@ -423,7 +453,7 @@ class _Pattern(tuple):
         return value
 
 
-def _pattern(values, legal: tuple[Fraction, Fraction], base: TimeBase) -> _Pattern | None:
+def _pattern(values: Sequence[Fraction] | None, legal: tuple[Fraction, Fraction], base: TimeBase) -> _Pattern | None:
     if not values:
         return None
     lo, hi = legal
@@ -437,34 +467,42 @@ def _pattern(values, legal: tuple[Fraction, Fraction], base: TimeBase) -> _Patte
 # ------------------------------------------------------------------ samples (specs/timing.md §4)
 
 
+class JobRecords(Protocol):
+    """The job records of a run (``IntSimulator``, or ``rigid.PeriodicShift``'s view of one)."""
+
+    index_of: dict[str, int]
+    read_ports: list[tuple[str, ...]]
+    jobs: list[list[_Job]]
+
+
 class ChainSamples:
     """The samples of one chain in the run so far, as integer tuples ``(value, begin, end, origin,
     stamp, last)`` in the order ``verify.sim.chain_latencies`` lists them."""
 
-    def __init__(self, sim: IntSimulator, chain):
+    def __init__(self, sim: JobRecords, chain: ChainModel):
         first = sim.index_of[chain.tasks[0]]
         last = sim.index_of[chain.tasks[-1]]
         n = len(chain.tasks)
         # the read-port index, per chain position ≥ 1, of the hop's in-port in that position's task
-        hop_port = {}
+        hop_port: dict[int, str] = {}
         for pos in range(1, n):
             port = chain.hops[pos - 1].link.target
             hop_port[pos] = port
         jobs = sim.jobs
         reads = {j.index: j.start for j in jobs[first] if j.start is not None}
-        memo: dict = {}
-        port_index: dict = {}
+        memo: dict[tuple[int, int, int], tuple[int, int] | None] = {}
+        port_index: dict[tuple[int, str], int] = {}
 
-        def message(pos: int, job: _Job):
+        def message(pos: int, job: _Job) -> _Msg | None:
             """What ``job`` (at chain position ``pos`` ≥ 1) read on the hop's in-port, or None."""
             pk = (job.task, hop_port[pos])
             idx = port_index.get(pk)
             if idx is None:
                 ports = sim.read_ports[job.task]
                 idx = port_index[pk] = ports.index(hop_port[pos]) if hop_port[pos] in ports else -1
-            return None if idx < 0 else job.reads[idx]
+            return None if idx < 0 else job.reads[idx]  # type: ignore[index]  # (it has started)
 
-        def stamp(pos: int, job: _Job):
+        def stamp(pos: int, job: _Job) -> tuple[int, int] | None:
             if pos == 0:
                 assert job.start is not None
                 return job.index, job.start
@@ -476,7 +514,7 @@ class ChainSamples:
             memo[key] = value
             return value
 
-        holders = []
+        holders: list[tuple[int, int, _Job]] = []
         for job in jobs[last]:
             if job.finish is None:
                 continue
@@ -487,21 +525,22 @@ class ChainSamples:
         self.holders = holders
         self.reads = reads
 
-    def data_age(self) -> list[tuple]:
-        return [(job.finish - s, s, job.finish, k, k, job.index) for s, k, job in self.holders]
+    # (the holders are finished jobs)
+    def data_age(self) -> list[IntSample]:
+        return [(job.finish - s, s, job.finish, k, k, job.index) for s, k, job in self.holders]  # type: ignore[operator, misc]
 
-    def data_age_nonreduced(self) -> list[tuple]:
+    def data_age_nonreduced(self) -> list[IntSample]:
         reads = self.reads
-        return [(job.finish - reads[k - 1], reads[k - 1], job.finish, k - 1, k, job.index)
+        return [(job.finish - reads[k - 1], reads[k - 1], job.finish, k - 1, k, job.index)  # type: ignore[operator, misc]
                 for s, k, job in self.holders if k >= 1]
 
-    def reactions(self) -> tuple[list[tuple], list[tuple]]:
+    def reactions(self) -> tuple[list[IntSample], list[IntSample]]:
         holders = sorted(self.holders, key=lambda h: h[0])
         stamps = [h[0] for h in holders]
-        best_from: list = [None] * len(holders)
+        best_from: list[tuple[int, int, int] | None] = [None] * len(holders)
         running = None
         for i in range(len(holders) - 1, -1, -1):
-            cand = (holders[i][2].finish, holders[i][2].index, holders[i][1])
+            cand: tuple[int, int, int] = (holders[i][2].finish, holders[i][2].index, holders[i][1])  # type: ignore[assignment]
             running = cand if running is None or cand < running else running
             best_from[i] = running
         react, react_r = [], []
@@ -510,12 +549,12 @@ class ChainSamples:
             pos = bisect_left(stamps, reads[j])
             if j == 0 or pos == len(holders):
                 continue
-            f, last, k = best_from[pos]
+            f, last, k = best_from[pos]  # type: ignore[misc]  # (set at every position)
             react.append((f - reads[j - 1], reads[j - 1], f, j - 1, k, last))
             react_r.append((f - reads[j], reads[j], f, j, k, last))
         return react, react_r
 
-    def of_kind(self, kind: str) -> list[tuple]:
+    def of_kind(self, kind: str) -> list[IntSample]:
         if kind == "data_age":
             return self.data_age()
         if kind == "data_age_nonreduced":
@@ -524,7 +563,9 @@ class ChainSamples:
         return react if kind == "reaction_time" else react_r
 
 
-def _stamp_iterative(stamp, message, job, pos, jobs, memo):
+def _stamp_iterative(stamp: Callable[[int, _Job], tuple[int, int] | None], message: Callable[[int, _Job], _Msg | None],
+                     job: _Job, pos: int, jobs: list[list[_Job]],
+                     memo: dict[tuple[int, int, int], tuple[int, int] | None]) -> tuple[int, int] | None:
     """``stamp(pos, job)``, first filling the memo along the chain of writers from the back so
     that the recursion in ``stamp`` is at most one level deep per call."""
     path = []
@@ -542,7 +583,7 @@ def _stamp_iterative(stamp, message, job, pos, jobs, memo):
     return stamp(pos, job)
 
 
-def to_sample(t: tuple, unit: Fraction) -> Sample:
+def to_sample(t: IntSample, unit: Fraction) -> Sample:
     value, begin, end, origin, stamp, last = t
     return Sample(value * unit, begin * unit, end * unit, origin, stamp, last)
 
@@ -550,7 +591,8 @@ def to_sample(t: tuple, unit: Fraction) -> Sample:
 # ------------------------------------------------------------------ one scenario up to its horizon
 
 
-def run_trace(model: SystemModel, scenario, max_events: int = DEFAULT_MAX_EVENTS, tasks=None) -> Trace:
+def run_trace(model: SystemModel, scenario: ConcreteScenario, max_events: int = DEFAULT_MAX_EVENTS,
+              tasks: Iterable[str] | None = None) -> Trace:
     """The ``Trace`` of ``scenario`` (a ``scenario.ConcreteScenario``) over ``[0, horizon)``: what
     ``scenario.replay`` gives by the reference simulator (tests/test_intsim.py compares the two); with
     ``tasks``, only their jobs and the messages they read (``IntSimulator.trace``)."""
@@ -559,7 +601,8 @@ def run_trace(model: SystemModel, scenario, max_events: int = DEFAULT_MAX_EVENTS
     return sim.trace(scenario.horizon, tasks)
 
 
-def target_samples(model: SystemModel, scenario, targets, max_events: int = DEFAULT_MAX_EVENTS) -> dict:
+def target_samples(model: SystemModel, scenario: ConcreteScenario, targets: Iterable[Target],
+                   max_events: int = DEFAULT_MAX_EVENTS) -> dict[Target, list[ResponseSample] | list[Sample]]:
     """Every sample of each target in the run of ``scenario`` over ``[0, horizon)``, as the reference
     path lists them (``scenario._chain_samples`` of the trace; for a task ``_response_samples`` with
     the jobs still open at the horizon, their value ``horizon − release``)."""
@@ -570,7 +613,7 @@ def target_samples(model: SystemModel, scenario, targets, max_events: int = DEFA
     horizon = sim.base.ticks(scenario.horizon)
     sim.run_to(horizon)
     chain_samples = _chain_samples_of(sim, model)
-    out = {}
+    out: dict[Target, list[ResponseSample] | list[Sample]] = {}
     for t in targets:
         if t.kind == "response":
             out[t] = [ResponseSample((horizon if j.finish is None else j.finish) * unit - j.release * unit, t.name,
@@ -581,7 +624,7 @@ def target_samples(model: SystemModel, scenario, targets, max_events: int = DEFA
     return out
 
 
-def _chain_samples_of(sim: IntSimulator, model: SystemModel):
+def _chain_samples_of(sim: IntSimulator, model: SystemModel) -> Callable[[str], ChainSamples]:
     """``ChainSamples`` of a chain of ``model`` (by name) in the run of ``sim``, each made once."""
     chains = {c.name: c for c in model.chains}
     made: dict[str, ChainSamples] = {}
@@ -594,17 +637,19 @@ def _chain_samples_of(sim: IntSimulator, model: SystemModel):
     return chain_samples
 
 
-def extremes_of(targets, unit: Fraction, jobs_of, chain_samples, open_until: int | None = None) -> dict:
+def extremes_of(targets: Iterable[Target], unit: Fraction, jobs_of: Callable[[str], list[_Job]],
+                chain_samples: Callable[[str], ChainSamples],
+                open_until: int | None = None) -> dict[Target, Extremes]:
     """The ``scenario.Extremes`` of each target from integer job records, in seconds: ``jobs_of(task
     id)`` gives a task's jobs, ``chain_samples(chain name)`` a chain's ``ChainSamples``. A job not
     finished is left out, or, with ``open_until`` (ticks), counted with ``open_until − release`` (as
     ``scenario.extremes`` with ``with_open``). Ties go to the earliest sample, as there."""
     from .scenario import Extremes, ResponseSample
 
-    values = {}
+    values: dict[Target, Extremes] = {}
     for t in targets:
         if t.kind == "response":
-            found = [(open_until - j.release if j.finish is None else j.finish - j.release, j.index, j.release,
+            found = [(open_until - j.release if j.finish is None else j.finish - j.release, j.index, j.release,  # type: ignore[operator]
                       j.finish) for j in jobs_of(t.name) if j.finish is not None or open_until is not None]
             if not found:
                 values[t] = Extremes(None, None)
@@ -614,17 +659,18 @@ def extremes_of(targets, unit: Fraction, jobs_of, chain_samples, open_until: int
             values[t] = Extremes(*(ResponseSample(v * unit, t.name, i, r * unit, None if f is None else f * unit)
                                    for v, i, r, f in (worst, best)))
             continue
-        found = chain_samples(t.name).of_kind(t.kind)
-        if not found:
+        samples = chain_samples(t.name).of_kind(t.kind)
+        if not samples:
             values[t] = Extremes(None, None)
             continue
-        worst = max(found, key=lambda s: (s[0], -s[1]))
-        best = min(found, key=lambda s: (s[0], s[1]))
-        values[t] = Extremes(to_sample(worst, unit), to_sample(best, unit))
+        worst_s = max(samples, key=lambda s: (s[0], -s[1]))
+        best_s = min(samples, key=lambda s: (s[0], s[1]))
+        values[t] = Extremes(to_sample(worst_s, unit), to_sample(best_s, unit))
     return values
 
 
-def measure_prefix(model: SystemModel, scenario, targets, max_events: int, event_budget: int | None = None):
+def measure_prefix(model: SystemModel, scenario: ConcreteScenario, targets: Iterable[Target], max_events: int,
+                   event_budget: int | None = None) -> Measured:
     """``scenario.measure`` on integers: the run of ``scenario`` over ``[0, horizon)`` and the
     extremes of every target in it, jobs still open at the horizon counted with ``horizon − release``
     (a lower bound on their response). The same run, samples and extremes as the reference path

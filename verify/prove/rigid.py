@@ -12,13 +12,21 @@ reference path (``scenario.measure_periodic_reference``) on random rigid systems
 """
 from __future__ import annotations
 
+from collections.abc import Callable, Hashable, Iterable
 from fractions import Fraction
+from typing import TYPE_CHECKING, TypeVar
 
 from ..model import SystemModel
 from .intsim import _ARRIVAL, ChainSamples, IntSimulator, _Job, extremes_of
 
+if TYPE_CHECKING:
+    from .scenario import ConcreteScenario, Measured, Target
 
-def rigid_scenario(model: SystemModel, scenario) -> bool:
+#: a time: ticks (``rigid``) or seconds (``scenario.measure_periodic_reference``)
+_T = TypeVar("_T", int, Fraction)
+
+
+def rigid_scenario(model: SystemModel, scenario: ConcreteScenario) -> bool:
     """Whether ``scenario`` on ``model`` is one this evaluator runs: constant execution times and
     delays, no sporadic source, no holes, and no per-job patterns in the scenario."""
     if model.holes or scenario.exec_times or scenario.delays or scenario.interarrivals:
@@ -31,10 +39,11 @@ def rigid_scenario(model: SystemModel, scenario) -> bool:
 # ------------------------------------------------------------------ one scenario, completely
 
 
-def repetition(run_to, timing_state, hyper, max_periods: int):
+def repetition(run_to: Callable[[_T], object], timing_state: Callable[[_T], Hashable], hyper: _T,
+               max_periods: int) -> tuple[_T, _T] | tuple[None, None]:
     """(t₀, P) of specs/proof.md §4.3: drive a run to the multiples of ``hyper`` until its timing
     state at one equals that at an earlier one; (None, None) if none repeats within ``max_periods``."""
-    seen: dict[tuple, int] = {}
+    seen: dict[Hashable, int] = {}
     for k in range(max_periods + 1):
         run_to(k * hyper)
         state = timing_state(k * hyper)
@@ -64,7 +73,7 @@ class _Snapshot:
         in_flight = [0] * len(sim.links)
         for _time, phase, _seq, payload in sim.heap:
             if phase == _ARRIVAL:
-                in_flight[payload[0]] += 1
+                in_flight[payload[0]] += 1  # type: ignore[index]  # (an arrival carries its message)
         self.arrived = [sent - flying for sent, flying in zip(sim.sent, in_flight)]
         self.events = sim.events
 
@@ -115,7 +124,8 @@ class PeriodicShift:
         p, shift = self.period, self.shift
         job = _new_job(_Job)
         job.task, job.index, job.release = task, src.index + shift[task], src.release + p
-        job.start, job.finish, job.remaining, job.key = src.start + p, src.finish + p, 0, None
+        # (a finished job has started; a record is never ranked again)
+        job.start, job.finish, job.remaining, job.key = src.start + p, src.finish + p, 0, None  # type: ignore[operator, assignment]
         reads = src.reads
         if reads:
             arrived, regs = self.arrived, self.registers[task]
@@ -137,31 +147,32 @@ class PeriodicShift:
             if n > 0:
                 append = jobs.append
                 while jobs[-n].release < last_release:
-                    append(moved(i, jobs[-n]))
+                    append(moved(i, jobs[-n]))  # type: ignore[arg-type]  # (the source has finished)
         self.jobs = [self._cut(jobs, horizon) for jobs in self.full]
         self.events = self.events_at(horizon)
         return self
 
     @staticmethod
-    def _cut(jobs: list, horizon: int) -> list:
+    def _cut(jobs: list[_Job], horizon: int) -> list[_Job]:
         k = len(jobs)
         while k and jobs[k - 1].release >= horizon:
             k -= 1
         out = jobs[:k]
         for j in range(k - 1, -1, -1):
             job = out[j]
-            if job.finish < horizon:
+            if job.finish < horizon:  # type: ignore[operator]  # (every job before the horizon finishes)
                 break
             cut = _new_job(_Job)
-            cut.task, cut.index, cut.release, cut.remaining, cut.key = job.task, job.index, job.release, 0, None
-            started = job.start < horizon
+            cut.task, cut.index, cut.release, cut.remaining, cut.key = job.task, job.index, job.release, 0, None  # type: ignore[assignment]
+            started = job.start < horizon  # type: ignore[operator]
             cut.start, cut.reads = (job.start, job.reads) if started else (None, None)
             cut.finish = None
             out[j] = cut
         return out
 
 
-def measure_rigid(model: SystemModel, scenario, targets, hyper: Fraction, max_periods: int, max_events: int):
+def measure_rigid(model: SystemModel, scenario: ConcreteScenario, targets: Iterable[Target], hyper: Fraction,
+                  max_periods: int, max_events: int) -> Measured:
     """``scenario.measure_periodic`` for a rigid scenario (``rigid_scenario``): the same detection
     of the periodic timing state at multiples of ``hyper``, the same coverage steps and the same
     extremes, computed on integers. Past the first repetition the run is not simulated again but
@@ -174,16 +185,17 @@ def measure_rigid(model: SystemModel, scenario, targets, hyper: Fraction, max_pe
     big_h = sim.base.ticks(hyper)
     snapshots: dict[int, _Snapshot] = {}
 
-    def timing_state(at: int) -> tuple:
+    def timing_state(at: int) -> Hashable:
         snapshots[at] = _Snapshot(sim)
         return sim.timing_state(at)
 
-    t0, period = repetition(sim.run_to, timing_state, big_h, max_periods)
+    period: int  # (None only together with t0)
+    t0, period = repetition(sim.run_to, timing_state, big_h, max_periods)  # type: ignore[assignment]
     horizon = sim.now
     complete = False
     chains = {c.name: c for c in model.chains}
     samples: dict[str, ChainSamples] = {}
-    run = sim
+    run: IntSimulator | PeriodicShift = sim
     shift = None if t0 is None else PeriodicShift.of(sim, snapshots[t0], snapshots[t0 + period], period)
 
     def chain_samples(name: str) -> ChainSamples:
@@ -191,7 +203,7 @@ def measure_rigid(model: SystemModel, scenario, targets, hyper: Fraction, max_pe
             samples[name] = ChainSamples(run, chains[name])
         return samples[name]
 
-    def covered(target, mark: int, end: int) -> bool:
+    def covered(target: Target, mark: int, end: int) -> bool:
         if target.kind == "response":
             return all(j.finish is not None for j in run.jobs[sim.index_of[target.name]] if j.release < end)
         return any(s >= mark for s, _k, _job in chain_samples(target.name).holders)

@@ -15,9 +15,10 @@ complete, so that its maxima are those of the infinite run.
 """
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
+from typing import Any, TypeAlias, TypeVar
 
 from ..model import SystemModel
 from ..timebase import frac_lcm
@@ -26,6 +27,10 @@ from ..sim import (DEFAULT_MAX_EVENTS, Sample, Scenario, Trace, _ARRIVAL, _RELEA
 
 ZERO = Fraction(0)
 CHAIN_KINDS = ("reaction_time", "data_age", "data_age_nonreduced")
+
+_K = TypeVar("_K")
+#: what decides the timing of a run's future (``timing_state``): six sorted tuples, compared for equality
+TimingState: TypeAlias = "tuple[tuple[object, ...], ...]"
 
 
 # ------------------------------------------------------------------ targets and samples
@@ -53,7 +58,8 @@ class ResponseSample:
 
 def _chain_samples(trace: Trace, model: SystemModel, target: Target) -> tuple[Sample, ...]:
     chain = next(c for c in model.chains if c.name == target.name)
-    return getattr(chain_latencies(trace, chain), target.kind)
+    samples: tuple[Sample, ...] = getattr(chain_latencies(trace, chain), target.kind)
+    return samples
 
 
 def _response_samples(trace: Trace, target: Target, with_open: bool = False) -> list[ResponseSample]:
@@ -75,6 +81,7 @@ class Extremes:
 
 
 def extremes(trace: Trace, model: SystemModel, target: Target, with_open: bool = False) -> Extremes:
+    samples: Sequence[Sample | ResponseSample]
     if target.kind == "response":
         samples = _response_samples(trace, target, with_open)
     else:
@@ -87,14 +94,14 @@ def extremes(trace: Trace, model: SystemModel, target: Target, with_open: bool =
     return Extremes(worst, best)
 
 
-def _when(s) -> Fraction:
+def _when(s: Sample | ResponseSample) -> Fraction:
     return s.begin if isinstance(s, Sample) else s.release
 
 
 # ------------------------------------------------------------------ scenarios
 
 
-def _pattern(values) -> tuple[Fraction, ...]:
+def _pattern(values: Iterable[Fraction | int | str]) -> tuple[Fraction, ...]:
     return tuple(Fraction(v) for v in values)
 
 
@@ -119,9 +126,9 @@ class ConcreteScenario:
     def to_sim(self, model: SystemModel) -> Scenario:
         """The ``verify.sim.Scenario`` of these choices; entries without a pattern take the
         simulator's defaults for ``model``."""
-        wcet = {t.id: t.wcet for t in model.tasks}
-        dmin = {(lk.source, lk.target): lk.delay_min for lk in model.links}
-        amin = {t.id: t.activation.gaps[0] for t in model.tasks
+        wcet: dict[str, Fraction] = {t.id: t.wcet for t in model.tasks}
+        dmin: dict[tuple[str, str], Fraction] = {(lk.source, lk.target): lk.delay_min for lk in model.links}
+        amin: dict[str, Fraction] = {t.id: t.activation.gaps[0] for t in model.tasks
                 if t.activation.gaps is not None and t.activation.gaps[0] != t.activation.gaps[1]}
         execs, delays, gaps = dict(self.exec_times), dict(self.delays), dict(self.interarrivals)
 
@@ -140,7 +147,7 @@ class ConcreteScenario:
         return Scenario(self.horizon, dict(self.phases), exec_time if execs else None,
                         delay if delays else None, gap if gaps else None, dict(self.counters))
 
-    def to_json(self) -> dict:
+    def to_json(self) -> dict[str, Any]:
         from ..timing.report import exact
 
         return {
@@ -154,8 +161,8 @@ class ConcreteScenario:
         }
 
     @classmethod
-    def from_json(cls, doc: dict) -> "ConcreteScenario":
-        def q(x) -> Fraction:
+    def from_json(cls, doc: dict[str, Any]) -> "ConcreteScenario":
+        def q(x: Any) -> Fraction:
             return Fraction(x["exact"])
 
         return cls(
@@ -190,7 +197,8 @@ class ConcreteScenario:
         return "; ".join(parts)
 
 
-def _policy_text(patterns, ranges, default: str) -> str | None:
+def _policy_text(patterns: Iterable[tuple[object, tuple[Fraction, ...]]],
+                 ranges: Mapping[_K, tuple[Fraction, Fraction]], default: str) -> str | None:
     """How the choices with a range were made (None: nothing has a range)."""
     chosen = dict(patterns)
     if all(lo == hi for lo, hi in ranges.values()):
@@ -252,7 +260,7 @@ def hyperperiod(model: SystemModel) -> Fraction | None:
             if any(w is None for w in writers):
                 eff[tid] = None
             else:
-                base = frac_lcm(writers)
+                base = frac_lcm(writers)  # type: ignore[arg-type]  # (none is None)
                 eff[tid] = None if base is None else base * act.release_every
         else:
             eff[tid] = None
@@ -279,7 +287,7 @@ class Measured:
     detected start ``t₀`` and ``period`` the detected period of the timing state."""
 
     scenario: ConcreteScenario
-    values: dict
+    values: dict[Target, Extremes]
     complete: bool
     horizon: Fraction
     periodic_from: Fraction | None = None
@@ -305,7 +313,7 @@ def _trace(sim: _Simulator, horizon: Fraction) -> Trace:
     return Trace(horizon, jobs, tuple(sim.messages))
 
 
-def timing_state(sim: _Simulator, at: Fraction) -> tuple:
+def timing_state(sim: _Simulator, at: Fraction) -> TimingState:
     """Everything that decides the *timing* of the future after ``at`` (nothing of provenance):
     pending jobs with their remaining work, cooperative tokens, scheduled releases and arrivals in
     processing order, FIFO back-pressure, prescaler counters and AND freshness — all relative to
@@ -317,7 +325,8 @@ def timing_state(sim: _Simulator, at: Fraction) -> tuple:
     # on different connections, do not interact within an instant (specs/proof.md §4.3); the stable
     # sort keeps the send order of messages on one connection
     entries = sorted(sim.heap, key=lambda e: (e[0], e[1], e[2]))
-    heap = tuple(sorted(((time - at, phase, payload.id if phase == _RELEASE else (payload.source, payload.target))
+    # (a release carries its task, an arrival its message)
+    heap = tuple(sorted(((time - at, phase, payload.id if phase == _RELEASE else (payload.source, payload.target))  # type: ignore[attr-defined]
                          for time, phase, _seq, payload in entries), key=lambda e: (e[0], e[1], e[2])))
     back = tuple(sorted((k, v - at) for k, v in sim.last_arrival.items() if v > at))
     counters = tuple(sorted(sim.counter.items()))
@@ -358,7 +367,8 @@ def measure_periodic_reference(model: SystemModel, scenario: ConcreteScenario, t
     sim = _Simulator(model, scenario.with_horizon(hyper * (max_periods + 2)).to_sim(model), max_events)
     from .rigid import repetition
 
-    t0, period = repetition(lambda t: _run_to(sim, t), lambda t: timing_state(sim, t), hyper, max_periods)
+    period: Fraction  # (None only together with t0)
+    t0, period = repetition(lambda t: _run_to(sim, t), lambda t: timing_state(sim, t), hyper, max_periods)  # type: ignore[assignment]
     horizon = sim.now
     complete = False
     if t0 is not None:

@@ -20,17 +20,22 @@ result (the caller reports "undecided").
 """
 from __future__ import annotations
 
+from collections.abc import Callable, Iterable
 from fractions import Fraction
+from typing import TypeAlias
 
 import z3
 
-from ..model import SystemModel
+from ..model import ChainModel, SystemModel
 from .exact import Budget, Extreme, ExactResult, Grid, exact_class, grid_of, scenario_of
 from ..timebase import ceil_to, floor_to
 from .scenario import Measured, Target, measure_periodic
 
 MAX_CELLS = 2_500  # instants × tasks: beyond, bit-blasting alone can outlast any resource limit
 MAX_PERIODS = 8  # hyperperiods tried for the start of the repetition
+
+#: provenance at one position and instant: (stamp, previous read, valid, previous valid)
+_Quad: TypeAlias = "tuple[z3.BitVecRef, z3.BitVecRef, z3.BoolRef, z3.BoolRef]"
 
 
 class EncodingMismatch(AssertionError):
@@ -69,14 +74,14 @@ class Encoding:
         self.model, self.grid = model, grid
         self.width = width
         self.h = grid.h
-        self.units = lambda x: int(Fraction(x) / self.h)
+        self.units: Callable[[Fraction], int] = lambda x: int(Fraction(x) / self.h)
         self.tasks = list(model.tasks)
-        self.ids = [t.id for t in self.tasks]
-        self.C = {t.id: self.units(t.wcet) for t in self.tasks}
-        self.hp = {t.id: [u.id for u in self.tasks if u.core == t.core and u.priority > t.priority]
-                   for t in self.tasks}
-        self.phi: dict[str, z3.ArithRef | int] = {}
-        self.cons: list = []
+        self.ids: list[str] = [t.id for t in self.tasks]
+        self.C: dict[str, int] = {t.id: self.units(t.wcet) for t in self.tasks}
+        self.hp: dict[str, list[str]] = {
+            t.id: [u.id for u in self.tasks if u.core == t.core and u.priority > t.priority] for t in self.tasks}
+        self.phi: dict[str, z3.BitVecRef | int] = {}
+        self.cons: list[z3.BoolRef] = []
         for t in self.tasks:
             act = t.activation
             if act.strict_period is not None:
@@ -89,26 +94,27 @@ class Encoding:
                     self.phi[t.id] = self.units(act.fixed_phase)
         if grid.normalise and grid.timers:
             self.cons.append(z3.Or([self.phi[a] == 0 for a in grid.timers]))
-        self.c0: dict[str, z3.ArithRef] = {}
+        self.c0: dict[str, z3.BitVecRef] = {}
         for tid, k in grid.counters:
             v = z3.BitVec(f"c0_{tid}", width)
             self.cons += [z3.ULT(v, k)]
             self.c0[tid] = v
-        self.trigger = {}
+        self.trigger: dict[str, tuple[str, int, int] | None] = {}  # writer, delay (units), prescaler
         for t in self.tasks:
             act = t.activation
             if act.trigger_port is not None:
                 lk = model.link_into(f"{t.instance}.{act.trigger_members[0]}")
                 self.trigger[t.id] = None if lk is None else (lk.writer, self.units(lk.delay_max), act.release_every)
-        self.q = {i: [] for i in self.ids}
-        self.rem = {i: [] for i in self.ids}
-        self.rel = {i: [] for i in self.ids}
-        self.comp = {i: [] for i in self.ids}
-        self.run = {i: [] for i in self.ids}
-        self.cnt = {i: [] for i in self.trigger}
-        self.rc = {i: [] for i in self.ids}
-        self.fc = {i: [] for i in self.ids}
-        self.chains = {name: _ChainVars(self, next(c for c in model.chains if c.name == name)) for name in chains}
+        self.q: dict[str, list[z3.BitVecRef]] = {i: [] for i in self.ids}
+        self.rem: dict[str, list[z3.BitVecRef]] = {i: [] for i in self.ids}
+        self.rel: dict[str, list[z3.BoolRef]] = {i: [] for i in self.ids}
+        self.comp: dict[str, list[z3.BoolRef]] = {i: [] for i in self.ids}
+        self.run: dict[str, list[z3.BoolRef]] = {i: [] for i in self.ids}
+        self.cnt: dict[str, list[z3.BitVecRef]] = {i: [] for i in self.trigger}
+        self.rc: dict[str, list[z3.BitVecRef]] = {i: [] for i in self.ids}
+        self.fc: dict[str, list[z3.BitVecRef]] = {i: [] for i in self.ids}
+        self.chains: dict[str, _ChainVars] = {
+            name: _ChainVars(self, next(c for c in model.chains if c.name == name)) for name in chains}
         self.W = -1
 
     def extend(self, W: int) -> None:
@@ -173,19 +179,19 @@ class Encoding:
             self.cons.append(r == z3.And(z3.UGT(self.q[i][t], 0), *[self.q[j][t] == 0 for j in self.hp[i]]))
             self.run[i].append(r)
 
-    def var(self, name: str):
+    def var(self, name: str) -> z3.BitVecRef:
         return z3.BitVec(name, self.width)
 
-    def val(self, x: int):
+    def val(self, x: int) -> z3.BitVecRef:
         return z3.BitVecVal(x, self.width)
 
-    def one(self, b):
+    def one(self, b: z3.BoolRef) -> z3.BitVecRef:
         return z3.If(b, self.val(1), self.val(0))
 
-    def start(self, i: str, t: int):
+    def start(self, i: str, t: int) -> z3.BoolRef:
         return z3.And(self.run[i][t], self.rem[i][t] == self.C[i])
 
-    def state(self, t: int) -> list:
+    def state(self, t: int) -> list[z3.BitVecRef]:
         """The timing state after instant t (what decides the future, proof spec §4.3)."""
         out = []
         for i in self.ids:
@@ -196,7 +202,7 @@ class Encoding:
                 out += [self.one(self.comp[src[0]][t - x]) for x in range(src[1])]
         return out
 
-    def scenario(self, model: z3.ModelRef):
+    def scenario(self, model: z3.ModelRef) -> tuple[dict[str, Fraction], dict[str, int]]:
         phases = {a: model.eval(self.phi[a], model_completion=True).as_long() * self.h for a in self.grid.timers}
         counters = {tid: model.eval(v, model_completion=True).as_long() for tid, v in self.c0.items()}
         return phases, {k: v for k, v in counters.items() if v}
@@ -206,22 +212,23 @@ class _ChainVars:
     """Provenance along one chain: per position the stamp (τ₁'s read) and the previous read held by
     the current job, per hop the register, and the stamps held by τₙ's completions."""
 
-    def __init__(self, enc: Encoding, chain):
+    def __init__(self, enc: Encoding, chain: ChainModel):
         self.enc, self.chain = enc, chain
         self.n = len(chain.tasks)
         self.delays = [enc.units(hop.link.delay_max) for hop in chain.hops]
-        self.cur = [[] for _ in range(self.n)]  # (stamp, previous read, valid, previous valid)
-        self.reg = [[] for _ in range(self.n)]
-        self.last = []  # τ₁'s latest read so far: (time, valid)
-        self.first = []  # τ₁'s first read: (time, valid)
-        self.held = []  # latest stamp held by a completion of τₙ: (stamp, valid)
+        self.cur: list[list[_Quad]] = [[] for _ in range(self.n)]  # (stamp, previous read, valid, prev. valid)
+        self.reg: list[list[_Quad]] = [[] for _ in range(self.n)]
+        self.last: list[tuple[z3.BitVecRef, z3.BoolRef]] = []  # τ₁'s latest read so far: (time, valid)
+        self.first: list[tuple[z3.BitVecRef, z3.BoolRef]] = []  # τ₁'s first read: (time, valid)
+        self.held: list[tuple[z3.BitVecRef, z3.BoolRef]] = []  # latest stamp held by a completion of τₙ
 
     def instant(self, t: int) -> None:
         enc, tasks = self.enc, self.chain.tasks
         name = self.chain.name
         F = z3.BoolVal(False)
         zero = enc.val(0)
-        prev = (lambda seq: seq[t - 1]) if t > 0 else (lambda seq: (zero, zero, F, F))
+        prev: Callable[[list[_Quad]], _Quad] = ((lambda seq: seq[t - 1]) if t > 0
+                                                else (lambda seq: (zero, zero, F, F)))
         s1 = enc.start(tasks[0], t)
         lt_prev, lv_prev = self.last[t - 1] if t > 0 else (zero, F)
         cs, cp, cv, cpv = [enc.var(f"st_{name}_0_{t}"), enc.var(f"pr_{name}_0_{t}"), z3.Bool(f"sv_{name}_0_{t}"),
@@ -267,7 +274,7 @@ class _ChainVars:
             enc.cons += [hs == hs_prev, hv == hv_prev]
         self.held.append((hs, hv))
 
-    def samples(self, kind: str, t: int):
+    def samples(self, kind: str, t: int) -> tuple[z3.BoolRef, z3.BitVecRef]:
         """(exists, value) of the sample ``kind`` ending with a completion of τₙ at instant t ≥ 1."""
         enc = self.enc
         comp = enc.comp[self.chain.tasks[-1]][t]
@@ -283,14 +290,14 @@ class _ChainVars:
         return z3.And(comp, v, z3.UGT(s, base)), now - base
 
 
-def _sample_terms(enc: Encoding, target: Target, W: int):
+def _sample_terms(enc: Encoding, target: Target, W: int) -> list[tuple[z3.BoolRef, z3.BitVecRef]]:
     if target.kind == "response":
         raise ValueError("response targets use counts")
     cv = enc.chains[target.name]
     return [cv.samples(target.kind, t) for t in range(1, W + 1)]
 
 
-def _exceeds(enc: Encoding, target: Target, W: int, threshold_units: Fraction, side: str):
+def _exceeds(enc: Encoding, target: Target, W: int, threshold_units: Fraction, side: str) -> z3.BoolRef:
     """A formula: some sample of ``target`` within [0, W] is above (below) ``threshold_units``."""
     if target.kind == "response":
         i = target.name
@@ -318,7 +325,7 @@ class _Spend:
     def __init__(self, total: int, budget: Budget | None):
         self.left, self.budget = total, budget
 
-    def check(self, solver: z3.Solver):
+    def check(self, solver: z3.Solver) -> z3.CheckSatResult:
         if self.left <= 0 or (self.budget is not None and self.budget.expired()):
             return z3.unknown
         solver.set("rlimit", self.left)
@@ -334,7 +341,8 @@ def _rlimit_count(solver: z3.Solver) -> int:
     return stats.get_key_value("rlimit count") if "rlimit count" in stats.keys() else 0
 
 
-def z3_exact(model: SystemModel, targets: list[Target], want_best=frozenset(), *, rlimit: int = 20_000_000,
+def z3_exact(model: SystemModel, targets: list[Target], want_best: Iterable[Target] = frozenset(), *,
+             rlimit: int = 20_000_000,
              budget: Budget | None = None, max_periods: int = MAX_PERIODS) -> ExactResult | None:
     """The exact extremes of ``targets`` by the encoding (None when it does not apply, is too large,
     or its queries together exhaust ``rlimit``, or the budget's deadline passes)."""
@@ -376,7 +384,7 @@ def z3_exact(model: SystemModel, targets: list[Target], want_best=frozenset(), *
             spans.append(None if rb is None else 2 * H + _ceil_units(rb, grid.h))
     if any(x is None for x in spans):
         return None
-    W = ts + max(spans, default=H) + 1
+    W = ts + max(spans, default=H) + 1  # type: ignore[type-var, operator]  # (none is None)
     if W * len(model.tasks) > MAX_CELLS:
         return None
     enc.extend(W)
@@ -391,7 +399,7 @@ def z3_exact(model: SystemModel, targets: list[Target], want_best=frozenset(), *
     return result
 
 
-def _optimise(model, enc: Encoding, solver: z3.Solver, grid: Grid, target: Target, W: int, side: str,
+def _optimise(model: SystemModel, enc: Encoding, solver: z3.Solver, grid: Grid, target: Target, W: int, side: str,
               budget: Budget | None, result: ExactResult, spend: _Spend) -> Extreme | None:
     measured = measure_periodic(model, scenario_of({a: Fraction(0) for a in grid.timers}, {}), [target],
                                 grid.hyper)
@@ -435,7 +443,7 @@ def _ceil_units(x: Fraction, h: Fraction) -> int:
     return -(-Fraction(x) // h)
 
 
-def _exists(enc: Encoding, target: Target, W: int):
+def _exists(enc: Encoding, target: Target, W: int) -> z3.BoolRef:
     if target.kind == "response":
         return z3.Or([r for r in enc.rel[target.name][:W + 1]])
     return z3.Or([e for e, _ in _sample_terms(enc, target, W)])
