@@ -76,11 +76,11 @@ import time
 import tracemalloc
 from collections import Counter
 from dataclasses import dataclass, field
-from datetime import datetime, timezone
+from datetime import datetime, UTC
 from fractions import Fraction
 from functools import cached_property
 from pathlib import Path
-from typing import Callable
+from collections.abc import Callable
 
 import verify
 
@@ -403,7 +403,8 @@ def _register_prove() -> None:
         chain = [v for v in proof.verdicts if v.subject == "chain"]
         result = {"jobs/hyperperiod": inst.hyperperiod_jobs, "scenarios": proof.explored}
         for v in chain:
-            result[v.kind] = f"{v.status} by {v.method} (exact {_ms(v.exact)}, spec {_ms(v.spec)}, bound {_ms(v.bound)})"
+            result[v.kind] = (f"{v.status} by {v.method} (exact {_ms(v.exact)}, spec {_ms(v.spec)}, "
+                              f"bound {_ms(v.bound)})")
         if not chain:
             raise BenchmarkError("the chain has no spec", result)
         undecided = [v for v in proof.verdicts if v.status == "undecided"]
@@ -445,8 +446,8 @@ def _synth_result(r) -> dict:
         if key in stats:
             out[label] = stats[key]
     if r.status == "unsat" and r.explanation is not None:
-        out["core"] = f"{len(r.explanation.core)} statement(s)" + (", minimal" if r.explanation.minimal else
-                                                                   f" (explanation {r.explanation.status}, not minimal)")
+        out["core"] = f"{len(r.explanation.core)} statement(s)" + (
+            ", minimal" if r.explanation.minimal else f" (explanation {r.explanation.status}, not minimal)")
     if r.status != "sat" and r.reason:
         out["reason"] = r.reason
     return out
@@ -705,7 +706,7 @@ def machine() -> dict:
         load = round(os.getloadavg()[0], 2)
     except OSError:
         load = None
-    return {"date": datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M:%S UTC"), "nproc": os.cpu_count(),
+    return {"date": datetime.now(UTC).strftime("%Y-%m-%d %H:%M:%S UTC"), "nproc": os.cpu_count(),
             "cpu": cpu, "python": platform.python_version(), "platform": platform.platform(),
             "loadavg_1min": load, **revision()}
 

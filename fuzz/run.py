@@ -115,7 +115,7 @@ def main(argv: list[str] | None = None) -> int:
         plan = {t: args.runs or 1000 for t in targets}
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    started = datetime.datetime.now(datetime.timezone.utc)
+    started = datetime.datetime.now(datetime.UTC)
     with ThreadPoolExecutor(max_workers=max(1, args.jobs)) as pool:
         results = list(pool.map(lambda t: fuzz_one(t, plan[t], out, max_len=args.max_len, smoke=args.smoke,
                                                    seed=args.seed), targets))

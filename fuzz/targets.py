@@ -7,19 +7,25 @@ and every regression input through them), so this module never imports atheris.
 
 | target | what runs on the input | invariants |
 |---|---|---|
-| ``parse`` | ``parse_source`` | every diagnostic located and in the language's words; a tree prints (``fmt``) to text that parses to the same tree |
-| ``validate`` | ``verify.load_text`` (resolve, validate, models, chains, rates) and the text and JSON renderers | located diagnostics; a valid system has a model |
-| ``analyze`` | ``verify.timing.analyze`` of every configured system, both data-age variants, its text and JSON reports | every response time at least the WCET |
-| ``synth`` | ``synthesize`` of every system with holes (at most ``SMALL`` tasks, a small solver budget) and its reports | a configuration found passes the independent re-check |
-| ``prove`` | ``prove`` of every configured system (at most ``SMALL`` tasks, budget ``PROVE_BUDGET``, one process) and its text, JSON and SARIF reports | the exit code follows the verdicts |
-| ``fmt`` | ``format_text`` twice | ``fmt(fmt(x)) == fmt(x)``, and the tree and the models of ``fmt(x)`` equal those of ``x`` |
+| ``parse`` | ``parse_source`` | every diagnostic located and in the language's words; a tree round-trips |
+| ``validate`` | ``verify.load_text``, its text and JSON renderers | located diagnostics; a valid system has a model |
+| ``analyze`` | ``verify.timing.analyze``, its text and JSON reports | every response time at least the WCET |
+| ``synth`` | ``synthesize`` and its reports | a configuration found passes the independent re-check |
+| ``prove`` | ``prove`` and its text, JSON and SARIF reports | the exit code follows the verdicts |
+| ``fmt`` | ``format_text`` twice | ``fmt(fmt(x)) == fmt(x)``, and ``fmt(x)`` has the tree and the models of ``x`` |
+
+In detail: ``parse`` checks that a tree prints (``fmt``) to text that parses to the same tree;
+``validate`` runs resolve, validate, models, chains and rates; ``analyze`` takes every configured
+system, both data-age variants; ``synth`` every system with holes (at most ``SMALL`` tasks, a small
+solver budget); ``prove`` every configured system (at most ``SMALL`` tasks, budget ``PROVE_BUDGET``,
+one process).
 """
 from __future__ import annotations
 
 import io
 import json
 from contextlib import redirect_stderr, redirect_stdout
-from typing import Callable
+from collections.abc import Callable
 
 #: systems larger than this are only loaded by the synth and prove targets (a mutant that copies a
 #: block many times would spend the run in one input)
@@ -100,7 +106,7 @@ def _models(data: bytes, holes: bool, small: bool = False):
     import verify
 
     result = verify.load_text(_text(data), "fuzz.vfy")
-    for name, model in sorted(result.models.items()):
+    for _name, model in sorted(result.models.items()):
         if bool(model.holes) == holes and (not small or len(model.tasks) <= SMALL):
             yield result, model
 
@@ -146,7 +152,7 @@ def prove(data: bytes) -> None:
     from verify.prove.report import to_json, to_text
     from verify.sarif import to_sarif
 
-    for result, model in _models(data, holes=False, small=True):
+    for _result, model in _models(data, holes=False, small=True):
         proof = run(model, budget=PROVE_BUDGET, rlimit=PROVE_RLIMIT, jobs=1)
         _located(proof.diagnostics)
         statuses = {v.status for v in proof.verdicts}

@@ -189,7 +189,8 @@ def test_runner_quick_mode_writes_json(tmp_path, capsys):
         assert r["result"]["proved"] == r["result"]["verdicts"] > 0
         assert r["chains"] == max(1, r["tasks"] // 5)
     (search,) = by_stage["prove-search"]
-    assert search["result"]["by search"] > 0 and search["result"]["scenarios"] <= run.QUICK_PARAMS["prove-search"]["budget"]
+    assert search["result"]["by search"] > 0
+    assert search["result"]["scenarios"] <= run.QUICK_PARAMS["prove-search"]["budget"]
     (pipeline,) = by_stage["analyze-pipeline"]
     assert pipeline["chains"] == 1 and pipeline["result"]["CPA rounds"] >= 1
     (exact,) = by_stage["prove-exact"]
@@ -204,7 +205,7 @@ def test_runner_quick_mode_writes_json(tmp_path, capsys):
             res = r["result"]
             assert 1 <= res["evaluations"] <= limit and "combinations" in res["space"]
             gave_up = res["evaluations"] == limit and res["status"] != "found"
-            assert res["status"] == ("gave up after %d evaluations (limit)" % limit if gave_up else res["status"])
+            assert res["status"] == (f"gave up after {limit} evaluations (limit)" if gave_up else res["status"])
             assert res["status"] in ("found", "unsat (space exhausted)") or gave_up
     assert all(r["result"]["status"] in ("sat", "unsat", "undecided") for r in by_stage["baseline-z3-direct"])
     table = capsys.readouterr().out

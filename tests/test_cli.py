@@ -17,6 +17,11 @@ NAV = str(EXAMPLES / "navigation" / "navigation.vfy")
 BROKEN = "component Laser { task T { wcet 1 ms } }\nsystem S { instance a : Lazer }\n"
 
 
+def _read(path: str) -> str:
+    with open(path) as f:
+        return f.read()
+
+
 def test_check_json_schema(write, capsys):
     path = write({"m.vfy": BROKEN})
     assert main(["check", path, "--format", "json"]) == 2
@@ -43,13 +48,13 @@ def test_fmt_never_overwrites_unless_asked(write, capsys):
     path = write({"a.vfy": src, "b.vfy": "keep me\n"})
     other = path.replace("a.vfy", "b.vfy")
     assert main(["fmt", path, "-o", other]) == 2
-    assert open(other).read() == "keep me\n"
-    assert open(path).read() == src
+    assert _read(other) == "keep me\n"
+    assert _read(path) == src
     assert main(["fmt", path, "--check"]) == 1
     assert main(["fmt", path, "-o", other, "--force"]) == 0
     assert main(["fmt", other, "--check"]) == 0
     assert main(["fmt", path, "--in-place"]) == 0
-    assert open(path).read() == open(other).read()
+    assert _read(path) == _read(other)
 
 
 def test_internal_errors_exit_70_without_traceback(monkeypatch, capsys):
@@ -107,7 +112,7 @@ def test_fmt_in_place_keeps_the_mode_and_leaves_no_temporary_file(write, tmp_pat
     path = write({"a.vfy": UNFORMATTED})
     os.chmod(path, 0o640)
     assert main(["fmt", path, "--in-place"]) == 0
-    assert open(path).read() != UNFORMATTED and main(["fmt", path, "--check"]) == 0
+    assert _read(path) != UNFORMATTED and main(["fmt", path, "--check"]) == 0
     assert stat.S_IMODE(os.stat(path).st_mode) == 0o640
     assert sorted(os.listdir(tmp_path)) == ["a.vfy"]
 
@@ -135,7 +140,7 @@ def test_fmt_in_place_failure_is_e004_and_loses_nothing(write, tmp_path, monkeyp
     err = capsys.readouterr().err
     assert "error[E004]" in err and "cannot write" in err and "Permission denied" in err
     assert "Traceback" not in err and "internal error" not in err
-    assert open(path).read() == UNFORMATTED
+    assert _read(path) == UNFORMATTED
     assert sorted(os.listdir(tmp_path)) == ["a.vfy"]  # the temporary file is removed
 
 
@@ -153,7 +158,7 @@ def test_fmt_in_place_where_no_temporary_file_can_be_made(write, tmp_path, monke
     assert main(["fmt", path, "--in-place"]) == 2
     err = capsys.readouterr().err
     assert "error[E004]" in err and "Permission denied" in err and "Traceback" not in err
-    assert open(path).read() == UNFORMATTED
+    assert _read(path) == UNFORMATTED
     assert sorted(os.listdir(tmp_path)) == ["a.vfy"]
 
 

@@ -32,7 +32,8 @@ def test_a_half_typed_file_has_a_partial_tree_with_what_was_typed():
 
 
 def test_recovery_inside_a_file_keeps_what_follows_the_error():
-    text = "component A { outx : T }\ncomponent B { in y : U }\nsystem S { core c instance b : B on c { task T priority } }\n"
+    text = ("component A { outx : T }\ncomponent B { in y : U }\n"
+            "system S { core c instance b : B on c { task T priority } }\n")
     parsed = parse_source(text, "m.vfy")
     assert parsed.module is None
     assert [c.name.text for c in parsed.partial.components] == ["A", "B"]

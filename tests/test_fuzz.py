@@ -27,7 +27,7 @@ def _regressions():
 
 @pytest.mark.parametrize("target", sorted(TARGETS))
 def test_every_seed_passes_every_stage(target):
-    for name, data in SEEDS.items():
+    for _name, data in SEEDS.items():
         run(target, data)
 
 

@@ -117,11 +117,13 @@ def test_the_fast_path_is_enabled_for_the_grammar():
     "component task { in timer : in task in { wcet 1 ms } }",
     "componentX { }", "component C { task T { wcet 1ms } }", "component C {} /* a */ /* b */",
     "/* \" */ x\" */", "// c\n#", "system S { core c chain k: a.b .. c.d }", "import \"a\" import\"b\"",
-    "component C { in a = b & c & d activation 1 ms .. 2 ms fixed }", "system S { instance i : C on c { task T timer ? in 1 ms .. 2 ms step 1/3 ms } }",
+    "component C { in a = b & c & d activation 1 ms .. 2 ms fixed }",
+    "system S { instance i : C on c { task T timer ? in 1 ms .. 2 ms step 1/3 ms } }",
     "system S { instance i:C{task T priority 1 on c trigger p every ? in 1 .. 3 wcrt 1 s deadline 2 s} }",
     "component C { task T { reads x optional oversampling <= 2 undersampling forbidden produces a, b } }",
     "", "   ", "// only a comment", "component C { task T { wcet 1 msx } }", "system S { core c policy fifo }",
-    "component C { task T { wcet 00000000000000000000000000000000000000001 ms } }", "component C { task T { wcet 1/0 ms } }",
+    "component C { task T { wcet 00000000000000000000000000000000000000001 ms } }",
+    "component C { task T { wcet 1/0 ms } }",
 ])
 def test_fast_path_agrees_with_lark_on_corner_cases(text):
     _assert_fast_path_exact(text)
@@ -133,7 +135,7 @@ def test_fast_path_decides_the_benchmark_systems_and_agrees():
 
 
 def test_fast_path_agrees_with_lark_on_mutants():
-    for name, text in LOAD_CASES.items():
+    for _name, text in LOAD_CASES.items():
         _assert_fast_path_exact(text)
 
 

@@ -569,9 +569,12 @@ def test_output_paths_are_checked_before_the_proof(tmp_path, capsys):
     for name in ("components.vfy", "navigation.vfy"):
         shutil.copy(NAV / name, tmp_path / name)
     model = str(tmp_path / "navigation.vfy")
-    before = open(model).read()
+    with open(model) as f:
+        before = f.read()
     assert main(["prove", model, "-o", model, "--force"]) == 2
-    assert "is the model being proved" in capsys.readouterr().err and open(model).read() == before
+    assert "is the model being proved" in capsys.readouterr().err
+    with open(model) as f:
+        assert f.read() == before
     assert main(["prove", model, "-o", str(tmp_path / "no" / "r.json")]) == 2
     assert "does not exist" in capsys.readouterr().err
     os.symlink(tmp_path / "r.json", tmp_path / "link.json")

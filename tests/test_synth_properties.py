@@ -62,11 +62,17 @@ def systems(draw) -> System:
     for i in range(n):
         source = None if i == 0 else draw(st.integers(0, i - 1))
         kinds = ["timer", "grid"] + ([] if i == 0 else ["trigger", "every"])
-        kind = draw(st.sampled_from(kinds)) if holes < 3 else draw(st.sampled_from([k for k in kinds if k in ("timer", "trigger")]))
+        if holes < 3:
+            kind = draw(st.sampled_from(kinds))
+        else:
+            kind = draw(st.sampled_from([k for k in kinds if k in ("timer", "trigger")]))
         if kind == "timer":
             act = f"timer {draw(st.sampled_from(PERIODS))}"
         elif kind == "grid":
-            act = f"grid {draw(st.sampled_from([5, 10, 20]))} {draw(st.sampled_from([5, 10, 15]))} {draw(st.integers(2, 4))}"
+            lo = draw(st.sampled_from([5, 10, 20]))
+            step = draw(st.sampled_from([5, 10, 15]))
+            count = draw(st.integers(2, 4))
+            act = f"grid {lo} {step} {count}"
             holes += 1
         elif kind == "trigger":
             act = f"trigger {draw(st.sampled_from([1, 1, 2]))}"
@@ -114,7 +120,8 @@ def render(sys_: System, scale: int = 1, order: random.Random | None = None) -> 
                                                                                                     "  task T {"]
         if t.source is not None:
             lines.append("    reads a" + (f" {t.tolerance}" if t.tolerance else ""))
-        lines += ["    produces o", f"    bcet {_time(F(t.bcet, 10), scale)}", f"    wcet {_time(F(t.wcet, 10), scale)}"]
+        lines += ["    produces o", f"    bcet {_time(F(t.bcet, 10), scale)}",
+                  f"    wcet {_time(F(t.wcet, 10), scale)}"]
         kind, *args = t.activation.split()
         if t.fixed:
             lines.append(f"    activation {_hz(F(1000, int(args[0])), scale)} fixed")
@@ -131,7 +138,8 @@ def render(sys_: System, scale: int = 1, order: random.Random | None = None) -> 
             act = "trigger a" + (f" every {args[0]}" if args[0] != "1" else "")
         else:
             act = f"trigger a every ? in 1 .. {args[0]}"
-        insts.append(f"  instance i{t.index} : C{t.index} on c{t.core} {{\n    task T priority {t.priority} {act}\n  }}")
+        insts.append(f"  instance i{t.index} : C{t.index} on c{t.core} {{\n"
+                     f"    task T priority {t.priority} {act}\n  }}")
         if t.source is not None:
             delay = sys_.delays.get(t.index)
             d = "" if not delay or delay[1] == 0 else f" delay {_time(delay[0], scale)} .. {_time(delay[1], scale)}"

@@ -72,7 +72,7 @@ def _perturbed(text: str, rng: random.Random) -> str:
         if roll < 0.08:
             out.append(" " * rng.randint(1, 3))
         elif roll < 0.12:
-            out.append(" /* c%d */ " % rng.randint(0, 99))
+            out.append(f" /* c{rng.randint(0, 99)} */ ")
         elif roll < 0.14:
             out.append("\n" + " " * rng.randint(0, 6))
     return "".join(out)

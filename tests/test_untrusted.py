@@ -173,7 +173,9 @@ def test_pyproject_settings_choose_root_and_include_within_their_directory(tmp_p
                       ("[tool.verify]\nroot = 3\n", "must be a string"), ('[tool]\nverify = "x"\n', "a table")):
         (repo / "pyproject.toml").write_text(bad)
         result = verify.load(str(main_file))
-        assert _codes(result) == ["E009"] and word in (result.diagnostics[0].message + (result.diagnostics[0].help or ""))
+        assert _codes(result) == ["E009"]
+        (d,) = result.diagnostics
+        assert word in (d.message + (d.help or ""))
 
 
 def test_the_search_for_pyproject_stops_at_the_repository(tmp_path):
