@@ -9,14 +9,25 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Mapping, Sequence
+from typing import TypedDict, Unpack
+from collections.abc import Mapping, Sequence
 
 from ..construct import direct_constructor
 from ..model import SystemModel
 from ..source import NO_SPAN, Span
 from ..timing import ChainBounds, TaskResponse
 from .scenario import Target
-from .verdict import Verdict, sim_kind
+from .verdict import Counterexample, Verdict, sim_kind
+
+
+class VerdictExtra(TypedDict, total=False):
+    """What a verdict may add to its obligation (the optional fields of ``Verdict``)."""
+
+    exact: Fraction | None
+    exact_best: Fraction | None
+    counterexample: Counterexample | None
+    note: str
+    explored: int
 
 
 @dataclass(frozen=True)
@@ -36,7 +47,7 @@ class Obligation:
     def proved_by_bound(self) -> bool:
         return self.bound is not None and self.bound <= self.spec
 
-    def verdict(self, status: str, method: str, **extra) -> Verdict:
+    def verdict(self, status: str, method: str, **extra: Unpack[VerdictExtra]) -> Verdict:
         return _new_verdict(self.subject, self.name, self.kind, self.spec, status, method, self.bound,
                             variant=self.variant, span=self.span, related=self.related, **extra)
 

@@ -10,23 +10,25 @@ violation but never proves.
 from __future__ import annotations
 
 import time
+from collections.abc import Mapping, Sequence
 from contextlib import closing
 from dataclasses import dataclass
 from fractions import Fraction
+from typing import cast
 
-from ..diagnostics import DiagnosticSink, Label
+from ..diagnostics import Diagnostic, DiagnosticSink, Label
 from ..gcpause import paused_gc
 from ..model import SystemModel
-from ..sim import ScenarioError, SimulationError
+from ..sim import Sample, ScenarioError, SimulationError
 from ..timing import response_and_chain_bounds
 from ..units import fmt_time
 from . import bound as bound_mod
 from .bound import Obligation
 from .cone import SliceMismatch, check_all_carry_over, restrict, slices
-from .exact import (SEARCH_EVENTS, Budget, ExactResult, Goal, approach, count_representatives, enumerate_exact,
-                    SearchResult, exact_class, first_scenarios, grid_of, search, search_horizon)
+from .exact import (SEARCH_EVENTS, Budget, ExactResult, Extreme, Goal, approach, count_representatives,
+                    enumerate_exact, SearchResult, exact_class, first_scenarios, grid_of, search, search_horizon)
 from .parallel import ordered_map, resolve_workers
-from .scenario import Measured, Target, measure
+from .scenario import ConcreteScenario, Measured, ResponseSample, Target, measure
 from .verdict import Counterexample, ProofResult, Verdict
 
 DEFAULT_BUDGET = 1000  # simulated scenarios
@@ -112,7 +114,8 @@ class _Left:
     explored: int  # scenarios the exact search of its cone simulated
 
 
-def _carries_over(model: SystemModel, decided: dict[int, Verdict], known: dict | None = None) -> bool:
+def _carries_over(model: SystemModel, decided: dict[int, Verdict],
+                  known: Mapping[ConcreteScenario, Measured] | None = None) -> bool:
     """Every counterexample of ``decided`` (found on a subsystem) holds on the whole ``model``; one
     whose samples come from ``known`` runs (scenario -> ``Measured``, made on the whole ``model``
     itself) needs no replay."""
@@ -125,7 +128,7 @@ def _carries_over(model: SystemModel, decided: dict[int, Verdict], known: dict |
     return True
 
 
-def _measured_on(cex: Counterexample, known: dict) -> bool:
+def _measured_on(cex: Counterexample, known: Mapping[ConcreteScenario, Measured]) -> bool:
     """The counterexample's samples are those of runs in ``known``."""
     worst = known.get(cex.scenario)
     if worst is None or worst.values.get(cex.target) is None or worst.values[cex.target].worst != cex.sample:
@@ -176,7 +179,7 @@ class _Cone:
 
 
 def _search_round(model: SystemModel, cones: list[_Cone], todo: list[int], round_: int, budget: Budget,
-                  jobs: int | None, known: dict, out: dict[int, Verdict]) -> None:
+                  jobs: int | None, known: Mapping[ConcreteScenario, Measured], out: dict[int, Verdict]) -> None:
     """One round of the searches of cones ``todo`` (their undecided obligations after round 0), in
     batches: verdicts into ``out``, each cone's search kept for the next round."""
     for start in range(0, len(todo), SEARCH_BATCH):
@@ -187,7 +190,7 @@ def _search_round(model: SystemModel, cones: list[_Cone], todo: list[int], round
         workers = resolve_workers(jobs) if size >= PARALLEL_TASK_SCENARIOS else 1
         items = {k: [r for r in cones[k].items if round_ == 0 or out[r.i].status == "undecided"] for k in batch}
 
-        def one(k: int):
+        def one(k: int) -> tuple[dict[int, Verdict], int, bool, SearchResult | None]:
             """Cone k's search and the replay of its counterexamples on the whole system (both
             in a worker when the batch is spread): (verdicts, scenarios used, carried over, search)."""
             cone = cones[k]
@@ -236,11 +239,12 @@ def _shared_firsts(model: SystemModel, pending: list[tuple[SystemModel, list[_Le
     runs = tuple(ordered_map(run, range(len(scenarios)), workers))
     if any(m is None for m in runs):
         return (), False
-    return runs, union is model
+    return cast("tuple[Measured, ...]", runs), union is model  # (no run is None: checked above)
 
 
 def _search_cone(model: SystemModel, items: list[_Left], share: int, deadline: float | None, horizon: Fraction,
-                 given: tuple[Measured, ...] = (), resume: SearchResult | None = None, round_: int = 0):
+                 given: tuple[Measured, ...] = (), resume: SearchResult | None = None,
+                 round_: int = 0) -> tuple[SearchResult | None, int]:
     """The falsifying search for ``items`` on ``model`` within ``share`` scenarios (``given``: its
     first runs, made on the union of the cones; ``resume``: its search of the rounds before, which
     round ``round_`` continues): (its result or None, the scenarios it used)."""
@@ -256,7 +260,7 @@ def _search_cone(model: SystemModel, items: list[_Left], share: int, deadline: f
     return search(model, goals, own, horizon, seed=f"verify-prove/round {round_}", resume=resume), own.used
 
 
-def _search_verdicts(items: list[_Left], found, budget: Budget) -> dict[int, Verdict]:
+def _search_verdicts(items: list[_Left], found: SearchResult | None, budget: Budget) -> dict[int, Verdict]:
     out: dict[int, Verdict] = {}
     for r in items:
         ob = r.ob
@@ -312,11 +316,15 @@ def _decide_exactly(model: SystemModel, open_: list[tuple[int, Obligation]], bud
 
 def _from_exact(model: SystemModel, ob: Obligation, exact: ExactResult, budget: Budget) -> Verdict | None:
     """The verdict an exact result gives, or None when it gives none (incomplete and no violation)."""
-    worst = exact.worst.get(ob.target)
-    best = exact.best.get(ob.target) if ob.kind == "jitter" else None
+    worst: Extreme | None = exact.worst.get(ob.target)
+    best: Extreme | None = exact.best.get(ob.target) if ob.kind == "jitter" else None
     if worst is None or worst.value is None or (ob.kind == "jitter" and (best is None or best.value is None)):
         return None
-    value = worst.value - best.value if ob.kind == "jitter" else worst.value
+    if ob.kind == "jitter":
+        assert best is not None and best.value is not None  # (checked above)
+        value = worst.value - best.value
+    else:
+        value = worst.value
     if value <= ob.spec:
         if not exact.complete:
             return None
@@ -337,14 +345,18 @@ def _concrete(model: SystemModel, ob: Obligation, exact: ExactResult, budget: Bu
     """A concrete run exceeding the spec, found by approaching the extreme (proof spec §4.5)."""
     grid = exact.grid or grid_of(model)
     t = ob.target
+    # (``_from_exact`` found the extremes' values, and an extreme with a value has the run that reached it)
     worst = exact.worst[t].measured
+    assert worst is not None
     if ob.kind != "jitter":
         m = approach(model, grid, worst, t, lambda x: x > ob.spec, value - ob.spec, "worst", budget)
         return None if m is None else Counterexample.of(t, m)
     best = exact.best[t].measured
+    worst_value, best_value = exact.worst[t].value, exact.best[t].value
+    assert best is not None and worst_value is not None and best_value is not None
     gap = (value - ob.spec) / 2
-    hi = exact.worst[t].value - gap
-    lo = exact.best[t].value + gap
+    hi = worst_value - gap
+    lo = best_value + gap
     mw = approach(model, grid, worst, t, lambda x: x > hi, gap, "worst", budget)
     mb = approach(model, grid, best, t, lambda x: x < lo, gap, "best", budget)
     if mw is None or mb is None:
@@ -352,17 +364,21 @@ def _concrete(model: SystemModel, ob: Obligation, exact: ExactResult, budget: Bu
     return Counterexample.of(t, mw, mb)
 
 
-def _search_cex(ob: Obligation, found) -> Counterexample | None:
+def _search_cex(ob: Obligation, found: SearchResult) -> Counterexample | None:
     t = ob.target
     w: Measured | None = found.worst.get(t)
     if ob.kind == "jitter":
         b: Measured | None = found.best.get(t)
         if w is None or b is None:
             return None
-        if w.values[t].worst.value - b.values[t].best.value > ob.spec:
+        # (a run kept in a search result has its sample)
+        if w.values[t].worst.value - b.values[t].best.value > ob.spec:  # type: ignore[union-attr]
             return Counterexample.of(t, w, b)
         return None
-    if w is None or w.values[t].worst is None or not w.values[t].worst.value > ob.spec:
+    if w is None:
+        return None
+    sample = w.values[t].worst
+    if sample is None or not sample.value > ob.spec:
         return None
     return Counterexample.of(t, w)
 
@@ -381,7 +397,7 @@ def _method_text(method: str) -> str:
             "exact-z3": "the exact Z3 search", "search": "a falsifying search"}[method]
 
 
-def diagnostics(model: SystemModel, verdicts) -> list:
+def diagnostics(model: SystemModel, verdicts: Sequence[Verdict]) -> list[Diagnostic]:
     """E501 (violated spec), E503 (deadline miss), E502 (undecided), in verdict order."""
     sink = DiagnosticSink()
     undecided = sorted({_subject_target(v) for v in verdicts if v.status == "undecided"})
@@ -399,6 +415,7 @@ def diagnostics(model: SystemModel, verdicts) -> list:
             notes.append("the compositional analysis gives no bound")
         if v.status == "violated":
             cex = v.counterexample
+            assert cex is not None  # (every violation comes with its run)
             notes.append(f"established by {_method_text(v.method)}; the run replays in the reference "
                          "simulator (verify.sim)")
             if v.exact is not None:
@@ -438,22 +455,23 @@ def diagnostics(model: SystemModel, verdicts) -> list:
     return sink.items
 
 
-def _subject_target(v: Verdict):
+def _subject_target(v: Verdict) -> Target:
     """A target with the cone of the verdict's subject (any chain kind stands for its chain)."""
     return Target("response" if v.subject == "task" else "data_age", v.name)
 
 
 def _sample_text(model: SystemModel, v: Verdict, cex: Counterexample) -> str:
-    s = cex.sample
     if v.subject == "task":
-        end = "still running at the end of the run" if s.finish is None else f"completes at {fmt_time(s.finish)}"
-        return f"job {s.task}#{s.index} is released at {fmt_time(s.release)} and {end}"
+        r = cast(ResponseSample, cex.sample)  # (see ``Counterexample.of``: a task's sample is a response)
+        end = "still running at the end of the run" if r.finish is None else f"completes at {fmt_time(r.finish)}"
+        return f"job {r.task}#{r.index} is released at {fmt_time(r.release)} and {end}"
+    s = cast(Sample, cex.sample)  # (a chain's sample is a ``verify.sim.Sample``)
     chain = next(c for c in model.chains if c.name == v.name)
     first, last = chain.tasks[0], chain.tasks[-1]
     text = (f"from the read of {first}#{s.origin} at {fmt_time(s.begin)} to the completion of {last}#{s.last} "
             f"at {fmt_time(s.end)}: {fmt_time(s.value)}")
     if v.kind == "jitter":
-        b = cex.best_sample
+        b = cast(Sample, cex.best_sample)  # (a jitter counterexample has a second run)
         text = (f"data age {fmt_time(s.value)} in one run and {fmt_time(b.value)} in another: jitter "
                 f"{fmt_time(cex.latency)}")
     return text

@@ -9,7 +9,8 @@ from __future__ import annotations
 
 import multiprocessing
 import os
-from typing import Callable, Iterator, TypeVar
+from typing import TypeVar
+from collections.abc import Callable, Generator
 
 R = TypeVar("R")
 
@@ -31,12 +32,12 @@ def resolve_workers(jobs: int | None) -> int:
     return cpus if not jobs else max(1, min(jobs, 4 * cpus))
 
 
-def _run(i: int):
+def _run(i: int) -> object:
     assert _WORK is not None
     return _WORK(i)
 
 
-def ordered_map(work: Callable[[int], R], indices: range, workers: int) -> Iterator[R]:
+def ordered_map(work: Callable[[int], R], indices: range, workers: int) -> Generator[R, None, None]:
     """``work(i)`` for every ``i`` in ``indices``, in order; with ``workers`` > 1 and more than one
     index, in that many forked processes. Stopping the iteration early stops the workers.
     Where processes cannot be forked (no ``fork`` start method, or inside a daemonic worker), the

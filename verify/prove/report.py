@@ -2,16 +2,23 @@
 ``verify.proof/1``), specs/proof.md §8–§9."""
 from __future__ import annotations
 
+from fractions import Fraction
+from typing import TYPE_CHECKING, Any
+
+from ..model import SystemModel
 from ..render import diagnostics_json
 from ..timing.report import exact
 from ..units import fmt_time
 from .verdict import ProofResult, Verdict
 
+if TYPE_CHECKING:
+    from .trace import Runs
+
 SCHEMA = "verify.proof/1"
 COLLAPSE = 20  # more task deadlines than this proved by bound are summarised in one line
 
 
-def _cell(x) -> str:
+def _cell(x: Fraction | None) -> str:
     return "-" if x is None else fmt_time(x)
 
 
@@ -19,7 +26,7 @@ def _task_proved_by_bound(v: Verdict) -> bool:
     return v.subject == "task" and v.status == "proved" and v.method == "bound"
 
 
-def to_text(model, proof: ProofResult) -> str:
+def to_text(model: SystemModel, proof: ProofResult) -> str:
     from .trace import Runs, to_text as timeline
 
     counts = {s: sum(v.status == s for v in proof.verdicts) for s in ("proved", "violated", "undecided")}
@@ -52,14 +59,14 @@ def to_text(model, proof: ProofResult) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _location(v: Verdict) -> dict | None:
+def _location(v: Verdict) -> dict[str, Any] | None:
     s = v.span
     if s.line < 1:
         return None
     return {"file": s.file, "line": s.line, "column": s.column, "end_line": s.end_line, "end_column": s.end_column}
 
 
-def verdict_json(model, v: Verdict, runs=None) -> dict:
+def verdict_json(model: SystemModel, v: Verdict, runs: Runs | None = None) -> dict[str, Any]:
     from .trace import to_json as cex_json
 
     return {"subject": v.subject, "name": v.name, "kind": v.kind, "variant": v.variant, "spec": exact(v.spec),
@@ -69,11 +76,11 @@ def verdict_json(model, v: Verdict, runs=None) -> dict:
             "counterexample": None if v.counterexample is None else cex_json(model, v, runs)}
 
 
-def to_json(model, proof: ProofResult) -> dict:
+def to_json(model: SystemModel, proof: ProofResult) -> dict[str, Any]:
     from .trace import Runs
 
     runs = Runs(model, proof.verdicts)  # (each counterexample scenario run once)
-    doc = {"schema": SCHEMA, "system": proof.system, "data_age_variant": proof.data_age_variant,
+    doc: dict[str, Any] = {"schema": SCHEMA, "system": proof.system, "data_age_variant": proof.data_age_variant,
            "budget": {"scenarios": proof.budget, "simulated": proof.explored},
            "verdicts": [verdict_json(model, v, runs) for v in proof.verdicts]}
     doc["diagnostics"] = diagnostics_json(list(proof.diagnostics))["diagnostics"]

@@ -7,16 +7,24 @@ the last task's job through the values it read (provenance, specs/timing.md §4)
 """
 from __future__ import annotations
 
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
+from typing import Any, TypeAlias, cast
 from xml.sax.saxutils import escape
 
-from ..model import SystemModel
-from ..sim import JobRecord, Message, Trace
+from ..model import SystemModel, TaskModel
+from ..sim import JobRecord, Message, Sample, Trace
 from ..timing.report import exact
 from ..units import fmt_time
 from .intsim import run_trace
+from .scenario import ConcreteScenario, ResponseSample
 from .verdict import Verdict
+
+# ``Counterexample.sample`` and ``best_sample`` are typed ``object``: they are the extreme samples
+# ``Counterexample.of`` takes from ``scenario.Extremes``, a ``verify.sim.Sample`` for a chain verdict
+# and a ``scenario.ResponseSample`` for a task's deadline (the casts below say which one a view has).
+AnySample: TypeAlias = "Sample | ResponseSample"
 
 
 @dataclass(frozen=True)
@@ -27,7 +35,7 @@ class ChainStep:
     message: Message | None
 
 
-def job_chain(model: SystemModel, trace: Trace, chain_name: str, sample) -> list[ChainStep]:
+def job_chain(model: SystemModel, trace: Trace, chain_name: str, sample: Sample) -> list[ChainStep]:
     """The jobs τ₁#stamp → … → τₙ#last through which the sample's value flowed."""
     chain = next(c for c in model.chains if c.name == chain_name)
     job = trace.job(chain.tasks[-1], sample.last)
@@ -48,18 +56,21 @@ class Runs:
     job and message of a job chain is there by then, and a longer run holds the same records for
     them); with the jobs of the task's core for a task's response, to the end of the run."""
 
-    def __init__(self, model: SystemModel, verdicts=()):
+    def __init__(self, model: SystemModel, verdicts: Iterable[Verdict] = ()):
         self.model = model
-        self.wanted: dict = {}  # scenario -> (last sample end, tasks)
+        # scenario -> (last sample end, tasks)
+        self.wanted: dict[ConcreteScenario, tuple[Fraction, tuple[str, ...]]] = {}
         for v in verdicts:
             if v.counterexample is not None:
                 self._want(v)
-        self.traces: dict = {}
+        self.traces: dict[ConcreteScenario, Trace] = {}
 
     def _want(self, v: Verdict) -> None:
         cex, model = v.counterexample, self.model
+        assert cex is not None
+        shown: Sequence[str]
         if v.subject == "chain":
-            end = cex.sample.end
+            end = cast(Sample, cex.sample).end
             shown = next(c for c in model.chains if c.name == v.name).tasks
         else:  # the whole run: a job running across the response's end shows when it completes
             end = cex.scenario.horizon
@@ -69,6 +80,7 @@ class Runs:
 
     def of(self, verdict: Verdict) -> Trace:
         cex = verdict.counterexample
+        assert cex is not None
         if cex.scenario not in self.wanted:
             self._want(verdict)
         if cex.scenario not in self.traces:
@@ -92,19 +104,20 @@ def to_text(model: SystemModel, verdict: Verdict, runs: Runs | None = None) -> s
     lines = [f"counterexample: {verdict.label} {fmt_time(cex.latency)} > spec {fmt_time(verdict.spec)} "
              f"(by {verdict.method})",
              f"  scenario: {cex.scenario.summary(model)}; the run lasts {fmt_time(cex.scenario.horizon)}"]
-    s = cex.sample
     if verdict.subject == "task":
-        lines.append(f"  job {s.task}#{s.index}: released {_t(s.release)}, completes {_t(s.finish)}: "
-                     f"response {fmt_time(s.value)}")
-        job = trace.job(s.task, s.index)
+        r = cast(ResponseSample, cex.sample)
+        lines.append(f"  job {r.task}#{r.index}: released {_t(r.release)}, completes {_t(r.finish)}: "
+                     f"response {fmt_time(r.value)}")
+        job = trace.job(r.task, r.index)
         lines.append(f"  it starts at {_t(job.start)}; jobs of its core running in between:")
-        core = model.task(s.task).core
-        end = s.finish if s.finish is not None else trace.horizon
+        core = model.task(r.task).core
+        end = r.finish if r.finish is not None else trace.horizon
         for t in model.tasks_on(core):
             between = [j for j in trace.jobs[t.id] if j.start is not None and j.start < end
-                       and (j.finish is None or j.finish > s.release) and (t.id, j.index) != (s.task, s.index)]
+                       and (j.finish is None or j.finish > r.release) and (t.id, j.index) != (r.task, r.index)]
             lines += _listed(t, between)
         return "\n".join(lines)
+    s = cast(Sample, cex.sample)
     chain = next(c for c in model.chains if c.name == verdict.name)
     first = chain.tasks[0]
     if verdict.kind == "reaction_time":
@@ -127,7 +140,8 @@ def to_text(model: SystemModel, verdict: Verdict, runs: Runs | None = None) -> s
             lines.append(f"      -> {m.source} -> {m.target}: written {_t(m.written)}, arrives {_t(m.arrival)}")
     lines.append(f"  latency: {fmt_time(s.end)} − {fmt_time(s.begin)} = {fmt_time(s.value)}")
     if verdict.kind == "jitter":
-        b = cex.best_sample
+        b = cast(Sample, cex.best_sample)
+        assert cex.best_scenario is not None
         lines.append(f"  a second run ({cex.best_scenario.summary(model)}) has a data age of {fmt_time(b.value)}: "
                      f"jitter {fmt_time(s.value)} − {fmt_time(b.value)} = {fmt_time(cex.latency)}")
     return "\n".join(lines)
@@ -137,7 +151,7 @@ def to_text(model: SystemModel, verdict: Verdict, runs: Runs | None = None) -> s
 LISTED_JOBS = 6
 
 
-def _listed(task, jobs: list[JobRecord]) -> list[str]:
+def _listed(task: TaskModel, jobs: list[JobRecord]) -> list[str]:
     """The lines of ``task``'s jobs in a response's interval; past ``LISTED_JOBS`` of them, the first
     and last few and a line that counts the rest (an overloaded core can hold thousands)."""
     def line(j: JobRecord) -> str:
@@ -157,35 +171,37 @@ def _listed(task, jobs: list[JobRecord]) -> list[str]:
 # ------------------------------------------------------------------ JSON
 
 
-def _job_json(j: JobRecord) -> dict:
+def _job_json(j: JobRecord) -> dict[str, Any]:
     return {"task": j.task, "index": j.index, "release": exact(j.release), "start": exact(j.start),
             "finish": exact(j.finish), "execution_time": exact(j.exec_time)}
 
 
-def _sample_json(s) -> dict:
-    if hasattr(s, "origin"):
+def _sample_json(s: AnySample) -> dict[str, Any]:
+    if isinstance(s, Sample):  # (the chain samples; a ``ResponseSample`` has no ``origin``)
         return {"value": exact(s.value), "begin": exact(s.begin), "end": exact(s.end), "origin_job": s.origin,
                 "stamp_job": s.stamp, "last_job": s.last}
     return {"value": exact(s.value), "task": s.task, "job": s.index, "release": exact(s.release),
             "finish": exact(s.finish)}
 
 
-def to_json(model: SystemModel, verdict: Verdict, runs: Runs | None = None) -> dict:
+def to_json(model: SystemModel, verdict: Verdict, runs: Runs | None = None) -> dict[str, Any]:
     cex = verdict.counterexample
     assert cex is not None
-    doc = {"target": {"kind": cex.target.kind, "name": cex.target.name}, "latency": exact(cex.latency),
-           "spec": exact(verdict.spec), "scenario": cex.scenario.to_json(), "sample": _sample_json(cex.sample)}
+    doc: dict[str, Any] = {"target": {"kind": cex.target.kind, "name": cex.target.name},
+                           "latency": exact(cex.latency), "spec": exact(verdict.spec),
+                           "scenario": cex.scenario.to_json(), "sample": _sample_json(cast(AnySample, cex.sample))}
     trace = (runs or Runs(model)).of(verdict)
     if verdict.subject == "chain":
         doc["job_chain"] = [dict(_job_json(st.job), message=None if st.message is None else {
             "source": st.message.source, "target": st.message.target, "index": st.message.index,
             "written": exact(st.message.written), "arrival": exact(st.message.arrival)})
-            for st in job_chain(model, trace, verdict.name, cex.sample)]
+            for st in job_chain(model, trace, verdict.name, cast(Sample, cex.sample))]
     else:
-        doc["job"] = _job_json(trace.job(cex.sample.task, cex.sample.index))
+        r = cast(ResponseSample, cex.sample)
+        doc["job"] = _job_json(trace.job(r.task, r.index))
     if cex.best_scenario is not None:
         doc["best_scenario"] = cex.best_scenario.to_json()
-        doc["best_sample"] = _sample_json(cex.best_sample)
+        doc["best_sample"] = _sample_json(cast(AnySample, cex.best_sample))
     return doc
 
 
@@ -196,7 +212,7 @@ def _num(x: float) -> str:
     return f"{x:.2f}".rstrip("0").rstrip(".")
 
 
-def to_svg(model: SystemModel, verdict: Verdict, traces: dict | None = None) -> str:
+def to_svg(model: SystemModel, verdict: Verdict, traces: dict[ConcreteScenario, Trace] | None = None) -> str:
     """A Gantt chart of the counterexample: one row per task (the chain's tasks and the tasks sharing
     their cores), jobs as bars from start to completion (preemptions are not drawn; in a row crowded
     with more than ``CROWDED`` jobs, bars less than a pixel apart are drawn as one), releases as
@@ -211,15 +227,18 @@ def _rows(model: SystemModel, verdict: Verdict) -> list[str]:
         cores = {model.task(t).core for t in chain.tasks}
         return list(dict.fromkeys(list(chain.tasks) + [t.id for c in sorted(cores) for t in sorted(
             model.tasks_on(c), key=lambda t: -t.priority)]))
-    core = model.task(verdict.counterexample.sample.task).core
+    cex = verdict.counterexample
+    assert cex is not None
+    core = model.task(cast(ResponseSample, cex.sample).task).core
     return [t.id for t in sorted(model.tasks_on(core), key=lambda t: -t.priority)]
 
 
-def chart_runs(model: SystemModel, verdicts: list[Verdict]) -> dict:
+def chart_runs(model: SystemModel, verdicts: list[Verdict]) -> dict[ConcreteScenario, Trace]:
     """scenario -> its whole run with the jobs of every row of the charts of ``verdicts`` that
     show it (each scenario run once)."""
-    rows: dict = {}
+    rows: dict[ConcreteScenario, tuple[str, ...]] = {}
     for v in verdicts:
+        assert v.counterexample is not None
         sc = v.counterexample.scenario
         rows[sc] = tuple(dict.fromkeys(rows.get(sc, ()) + tuple(_rows(model, v))))
     return {sc: run_trace(model, sc, tasks=list(tasks)) for sc, tasks in rows.items()}
@@ -246,23 +265,24 @@ def to_svg_all(model: SystemModel, verdicts: list[Verdict]) -> str:
 
 
 def _chart(model: SystemModel, verdict: Verdict, marker: str = "arrow", position: bool = False,
-           traces: dict | None = None) -> tuple[int, int, list[str]]:
+           traces: dict[ConcreteScenario, Trace] | None = None) -> tuple[int, int, list[str]]:
     """(width, height, lines) of one counterexample's chart; its first line opens its ``svg`` element
     (without ``xmlns`` when it is to be nested: ``position``). ``traces``: ``chart_runs``."""
     cex = verdict.counterexample
     assert cex is not None
-    s = cex.sample
     rows = _rows(model, verdict)
     trace = (traces or chart_runs(model, [verdict]))[cex.scenario]
     if verdict.subject == "chain":
+        s = cast(Sample, cex.sample)
         steps = job_chain(model, trace, verdict.name, s)
         lo, hi = s.begin, s.end
         highlighted = {(st.job.task, st.job.index) for st in steps}
     else:
+        r = cast(ResponseSample, cex.sample)
         steps = []
-        lo = s.release
-        hi = s.finish if s.finish is not None else trace.horizon
-        highlighted = {(s.task, s.index)}
+        lo = r.release
+        hi = r.finish if r.finish is not None else trace.horizon
+        highlighted = {(r.task, r.index)}
     pad = max((hi - lo) / 10, Fraction(1, 10**6))
     t0, t1 = max(Fraction(0), lo - pad), hi + pad
     left, width, row_h, top = 230, 900, 30, 60
@@ -293,8 +313,9 @@ def _chart(model: SystemModel, verdict: Verdict, marker: str = "arrow", position
     if cex.best_sample is None:
         label = f"{fmt_time(hi - lo)} (spec {fmt_time(verdict.spec)})"
     else:  # jitter: this run holds the largest sample; the smallest comes from a second run (not drawn)
-        label = (f"{fmt_time(hi - lo)} here; jitter {fmt_time(cex.latency)} = {fmt_time(cex.sample.value)} − "
-                 f"{fmt_time(cex.best_sample.value)} of a second run (spec {fmt_time(verdict.spec)})")
+        label = (f"{fmt_time(hi - lo)} here; jitter {fmt_time(cex.latency)} = "
+                 f"{fmt_time(cast(Sample, cex.sample).value)} − "
+                 f"{fmt_time(cast(Sample, cex.best_sample).value)} of a second run (spec {fmt_time(verdict.spec)})")
     out.append(f'<text x="{_num((x(lo) + x(hi)) / 2)}" y="{top + row_h * len(rows) + 16}" text-anchor="middle" '
                f'fill="#c0392b">{escape(label)}</text>')
     for task in rows:
@@ -327,14 +348,14 @@ def _chart(model: SystemModel, verdict: Verdict, marker: str = "arrow", position
 CROWDED = 200
 
 
-def _row(jobs: list[JobRecord], x, yy: float, row_h: int, t0: Fraction, t1: Fraction, highlighted: set,
-         horizon: Fraction) -> list[str]:
+def _row(jobs: list[JobRecord], x: Callable[[Fraction], float], yy: float, row_h: int, t0: Fraction,
+         t1: Fraction, highlighted: set[tuple[str, int]], horizon: Fraction) -> list[str]:
     """The release ticks and job bars of one row of a chart, in job order."""
     out: list[str] = []
     crowded = len(jobs) > CROWDED
     ticked: set[str] = set()
-    pending: list = []  # the bar not drawn yet: [x from, x to, first job, last job, jobs merged (0: chain),
-    #                    its place in ``out``]
+    pending: list[Any] = []  # the bar not drawn yet: [x from, x to, first job, last job, jobs merged (0: chain),
+    #                    its place in ``out``] (floats, JobRecords and ints: hence Any)
 
     def flush() -> None:
         if not pending:

@@ -14,6 +14,7 @@ refer back into the model by mutation. ``None`` stands for "unbounded" everywher
 """
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from fractions import Fraction
 
@@ -137,7 +138,9 @@ def _variant(data_age: str) -> str:
     return variant
 
 
-def _bounds(system: SystemModel, variant: str):
+def _bounds(system: SystemModel, variant: str
+            ) -> tuple[dict[str, ActivationInfo], dict[str, EventModel], dict[str, TaskResponse],
+                       tuple[ChainBounds, ...], int, bool]:
     """Rates, event models, response times (the CPA fixed point) and chain bounds: (infos, events,
     responses, chains, rounds, converged)."""
     order = trigger_order(system)
@@ -172,16 +175,17 @@ def _task_timing(task: TaskModel, info: ActivationInfo, events: EventModel, resp
                             response)
 
 
-def _fixed_point(system: SystemModel, infos, order):
+def _fixed_point(system: SystemModel, infos: Mapping[str, ActivationInfo], order: tuple[str, ...]
+                 ) -> tuple[dict[str, EventModel], dict[str, TaskResponse], int, bool]:
     """CPA global iteration: event models from response times, response times from event models,
     starting from R = bcet (zero jitter) until the WCRTs repeat (§6.5). Each round is
     ``rta.response_times``, computed by ``fastrta``; only the last one's ``TaskResponse``s are built."""
     static = fastrta.Static(system)
-    bcrt = {t.id: t.bcet for t in system.tasks}
+    bcrt: dict[str, Fraction] = {t.id: t.bcet for t in system.tasks}
     wcrt: dict[str, Fraction | None] = {t.id: (t.wcrt_bound if t.wcrt_bound is not None else t.bcet)
                                         for t in system.tasks}
-    memo: dict = {}
-    analysed = None
+    memo: dict[str, object] = {}  # (``event_models``' own, kept across rounds)
+    analysed: fastrta.Round | None = None
     for rounds in range(1, MAX_ROUNDS + 1):
         events = event_models(system, infos, order, wcrt, bcrt, memo)
         analysed = fastrta.Round(static, events, wcrt, analysed)
@@ -193,7 +197,10 @@ def _fixed_point(system: SystemModel, infos, order):
     return _give_up(system, infos, order, wcrt, None, bcrt, static)
 
 
-def _give_up(system, infos, order, wcrt, responses, bcrt, static):
+def _give_up(system: SystemModel, infos: Mapping[str, ActivationInfo], order: tuple[str, ...],
+             wcrt: dict[str, Fraction | None], responses: dict[str, TaskResponse] | None,
+             bcrt: Mapping[str, Fraction], static: fastrta.Static
+             ) -> tuple[dict[str, EventModel], dict[str, TaskResponse], int, bool]:
     """Non-convergence (E312): every task whose WCRT still changes is made unbounded (None absorbs),
     and the rest is recomputed until nothing changes; at most one more round per task."""
     forced: set[str] = set()
@@ -206,6 +213,7 @@ def _give_up(system, infos, order, wcrt, responses, bcrt, static):
             break
         forced |= changed
         wcrt = {tid: (None if tid in forced else r.wcrt) for tid, r in responses.items()}
+    assert responses is not None  # (the loop runs at least once)
     return events, responses, MAX_ROUNDS, not forced
 
 

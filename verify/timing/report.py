@@ -13,7 +13,9 @@ the rule that produced each term.
 """
 from __future__ import annotations
 
+from collections.abc import Iterable
 from fractions import Fraction
+from typing import Any
 
 from ..units import fmt_number, fmt_time
 from . import AnalysisResult, TaskTiming
@@ -27,7 +29,7 @@ SCHEMA = "verify.analysis/1"
 # ================================================================== JSON
 
 
-def exact(value: Fraction | int | None) -> dict | None:
+def exact(value: Fraction | int | None) -> dict[str, str | None] | None:
     """``{"exact": "p/q", "decimal": "0.25" | null}``, or None (unbounded)."""
     if value is None:
         return None
@@ -35,15 +37,16 @@ def exact(value: Fraction | int | None) -> dict | None:
         value = Fraction(value)
     num, den = value.numerator, value.denominator  # (a Fraction is in lowest terms)
     text = str(num) if den == 1 else f"{num}/{den}"
-    decimal = fmt_number(value)
+    # (fmt_number renders an int as well; verify/units.py declares only Fraction)
+    decimal = fmt_number(value)  # type: ignore[arg-type]
     return {"exact": text, "decimal": None if "/" in decimal else decimal}
 
 
-def _interval(rate: RateInterval | None) -> dict | None:
+def _interval(rate: RateInterval | None) -> dict[str, Any] | None:
     return None if rate is None else {"min": exact(rate.low), "max": exact(rate.high)}
 
 
-def _activation(t: TaskTiming) -> dict:
+def _activation(t: TaskTiming) -> dict[str, Any]:
     a = t.activation
     return {
         "kind": a.kind,
@@ -62,7 +65,7 @@ def _activation(t: TaskTiming) -> dict:
     }
 
 
-def _events(e: EventModel) -> dict:
+def _events(e: EventModel) -> dict[str, Any]:
     return {
         "silent": e.silent,
         "period_min": exact(e.period_min), "jitter_min": exact(e.jitter_min),
@@ -72,7 +75,7 @@ def _events(e: EventModel) -> dict:
     }
 
 
-def _task(t: TaskTiming) -> dict:
+def _task(t: TaskTiming) -> dict[str, Any]:
     r = t.response
     return {
         "id": t.id, "core": t.core, "priority": t.priority, "kind": t.kind,
@@ -89,13 +92,13 @@ def _task(t: TaskTiming) -> dict:
     }
 
 
-def _core(c: CoreLoad) -> dict:
+def _core(c: CoreLoad) -> dict[str, Any]:
     return {"name": c.core, "utilisation": exact(c.utilisation),
             "percent": None if c.utilisation is None else percent(c.utilisation),
             "overloaded": c.overloaded, "tasks": list(c.tasks)}
 
 
-def _link(s: LinkSampling) -> dict:
+def _link(s: LinkSampling) -> dict[str, Any]:
     return {
         "source": s.source, "target": s.target, "writer": s.writer, "reader": s.reader,
         "writer_rate": _interval(s.writer_rate), "reader_rate": _interval(s.reader_rate),
@@ -105,14 +108,14 @@ def _link(s: LinkSampling) -> dict:
     }
 
 
-def _term(term: Term | None) -> dict | None:
+def _term(term: Term | None) -> dict[str, Any] | None:
     if term is None:
         return None
     return {"rule": term.rule, "value": exact(term.value), "note": term.note or None,
             "parts": [{"name": n, "value": exact(v)} for n, v in term.parts]}
 
 
-def _step(n: int, s: Step) -> dict:
+def _step(n: int, s: Step) -> dict[str, Any]:
     return {"index": n, "kind": s.kind, "label": s.label, "writer": s.writer, "reader": s.reader,
             "source": s.source, "target": s.target, "reaction_time": _term(s.reaction),
             "data_age": _term(s.data_age), "data_age_non_reduced": _term(s.data_age_non_reduced),
@@ -120,11 +123,11 @@ def _step(n: int, s: Step) -> dict:
             "best_non_reduced": _term(s.best_non_reduced)}
 
 
-def _bound(b: Bound) -> dict:
+def _bound(b: Bound) -> dict[str, Any]:
     return {"worst": exact(b.worst), "best": exact(b.best), "jitter": exact(b.jitter), "rule": b.rule}
 
 
-def _chain(c: ChainBounds) -> dict:
+def _chain(c: ChainBounds) -> dict[str, Any]:
     return {
         "name": c.name, "tasks": list(c.tasks), "problem": c.problem,
         "hops": [_step(n, s) for n, s in enumerate(c.steps)],
@@ -141,7 +144,7 @@ def _chain(c: ChainBounds) -> dict:
     }
 
 
-def to_json(result: AnalysisResult) -> dict:
+def to_json(result: AnalysisResult) -> dict[str, Any]:
     """The analysis as a JSON-ready dict following ``JSON_SCHEMA`` (schema "verify.analysis/1")."""
     return {
         "schema": SCHEMA,
@@ -176,11 +179,11 @@ _BOUND = {"type": "object", "required": ["worst", "best", "jitter", "rule"],
           "properties": {"worst": _NUM, "best": _NUM, "jitter": _NUM, "rule": {"type": "string"}}}
 
 
-def _obj(required: dict, **extra) -> dict:
+def _obj(required: dict[str, Any], **extra: Any) -> dict[str, Any]:
     return {"type": "object", "required": sorted(required), "properties": required, **extra}
 
 
-JSON_SCHEMA: dict = _obj({
+JSON_SCHEMA: dict[str, Any] = _obj({
     "schema": {"const": SCHEMA},
     "system": {"type": "string"},
     "data_age_variant": {"enum": ["reduced", "non-reduced"]},
@@ -245,6 +248,7 @@ def _rate_text(t: TaskTiming) -> str:
     if a.kind == "timer":
         how = f"timer {fmt_time(a.period)}" + (f" phase {fmt_time(a.phase)}" if a.phase is not None else "")
     elif a.kind == "sporadic":
+        assert a.interarrival is not None  # (a sporadic task has its range)
         how = f"sporadic {fmt_time(a.interarrival[0])} .. {fmt_time(a.interarrival[1])}"
     elif a.kind == "trigger":
         how = f"trigger {a.trigger_port}" + (f" every {a.prescaler}" if a.prescaler != 1 else "")
@@ -339,7 +343,7 @@ def _table(rows: list[list[str]]) -> list[str]:
     return ["  " + "  ".join(cell.ljust(w) for cell, w in zip(row, widths)).rstrip() for row in rows]
 
 
-def _parts_text(parts) -> str:
+def _parts_text(parts: Iterable[tuple[str, Fraction | None]]) -> str:
     """``a 1 ms + b 2 ms − c 3 ms``: a part with a negative value is subtracted."""
     out = ""
     for n, (name, value) in enumerate(parts):
@@ -403,8 +407,8 @@ def to_text(result: AnalysisResult) -> str:
         header = ["chain", "latency", "worst", "best", "jitter", "spec", "margin", "dominating hop", "rule"]
         rows = [header] + [row for c in result.chains for row in _chain_rows(c)]
         out += ["", "chains"] + _table(rows)
-        for c in result.chains:
-            out += [""] + _breakdown(c)
+        for ch in result.chains:
+            out += [""] + _breakdown(ch)
     if result.diagnostics:
         out += ["", f"{len(result.diagnostics)} problem{'s' if len(result.diagnostics) != 1 else ''}: "
                 + ", ".join(sorted({d.code for d in result.diagnostics}))]
