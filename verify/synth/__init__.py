@@ -11,6 +11,7 @@ so that the command line does not load Z3 for other commands.
 from __future__ import annotations
 
 import importlib
+from typing import Any
 
 _EXPORTS = {
     "BruteResult": "driver", "DEFAULT_RLIMIT": "driver", "Goal": "driver", "ObjectiveError": "driver",
@@ -21,7 +22,7 @@ _EXPORTS = {
 __all__ = sorted(_EXPORTS)
 
 
-def __getattr__(name: str):
+def __getattr__(name: str) -> Any:  # (a class, a function or a constant of a submodule)
     if name in _EXPORTS:
         return getattr(importlib.import_module(f".{_EXPORTS[name]}", __name__), name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

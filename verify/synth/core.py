@@ -14,8 +14,10 @@ constraint, a hole's range), the rate or value it would need to admit.
 """
 from __future__ import annotations
 
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from fractions import Fraction
+from typing import cast, overload
 
 import z3
 
@@ -23,12 +25,18 @@ from ..diagnostics import Diagnostic, DiagnosticSink, Label
 from ..model import SystemModel
 from ..resolve import SystemScope
 from ..source import NO_SPAN, Span
+from ..timing import RateInterval
 from ..units import fmt_rate, fmt_time
-from .problem import Config, Problem, build_problem, relaxed_problem
+from .candidates import Candidate
+from .encode import Encoding
+from .problem import Config, Evaluation, Problem, build_problem, relaxed_problem
 from .prune import ChainLowerBound, Pruner
 from .repair import fastest_chain
-from .solve import Budget, Engine, Objective, quick_answer
+from .solve import Budget, Engine, Objective, Outcome, quick_answer
 from .statements import Statement
+
+# A spec statement (``kind`` "spec") names its chain and its spec kind (``Statement.chain`` and
+# ``Statement.spec_kind`` are None only for the other kinds): hence ``cast(str, st.chain)`` below.
 
 
 @dataclass
@@ -92,13 +100,14 @@ def seeded_core(problem: Problem, culprit: tuple[tuple[str, ...], tuple[str, ...
     return keys if status == "unsat" else None
 
 
-def deletion_order(statements) -> list[Statement]:
+def deletion_order(statements: Iterable[Statement]) -> list[Statement]:
     """By kind (ranks of ``statements.RANKS``), then by key: names, not positions, so that
     reordering declarations does not change the core."""
     return sorted(statements, key=lambda st: (st.rank, st.key))
 
 
-def _minimise(problem: Problem, by_key: dict[str, Statement], core: set[str], budget: Budget):
+def _minimise(problem: Problem, by_key: dict[str, Statement], core: set[str], budget: Budget
+              ) -> tuple[set[str], dict[str, Config], bool]:
     witnesses: dict[str, Config] = {}
     minimal = True
     for st in deletion_order(by_key[k] for k in core):
@@ -109,6 +118,7 @@ def _minimise(problem: Problem, by_key: dict[str, Statement], core: set[str], bu
         if status == "unsat":
             core = set(trial)
         elif status == "sat":
+            assert witness is not None  # (a satisfiable trial comes with its witness)
             witnesses[st.key] = witness
         else:
             minimal = False
@@ -132,6 +142,7 @@ def decide_trial(problem: Problem, in_force: set[str], budget: Budget) -> tuple[
         if out.status != "sat":
             problem.analyses += sub.analyses
             return out.status, None
+        assert out.config is not None and out.evaluation is not None  # (a "sat" outcome has its configuration)
         found = (out.config, out.evaluation)
     problem.analyses += sub.analyses
     picked = sub.candidates(found[0])
@@ -145,7 +156,7 @@ HINT_RLIMIT = 2_000_000  # Z3 resource units per hint: a hint never costs more t
 
 
 def _hints(expl: Explanation, problem: Problem, budget: Budget) -> None:
-    out = []
+    out: list[str] = []
     for st in expl.core:
         if budget.exhausted():
             break
@@ -158,7 +169,8 @@ def _hints(expl: Explanation, problem: Problem, budget: Budget) -> None:
     expl.hints = tuple(h for h in out if h)
 
 
-def _relaxed_run(problem: Problem, off: set[str], budget: Budget, objective) -> tuple[object, Problem] | None:
+def _relaxed_run(problem: Problem, off: set[str], budget: Budget, objective: Callable[[Encoding], Objective]
+                 ) -> tuple[Outcome, Problem] | None:
     """The best configuration by ``objective(encoding)`` of ``problem`` with ``off`` relaxed and every
     other statement in force (its own pruned problem, at most ``HINT_RLIMIT``); None if pruning shows
     there is none."""
@@ -177,8 +189,9 @@ def _relaxed_run(problem: Problem, off: set[str], budget: Budget, objective) -> 
 def _spec_hint(expl: Explanation, st: Statement, problem: Problem, budget: Budget) -> str:
     """The smallest bound any configuration meets, with every other statement in force, or failing
     that with the other spec bounds relaxed as well (other conflicts remain then)."""
-    def objective(enc):
-        return Objective(f"hint {st.key}", "min", enc.latency[(st.chain, st.spec_kind)], _spec_real(st, enc))
+    def objective(enc: Encoding) -> Objective:
+        return Objective(f"hint {st.key}", "min", enc.latency[(cast(str, st.chain), cast(str, st.spec_kind))],
+                         _spec_real(st, enc))
 
     found, caveat = _relaxed_run(problem, {st.key}, budget, objective), ""
     if found is None:  # other conflicts remain: the chain at its fastest with every spec relaxed
@@ -187,10 +200,12 @@ def _spec_hint(expl: Explanation, st: Statement, problem: Problem, budget: Budge
     if found is None or not found[0].values or found[0].values[0] is None:
         return f"relaxing `{st.text}` of `{st.chain}` alone is not enough"
     res, sub = found
+    assert res.config is not None and res.evaluation is not None  # (an outcome with values has its configuration)
     value = _spec_real(st, None)(res.config, res.evaluation)
     if res.status != "optimal":
         return f"relax `{st.text}` of `{st.chain}` to {fmt_time(value)}{caveat} (not proven the smallest)"
     if not caveat:
+        assert value is not None  # (the same latency as ``values[0]``, in seconds)
         expl.smallest[st.key] = value
     return f"relax `{st.text}` of `{st.chain}` to at least {fmt_time(value)}{caveat}"
 
@@ -201,7 +216,7 @@ def _fastest_chain_hint(st: Statement, problem: Problem, caveat: str) -> str:
     sub = relaxed_problem(problem, frozenset(key.key for key in problem.statements if key.kind == "spec"))
     found = None
     if sub.infeasible is None:
-        found = fastest_chain(sub, st.chain) or (sub.seed() if sub.seed()[1].accepted else None)
+        found = fastest_chain(sub, cast(str, st.chain)) or (sub.seed() if sub.seed()[1].accepted else None)
     problem.analyses += sub.analyses
     value = _spec_real(st, None)(*found) if found is not None else None
     if value is None:
@@ -219,12 +234,18 @@ def _fastest_chain_hint(st: Statement, problem: Problem, caveat: str) -> str:
             f"{below})")
 
 
-def _spec_real(st: Statement, enc):
+@overload
+def _spec_real(st: Statement, enc: Encoding) -> Callable[[Config, Evaluation], int | None]: ...
+@overload
+def _spec_real(st: Statement, enc: None) -> Callable[[Config, Evaluation], Fraction | None]: ...
+
+
+def _spec_real(st: Statement, enc: Encoding | None) -> Callable[[Config, Evaluation], Fraction | int | None]:
     """The analysed latency a spec bounds: in ticks of ``enc``, in seconds when ``enc`` is None."""
-    def real(config, ev):
-        chain = ev.result.chain(st.chain)
+    def real(config: Config, ev: Evaluation) -> Fraction | int | None:
+        chain = ev.result.chain(cast(str, st.chain))
         value = {"reaction_time": chain.reaction_time.worst, "data_age": chain.data_age_reduced.worst,
-                 "jitter": chain.data_age_reduced.jitter}[st.spec_kind]
+                 "jitter": chain.data_age_reduced.jitter}[cast(str, st.spec_kind)]
         return value if value is None or enc is None else enc.ticks(value)
     return real
 
@@ -233,21 +254,21 @@ def _rate_hint(st: Statement, problem: Problem, budget: Budget) -> str:
     """The rate the constraint end would need to admit (every other statement in force)."""
     high = st.kind == "max_rate"
 
-    def real_rate(ev) -> Fraction | None:
+    def real_rate(ev: Evaluation) -> Fraction | None:
         rates = [ev.result.task(t).rate for t in st.tasks]
         if any(r is None for r in rates):
             return None
-        values = [r.high if high else r.low for r in rates]
+        values = [r.high if high else r.low for r in cast("list[RateInterval]", rates)]  # (no None: above)
         return max(values) if high else min(values)
 
-    def objective(enc):
+    def objective(enc: Encoding) -> Objective:
         z = z3.Int(f"hint|{st.key}", enc.ctx)
         for tid in st.tasks:
             fl, fh = enc.rates.get(tid, (None, None))
             if fl is not None:
                 enc.add(z >= enc.t.lift(fh) if high else z <= enc.t.lift(fl))
 
-        def real(config, ev):
+        def real(config: Config, ev: Evaluation) -> int | None:
             rate = real_rate(ev)
             return None if rate is None else int(rate * enc.tick * enc.M)
         return Objective(f"hint {st.key}", "min" if high else "max", z, real)
@@ -274,13 +295,14 @@ def _range_hint(st: Statement, problem: Problem, budget: Budget) -> str:
         return ""
     lo, hi = min(c.speed for c in inside), max(c.speed for c in inside)
 
-    def distance(c) -> Fraction:
+    def distance(c: Candidate) -> Fraction:
         v = c.speed
         return lo - v if v < lo else (v - hi if v > hi else Fraction(0))
 
-    def objective(enc):
+    def objective(enc: Encoding) -> Objective:
         cands = enc.choices[tid].candidates
-        scale = (lambda c: int(distance(c) / enc.tick) if c.kind == "timer" else int(distance(c)))
+        scale: Callable[[Candidate], int] = (
+            lambda c: int(distance(c) / enc.tick) if c.kind == "timer" else int(distance(c)))
         term = enc.t.add(*(enc.t.ite(enc.sel[tid][i], scale(c), 0) for i, c in enumerate(cands) if c in outside))
         return Objective(f"hint {st.key}", "min", term, lambda config, ev: scale(cands[config.index(tid)]))
 
@@ -318,6 +340,7 @@ def unsat_diagnostic(system: SystemModel, expl: Explanation | None, reason: str 
     secondary = tuple(Label(st.span, _label(st)) for st in core if st is not primary)
     notes = []
     if core:
+        assert expl is not None  # (a core comes with its explanation)
         if len(core) == 1:
             notes.append("this statement cannot hold: without it a configuration exists (every other statement "
                          "was relaxed)")
@@ -333,8 +356,8 @@ def unsat_diagnostic(system: SystemModel, expl: Explanation | None, reason: str 
         notes.append(reason)
     for key, value in (expl.smallest.items() if expl is not None else ()):
         st = next(s for s in core if s.key == key)
-        notes.append(f"the smallest {st.spec_kind.replace('_', ' ')} of `{st.chain}` any configuration allows "
-                     f"is {fmt_time(value)}")
+        notes.append(f"the smallest {cast(str, st.spec_kind).replace('_', ' ')} of `{st.chain}` any configuration "
+                     f"allows is {fmt_time(value)}")
     help_ = "; ".join(expl.hints) if expl is not None and expl.hints else (
         "relax a spec bound, a fixed rate or an activation constraint" if core else None)
     sink.emit("E401", message, where, label, secondary=secondary, notes=tuple(notes), help=help_)

@@ -12,8 +12,10 @@ unsatisfiable, rebuild with tracked statements and explain (unsat core and repai
 from __future__ import annotations
 
 import itertools
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
+from typing import cast
 
 import z3
 
@@ -21,12 +23,14 @@ from ..api import LoadResult
 from ..diagnostics import Diagnostic, DiagnosticSink
 from ..model import SystemModel
 from ..resolve import SystemScope
+from ..source import Span
 from ..timing import AnalysisResult
 from ..units import fmt_time
 from .candidates import Candidate
 from .core import Explanation, explain_unsat, unsat_diagnostic
+from .encode import Encoding
 from .problem import Config, Evaluation, Problem, build_problem
-from .solve import Budget, Engine, Objective, lex_better, quick_answer
+from .solve import Budget, Engine, Objective, Outcome, lex_better, quick_answer
 from .statements import Statement
 
 DEFAULT_RLIMIT = 50_000_000  # Z3 resource units for one run (deterministic); --rlimit changes it
@@ -81,7 +85,7 @@ def parse_objective(text: str | None, model: SystemModel) -> list[Goal]:
     return goals
 
 
-def objectives_for(goals: list[Goal], enc) -> list[Objective]:
+def objectives_for(goals: list[Goal], enc: Encoding) -> list[Objective]:
     out = []
     for g in goals:
         if g.kind == "utilisation":
@@ -91,24 +95,31 @@ def objectives_for(goals: list[Goal], enc) -> list[Objective]:
             slack = z3.Int("objective|slack", enc.ctx)
             for _, term, bound in enc.specs:
                 enc.add(slack <= bound - enc.t.lift(term))
-            out.append(Objective(g.name, "max", slack, lambda c, ev: enc.ticks(min_margin(ev.result))))
+            # (the configurations measured are accepted ones: every spec holds, so no margin is None)
+            out.append(Objective(g.name, "max", slack,
+                                 lambda c, ev: enc.ticks(cast(Fraction, min_margin(ev.result)))))
         else:
             kind = "reaction_time" if g.kind == "latency" else "data_age"
-            out.append(Objective(g.name, "min", enc.latency[(g.chain, kind)],
-                                 lambda c, ev, ch=g.chain, k=kind: enc.ticks(_latency(ev.result, ch, k))))
+            chain = cast(str, g.chain)  # (a latency or age goal names its chain)
+
+            def latency(c: Config, ev: Evaluation, ch: str = chain, k: str = kind) -> int:
+                # an unbounded latency (None) of an accepted configuration would fail in ``ticks``
+                return enc.ticks(_latency(ev.result, ch, k))  # type: ignore[arg-type]
+            out.append(Objective(g.name, "min", enc.latency[(chain, kind)], latency))
     return out
 
 
 def _utilisation(result: AnalysisResult) -> Fraction:
-    return sum((c.utilisation for c in result.cores), Fraction(0))
+    # (of a configuration the analysis accepts: no core has an unbounded utilisation)
+    return sum((cast(Fraction, c.utilisation) for c in result.cores), Fraction(0))
 
 
 def min_margin(result: AnalysisResult) -> Fraction | None:
     margins = [s.margin for c in result.chains for s in c.specs]
-    return min(margins) if margins and None not in margins else None
+    return min(cast("list[Fraction]", margins)) if margins and None not in margins else None
 
 
-def _latency(result: AnalysisResult, chain: str, kind: str) -> Fraction:
+def _latency(result: AnalysisResult, chain: str, kind: str) -> Fraction | None:
     bounds = result.chain(chain)
     return bounds.reaction_time.worst if kind == "reaction_time" else bounds.data_age_reduced.worst
 
@@ -119,7 +130,7 @@ def goal_value(goal: Goal, result: AnalysisResult) -> Fraction | None:
         return _utilisation(result)
     if goal.kind == "slack":
         return min_margin(result)
-    return _latency(result, goal.chain, "reaction_time" if goal.kind == "latency" else "data_age")
+    return _latency(result, cast(str, goal.chain), "reaction_time" if goal.kind == "latency" else "data_age")
 
 
 # ================================================================== result
@@ -139,7 +150,7 @@ class SynthResult:
     reason: str | None = None
     established: tuple[str, ...] = ()
     diagnostics: tuple[Diagnostic, ...] = ()
-    stats: dict = field(default_factory=dict)
+    stats: dict[str, int] = field(default_factory=dict)
     problem: Problem | None = None
 
     @property
@@ -151,7 +162,8 @@ class SynthResult:
         return self.status == "sat"
 
 
-def _inputs(source, system: str | None, scope: SystemScope | None) -> tuple[SystemModel, SystemScope | None]:
+def _inputs(source: LoadResult | SystemModel, system: str | None, scope: SystemScope | None
+            ) -> tuple[SystemModel, SystemScope | None]:
     if isinstance(source, LoadResult):
         model = source.system(system)
         resolution = source.resolution
@@ -159,7 +171,8 @@ def _inputs(source, system: str | None, scope: SystemScope | None) -> tuple[Syst
     return source, scope
 
 
-def synthesize(source, system: str | None = None, *, objective: str | list[Goal] | None = "utilisation",
+def synthesize(source: LoadResult | SystemModel, system: str | None = None, *,
+               objective: str | list[Goal] | None = "utilisation",
                rlimit: int | None = DEFAULT_RLIMIT, timeout: float | None = None, explain: bool = True,
                scope: SystemScope | None = None) -> SynthResult:
     """Fill the holes of a system: a ``LoadResult`` (with ``system`` naming one of its systems) or a
@@ -181,6 +194,7 @@ def synthesize(source, system: str | None = None, *, objective: str | list[Goal]
         out = engine.run(objectives_for(goals, enc))
         stats.update(_engine_stats(engine, problem, budget))
         if out.status in ("sat", "optimal"):
+            assert out.config is not None and out.evaluation is not None  # (a found configuration)
             return _answer(model, problem, goals, out.config, out.evaluation, not goals or out.status == "optimal",
                            stats)
         if out.status == "unknown":
@@ -190,22 +204,25 @@ def synthesize(source, system: str | None = None, *, objective: str | list[Goal]
     return _unsat(model, scope, problem, goals, reason, budget, stats, explain)
 
 
-def _engine_stats(engine: Engine, problem: Problem, budget: Budget) -> dict:
+def _engine_stats(engine: Engine, problem: Problem, budget: Budget) -> dict[str, int]:
     return {"solver_calls": engine.stats.checks, "analyses": problem.analyses, "lemmas": engine.stats.lemmas,
             "rejected": engine.stats.rejected, "rlimit_used": budget.used}
 
 
-def _answer(model, problem: Problem, goals, config: Config, ev: Evaluation, optimal: bool, stats) -> SynthResult:
+def _answer(model: SystemModel, problem: Problem, goals: Sequence[Goal], config: Config, ev: Evaluation,
+            optimal: bool, stats: dict[str, int]) -> SynthResult:
     values = tuple(goal_value(g, ev.result) for g in goals)
     return SynthResult("sat", model.name, tuple(goals), values, optimal, problem.candidates(config), ev.model,
                        ev.result, stats=stats, problem=problem)
 
 
-def _undecided(model, problem: Problem, goals, out, budget: Budget, stats, where) -> SynthResult:
+def _undecided(model: SystemModel, problem: Problem, goals: Sequence[Goal], out: Outcome, budget: Budget,
+               stats: dict[str, int], where: Span) -> SynthResult:
     kept = sum(len(c.candidates) for c in problem.choices.values())
     established = [f"pruning kept {kept} of {kept + problem.pruned} candidate values "
                    f"({len(problem.choices)} hole{'s' * (len(problem.choices) != 1)})"]
     if out.config is not None:
+        assert out.evaluation is not None  # (set with the configuration)
         values = tuple(goal_value(g, out.evaluation.result) for g in goals)
         shown = ", ".join(f"{g.name} {_show(g, v)}" for g, v in zip(goals, values))
         established.append(f"a configuration meeting every spec was found ({shown}); it is printed, but no "
@@ -223,21 +240,24 @@ def _undecided(model, problem: Problem, goals, out, budget: Budget, stats, where
     result = SynthResult("undecided", model.name, tuple(goals), reason=out.reason or budget.reason,
                          established=tuple(established), diagnostics=tuple(sink.items), stats=stats, problem=problem)
     if out.config is not None:
+        assert out.evaluation is not None
         result.values = tuple(goal_value(g, out.evaluation.result) for g in goals)
         result.choices, result.model, result.analysis = problem.candidates(out.config), out.evaluation.model, \
             out.evaluation.result
     return result
 
 
-def _show(goal: Goal, value) -> str:
+def _show(goal: Goal, value: Fraction | None) -> str:
     if value is None:
         return "unbounded"
     return f"{float(value) * 100:.2f} %" if goal.kind == "utilisation" else fmt_time(value)
 
 
-def _unsat(model, scope, problem, goals, reason, budget: Budget, stats, explain: bool) -> SynthResult:
+def _unsat(model: SystemModel, scope: SystemScope | None, problem: Problem, goals: Sequence[Goal], reason: str,
+           budget: Budget, stats: dict[str, int], explain: bool) -> SynthResult:
     expl = explain_unsat(model, scope, budget, culprit=problem.culprit) if explain else None
     if expl is not None and expl.status == "sat":  # the tracked search found what the untracked one missed
+        assert expl.problem is not None and expl.sat_config is not None  # (a "sat" explanation has both)
         ev = expl.problem.evaluate(expl.sat_config)
         result = SynthResult("sat", model.name, tuple(goals), tuple(goal_value(g, ev.result) for g in goals), False,
                              expl.problem.candidates(expl.sat_config), ev.model, ev.result, stats=stats,
@@ -245,6 +265,7 @@ def _unsat(model, scope, problem, goals, reason, budget: Budget, stats, explain:
         result.choices = {k: v for k, v in result.choices.items() if k in problem.choices}
         return result
     if expl is not None:
+        assert expl.problem is not None  # (every explanation has its problem)
         stats["core_analyses"] = expl.problem.analyses
         stats["rlimit_used"] = budget.used
     diag = unsat_diagnostic(model, expl if expl is not None and expl.status == "unsat" else None, reason)
@@ -264,8 +285,9 @@ class BruteResult:
     complete: bool = True  # every combination was evaluated (else the best is only the best seen)
 
 
-def brute_force(source, system: str | None = None, *, objective: str | list[Goal] | None = "utilisation",
-                scope: SystemScope | None = None, prune: bool = False, limit: int | None = None) -> BruteResult:
+def brute_force(source: LoadResult | SystemModel, system: str | None = None, *,
+                objective: str | list[Goal] | None = "utilisation", scope: SystemScope | None = None,
+                prune: bool = False, limit: int | None = None) -> BruteResult:
     """Enumerate every combination of candidates (unpruned by default), analyse each, keep the best
     accepted one by the objective (the first in enumeration order among equals). The naive baseline.
     With ``limit``, at most that many combinations are evaluated: stopping there with none accepted
@@ -275,7 +297,7 @@ def brute_force(source, system: str | None = None, *, objective: str | list[Goal
     problem = build_problem(model, scope, prune=prune)
     names = list(problem.choices)
     ranges = [range(len(problem.choices[n].candidates)) for n in names]
-    best: tuple | None = None
+    best: tuple[tuple[Fraction | None, ...], tuple[int, ...], tuple[Fraction | None, ...]] | None = None
     count = 0
     complete = True
     for combo in itertools.product(*ranges):
@@ -287,7 +309,8 @@ def brute_force(source, system: str | None = None, *, objective: str | list[Goal
         if not ev.accepted:
             continue
         values = tuple(goal_value(g, ev.result) for g in goals)
-        key = tuple(v if g.sense == "min" else -v for g, v in zip(goals, values))
+        # (slack, the one "max" goal: the configuration is accepted, so every spec holds and no margin is None)
+        key = tuple(v if g.sense == "min" else -cast(Fraction, v) for g, v in zip(goals, values))
         if best is None or key < best[0]:
             best = (key, combo, values)
             if not goals:

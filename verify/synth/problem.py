@@ -11,7 +11,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Mapping
+from typing import TYPE_CHECKING
+from collections.abc import Mapping
 
 from ..model import SystemModel
 from ..resolve import SystemScope
@@ -20,6 +21,11 @@ from .candidates import Candidate, Choice, build_choices, make_choice
 from .prune import Pruner
 from .statements import Statement, collect_statements, configured_model, statement_index
 from .structure import Structure, analyse_structure, topological, trigger_graph
+
+if TYPE_CHECKING:
+    import z3
+
+    from .encode import Encoding
 
 
 @dataclass(frozen=True)
@@ -56,8 +62,8 @@ class Problem:
     infeasible: str | None = None
     culprit: tuple[tuple[str, ...], tuple[str, ...]] | None = None  # (chains, tasks) pruning blamed
     analyses: int = field(default=0)
-    _seed: tuple | None = field(default=None, repr=False)
-    _cache: dict = field(default_factory=dict, repr=False)
+    _seed: tuple[Config, Evaluation] | None = field(default=None, repr=False)
+    _cache: dict[Config, Evaluation] = field(default_factory=dict, repr=False)
 
     def candidates(self, config: Config) -> dict[str, Candidate]:
         return {tid: self.choices[tid].candidates[i] for tid, i in config.choice}
@@ -86,7 +92,7 @@ class Problem:
             self._seed = (config, self.evaluate(config))
         return self._seed
 
-    def encoding(self, ctx):
+    def encoding(self, ctx: z3.Context) -> Encoding:
         from .encode import Encoding
 
         _, ev = self.seed()

@@ -24,6 +24,7 @@ seconds. Choices are listed in source order.
 from __future__ import annotations
 
 from fractions import Fraction
+from typing import Any
 
 from ..render import diagnostic_json
 from ..timing.report import exact
@@ -56,7 +57,7 @@ def objective_line(result: SynthResult) -> str:
 
 
 def _choice_rows(result: SynthResult) -> list[tuple[str, str, str]]:
-    rows = []
+    rows: list[tuple[str, str, str]] = []
     problem = result.problem
     for task in (result.model.tasks if result.model is not None else ()):
         cand = result.choices.get(task.id)
@@ -100,7 +101,7 @@ def to_text(result: SynthResult) -> str:
 
 
 def to_json(result: SynthResult, file: str, *, dsl: str | None = None, diff: str | None = None,
-            written: str | None = None) -> dict:
+            written: str | None = None) -> dict[str, Any]:
     problem = result.problem
     choices = []
     for task, hole, _ in _choice_rows(result):

@@ -20,10 +20,12 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
-from typing import Callable
+from typing import Any, cast
+from collections.abc import Callable, Sequence
 
 import z3
 
+from ..timing import TaskResponse
 from .encode import Encoding
 from .problem import Config, Evaluation, Problem
 from .repair import repair
@@ -57,7 +59,7 @@ class Budget:
             self.reason = self.reason or f"the time limit of {self.timeout:g} s ran out"
         return self.reason is not None
 
-    def arm(self, obj) -> None:
+    def arm(self, obj: z3.Solver) -> None:
         if self.remaining is not None:
             obj.set("rlimit", max(1, self.remaining))
         if self.deadline is not None:
@@ -67,7 +69,7 @@ class Budget:
         self.used += spent
 
 
-def implies(parts: list, fact):
+def implies(parts: list[z3.BoolRef], fact: z3.BoolRef) -> z3.BoolRef:
     """``(∧ parts) → fact`` built directly (z3py's ``And`` coerces every argument, which is slow for
     the long antecedents of lemmas)."""
     if not parts:
@@ -80,7 +82,7 @@ def implies(parts: list, fact):
     return z3.BoolRef(z3.Z3_mk_or(ctx.ref(), len(terms), args), ctx)
 
 
-def _rlimit_count(obj) -> int:
+def _rlimit_count(obj: z3.Solver) -> int:
     stats = obj.statistics()
     for key in stats.keys():
         if key == "rlimit count":
@@ -97,23 +99,25 @@ class Objective:
 
     name: str
     sense: str  # "min" | "max"
-    term: object
+    term: object  # an int or a z3 term
     real: Callable[[Config, Evaluation], int | None]
 
     def better(self, a: int, b: int) -> bool:
         return a < b if self.sense == "min" else a > b
 
 
-def lex_better(objectives: list[Objective], a: tuple, b: tuple) -> bool:
+def lex_better(objectives: Sequence[Objective], a: Sequence[int | None], b: Sequence[int | None]) -> bool:
     for obj, x, y in zip(objectives, a, b):
-        if obj.better(x, y):
+        # ``Objective.real`` says None for unbounded; the configurations compared here are accepted ones,
+        # whose objective values are bounded (``better`` compares ints)
+        if obj.better(x, y):  # type: ignore[arg-type]
             return True
         if x != y:
             return False
     return False
 
 
-def strictly_better(enc: Encoding, objectives: list[Objective], values: tuple):
+def strictly_better(enc: Encoding, objectives: Sequence[Objective], values: Sequence[int | None]) -> z3.BoolRef:
     """The encoded objectives lexicographically better than ``values``."""
     t = enc.t
     cases = []
@@ -131,6 +135,7 @@ def failing_checks(problem: Problem, ev: Evaluation) -> set[str] | None:
     from ..timing.rates import _tolerance_violation
 
     slots = statement_index(problem.statements)
+    checks: set[str | None]  # (None: a failure no statement asks for)
     result, checks = ev.result, set()
     for d in result.diagnostics:
         if d.severity.value == "error" and d.code in ("E311", "E312"):
@@ -156,7 +161,7 @@ def failing_checks(problem: Problem, ev: Evaluation) -> set[str] | None:
                 checks.add(slots.get(s.reader, {}).get(f"tolerance:{read.port}:{direction}"))
     if None in checks or not checks:
         return None
-    return checks
+    return cast("set[str]", checks)  # (None is not in it: checked above)
 
 
 # ================================================================== the loop
@@ -176,7 +181,7 @@ class Outcome:
     status: str  # "sat" | "optimal" | "unsat" | "unknown"
     config: Config | None = None
     evaluation: Evaluation | None = None
-    values: tuple | None = None
+    values: tuple[int | None, ...] | None = None
     core: tuple[str, ...] = ()  # statement keys (tracked, unsat)
     reason: str | None = None
 
@@ -211,7 +216,8 @@ class Engine:
         if new:
             self.solver.add(*new)
 
-    def _check(self, assumptions: list):
+    def _check(self, assumptions: Sequence[z3.BoolRef]) -> tuple[str, Any]:
+        """(status, the model when "sat", the unsat core when "unsat", else None)"""
         self._sync()
         if self.budget.exhausted():
             return "unknown", None
@@ -228,14 +234,14 @@ class Engine:
         self.budget.reason = self.budget.reason or f"the solver gave up ({self.solver.reason_unknown()})"
         return "unknown", None
 
-    def _fresh(self, prefix: str):
+    def _fresh(self, prefix: str) -> z3.BoolRef:
         self._bounds += 1
         return z3.Bool(f"{prefix}|{self._bounds}", self.enc.ctx)
 
-    def _value(self, model, term) -> int:
+    def _value(self, model: z3.ModelRef, term: object) -> int:
         return term if isinstance(term, int) else model.eval(term, model_completion=True).as_long()
 
-    def _best(self, objectives: list[Objective], assumptions: list):
+    def _best(self, objectives: Sequence[Objective], assumptions: list[z3.BoolRef]) -> tuple[str, Any]:
         """The encoded lexicographic optimum under ``assumptions``, by strengthening: ask for a value
         better than the last answer by a step (a sixteenth of it at first) that doubles while answers
         come; then alternately bisect between the best answer and the closest value found impossible
@@ -244,7 +250,7 @@ class Engine:
         status, answer = self._check(assumptions)
         if status != "sat" or not objectives:
             return status, answer
-        fixed: list = []
+        fixed: list[z3.BoolRef] = []
         for obj in objectives:
             best, bound = self._value(answer, obj.term), None
             step, probe = max(1, abs(best) // 16), False
@@ -272,7 +278,7 @@ class Engine:
 
     # -------------------------------------------------------------- configurations
 
-    def config_of(self, model) -> Config:
+    def config_of(self, model: z3.ModelRef) -> Config:
         choice = []
         for tid, sels in self.enc.sel.items():
             index = next((i for i, b in enumerate(sels) if z3.is_true(model.eval(b, model_completion=True))), 0)
@@ -281,7 +287,7 @@ class Engine:
                         if not z3.is_true(model.eval(lit, model_completion=True)))
         return Config(tuple(choice), off)
 
-    def _config_literals(self, config: Config) -> list:
+    def _config_literals(self, config: Config) -> list[z3.BoolRef]:
         lits = [self.enc.sel[tid][i] for tid, i in config.choice]
         for key, lit in sorted(self.enc.lits.items()):
             lits.append(z3.Not(lit) if key in config.off else lit)
@@ -310,7 +316,7 @@ class Engine:
 
     # -------------------------------------------------------------- lemmas
 
-    def ladder(self, tid: str, index: int):
+    def ladder(self, tid: str, index: int) -> z3.BoolRef | None:
         """"The choice of ``tid`` is in the group of candidate ``index`` and at least as fast" (the
         candidates of a group are sorted fastest first), or the exact candidate for an AND feeder."""
         sels = self.enc.sel[tid]
@@ -332,7 +338,7 @@ class Engine:
             self.enc.add(lads[index] == z3.Or(previous, sels[index]))
         return lads[index]
 
-    def antecedent(self, tid: str, config: Config) -> list:
+    def antecedent(self, tid: str, config: Config) -> list[z3.BoolRef]:
         bits = self.problem.structure.cones.get(tid, 0)
         choice = dict(config.choice)
         parts = []
@@ -352,11 +358,11 @@ class Engine:
                 parts.append(z3.Not(lit) if key in config.off else lit)
         return parts
 
-    def learn(self, config: Config, ev: Evaluation, model) -> int:
+    def learn(self, config: Config, ev: Evaluation, model: z3.ModelRef | None) -> int:
         """Lemmas ``antecedent → R ≥ r`` for every task whose analysed WCRT exceeds the solver's."""
         added = 0
         for tid in sorted(self.enc.R):
-            var = self.enc.R[tid]
+            var: int | z3.ArithRef = self.enc.R[tid]  # (``Encoding.R`` is typed ``object``)
             if isinstance(var, int):
                 continue
             bound = self._lower_bound(ev.result.task(tid).response)
@@ -373,7 +379,7 @@ class Engine:
         self.stats.lemmas += added
         return added
 
-    def _lower_bound(self, response) -> int | None:
+    def _lower_bound(self, response: TaskResponse) -> int | None:
         """The analysed WCRT in ticks; for a task without a bound within its deadline (its busy window
         exceeded it, or the interfering load reached 1) one tick more than the deadline."""
         if response.wcrt is not None:
@@ -388,7 +394,7 @@ class Engine:
     def start(self) -> tuple[Config, Evaluation] | None:
         return quick_answer(self.problem)
 
-    def run(self, objectives: list[Objective] = (), assumptions: list = ()) -> Outcome:
+    def run(self, objectives: Sequence[Objective] = (), assumptions: Sequence[z3.BoolRef] = ()) -> Outcome:
         """The best accepted configuration under ``assumptions`` (any one without objectives)."""
         objectives = list(objectives)
         best: Outcome | None = None
@@ -425,7 +431,8 @@ class Engine:
             if not objectives:
                 return Outcome("sat", config, ev)
             values = tuple(o.real(config, ev) for o in objectives)
-            if best is None or lex_better(objectives, values, best.values):
+            # (an incumbent always has its values)
+            if best is None or lex_better(objectives, values, cast("tuple[int | None, ...]", best.values)):
                 best = Outcome("sat", config, ev, values)
                 guard = self._fresh("better")
                 self.enc.add(z3.Implies(guard, strictly_better(self.enc, objectives, values)))
