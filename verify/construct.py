@@ -15,7 +15,8 @@ the speed.
 from __future__ import annotations
 
 import dataclasses
-from typing import TYPE_CHECKING, Callable, TypeGuard, TypeVar
+from typing import TYPE_CHECKING, TypeGuard, TypeVar
+from collections.abc import Callable
 
 if TYPE_CHECKING:
     from _typeshed import DataclassInstance
@@ -26,11 +27,11 @@ _RESERVED = frozenset({"obj", "_new", "_set", "_cls"})  # the names the generate
 
 def is_plain_frozen(cls: type) -> TypeGuard[type[DataclassInstance]]:
     """``cls`` is a frozen dataclass whose instances are fully described by their ``__dict__``."""
-    if not (dataclasses.is_dataclass(cls) and getattr(cls, "__dataclass_params__").frozen):
+    if not (dataclasses.is_dataclass(cls) and getattr(cls, "__dataclass_params__").frozen):  # noqa: B009 (not in the type)
         return False
     if "__post_init__" in dir(cls) or any("__slots__" in vars(k) for k in cls.__mro__[:-1]):
         return False
-    all_fields = [f for f in getattr(cls, "__dataclass_fields__").values()
+    all_fields = [f for f in cls.__dataclass_fields__.values()
                   if f._field_type is not dataclasses._FIELD_CLASSVAR]  # type: ignore[attr-defined]
     return all(f._field_type is dataclasses._FIELD and f.init and not f.kw_only  # type: ignore[attr-defined]
                and f.default_factory is dataclasses.MISSING for f in all_fields)

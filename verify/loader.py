@@ -11,7 +11,8 @@ from __future__ import annotations
 import os
 import stat
 from dataclasses import dataclass, field
-from typing import Callable, Mapping, Union
+from typing import Union
+from collections.abc import Callable, Mapping
 
 from . import syntax as s
 from .diagnostics import DiagnosticSink
@@ -23,7 +24,7 @@ from .source import Span, SourceFile
 
 #: text held in memory in place of files (an editor's unsaved buffers): a mapping from paths, or a
 #: function of an absolute path giving the text or None (then the file on disk is read)
-Overlay = Union[Mapping[str, str], Callable[[str], Union[str, None]]]
+Overlay = Union[Mapping[str, str], Callable[[str], str | None]]
 
 
 @dataclass(frozen=True)

@@ -57,7 +57,7 @@ class Roots:
         object.__setattr__(self, "real", tuple(_real(d) for d in dirs))
 
     @classmethod
-    def of_file(cls, path: str, root: str | None = None, include: tuple[str, ...] = ()) -> "Roots":
+    def of_file(cls, path: str, root: str | None = None, include: tuple[str, ...] = ()) -> Roots:
         """The roots of a project whose root file is ``path``: ``root`` or the file's directory."""
         if root is not None:
             return cls(root, tuple(include))

@@ -50,7 +50,7 @@ class Hole(Activation):
                 object.__setattr__(self, name, value)
 
     @classmethod
-    def of(cls, node: s.Activation) -> "Hole":
+    def of(cls, node: s.Activation) -> Hole:
         """The hole that the activation ``node`` (with a ``?``) leaves open."""
         return cls(**_hole_fields(node))
 

@@ -15,7 +15,7 @@ import os
 import stat
 import sys
 import tempfile
-from typing import Mapping, Sequence
+from collections.abc import Mapping, Sequence
 
 from .. import api
 from ..diagnostics import Diagnostic, DiagnosticSink

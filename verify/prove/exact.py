@@ -22,7 +22,7 @@ import time
 from dataclasses import dataclass, field
 from fractions import Fraction
 from collections.abc import Generator, Iterable
-from typing import Callable, Iterator
+from collections.abc import Callable, Iterator
 
 from ..model import SystemModel, TaskModel
 from ..sim import Sample, SimulationError

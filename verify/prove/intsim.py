@@ -153,7 +153,7 @@ class IntSimulator:
 
     @classmethod
     def of(cls, model: SystemModel, scenario: ConcreteScenario, max_events: int,
-           extra_times: Iterable[Fraction] = (), log: bool = False) -> "IntSimulator":
+           extra_times: Iterable[Fraction] = (), log: bool = False) -> IntSimulator:
         """The simulator of a ``scenario.ConcreteScenario`` (its horizon is not used here); with
         ``log`` it records the arrivals that ``trace`` needs."""
         return cls(model, dict(scenario.phases), dict(scenario.counters), max_events, extra_times,

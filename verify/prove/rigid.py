@@ -104,7 +104,7 @@ class PeriodicShift:
         self.events = sim.events
 
     @classmethod
-    def of(cls, sim: IntSimulator, before: _Snapshot, after: _Snapshot, period: int) -> "PeriodicShift | None":
+    def of(cls, sim: IntSimulator, before: _Snapshot, after: _Snapshot, period: int) -> PeriodicShift | None:
         shift = cls(sim, before, after, period)
         for i, jobs in enumerate(shift.full):
             n = shift.shift[i]
@@ -138,7 +138,7 @@ class PeriodicShift:
     def events_at(self, horizon: int) -> int:
         return self.events_start + (horizon - self.start) // self.period * self.events_per_period
 
-    def view(self, horizon: int) -> "PeriodicShift":
+    def view(self, horizon: int) -> PeriodicShift:
         """The job records as a run stopped at ``horizon`` (a multiple of the period past ``t₁``) has
         them: released before it, started and finished only if before it."""
         moved, last_release = self._moved, horizon - self.period

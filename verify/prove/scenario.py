@@ -119,7 +119,7 @@ class ConcreteScenario:
     delays: tuple[tuple[tuple[str, str], tuple[Fraction, ...]], ...] = ()
     interarrivals: tuple[tuple[str, tuple[Fraction, ...]], ...] = ()
 
-    def with_horizon(self, horizon: Fraction) -> "ConcreteScenario":
+    def with_horizon(self, horizon: Fraction) -> ConcreteScenario:
         return ConcreteScenario(Fraction(horizon), self.phases, self.counters, self.exec_times, self.delays,
                                 self.interarrivals)
 
@@ -161,7 +161,7 @@ class ConcreteScenario:
         }
 
     @classmethod
-    def from_json(cls, doc: dict[str, Any]) -> "ConcreteScenario":
+    def from_json(cls, doc: dict[str, Any]) -> ConcreteScenario:
         def q(x: Any) -> Fraction:
             return Fraction(x["exact"])
 

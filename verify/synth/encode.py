@@ -22,7 +22,8 @@ from __future__ import annotations
 
 import math
 from fractions import Fraction
-from typing import Mapping, TypeAlias
+from typing import TypeAlias
+from collections.abc import Mapping
 
 import z3
 

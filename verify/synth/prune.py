@@ -20,7 +20,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Callable, Mapping, TypeAlias
+from typing import TypeAlias
+from collections.abc import Callable, Mapping
 
 from ..activations import Activation, DataTriggered
 from ..model import ChainModel, HopModel, SystemModel, TaskModel

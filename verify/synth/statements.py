@@ -15,7 +15,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 from fractions import Fraction
-from typing import Mapping, TypedDict, TypeGuard
+from typing import TypedDict, TypeGuard
+from collections.abc import Mapping
 
 from .. import syntax as s
 from ..activations import DataTriggered, Hole, Periodic

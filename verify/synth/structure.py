@@ -12,7 +12,8 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Mapping, TypeAlias
+from typing import TypeAlias
+from collections.abc import Mapping
 
 import networkx as nx  # type: ignore[import-untyped, unused-ignore]  # types-networkx: not installed yet
 

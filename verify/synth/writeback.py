@@ -17,7 +17,7 @@ from __future__ import annotations
 import difflib
 from dataclasses import dataclass, replace
 from fractions import Fraction
-from typing import Mapping
+from collections.abc import Mapping
 
 from .. import syntax as s
 from ..api import LoadResult, _finish

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Mapping
+from collections.abc import Mapping
 
 from ..diagnostics import DiagnosticSink, Label, name_list
 from ..model import SystemModel, TaskModel
