@@ -160,8 +160,7 @@ class Encoding:
                  structure: Structure, tracked: bool, seed: Mapping[str, Fraction | None], ctx: z3.Context):
         self.model, self.choices, self.statements = model, choices, statements
         self.structure, self.tracked, self.seed = structure, tracked, seed
-        self.tick = tick_of(model, choices)
-        self.base = TimeBase(self.tick)
+        self.base = TimeBase(tick_of(model, choices))
         self.M = rate_scale(model, choices, structure, self.tick)
         self.ctx = ctx
         self.t = Terms(ctx)
@@ -181,6 +180,11 @@ class Encoding:
         self._build()
 
     # -------------------------------------------------------------- basics
+
+    @property
+    def tick(self) -> Fraction:
+        """The problem's tick in seconds (``tick_of``)."""
+        return self.base.unit
 
     def ticks(self, x: Fraction) -> int:
         """``x`` in ticks of the problem (``verify.timebase``)."""
