@@ -64,10 +64,11 @@ def fuzz_one(target: str, runs: int, out: Path, *, max_len: int, smoke: bool, se
                "-print_final_stats=1", "-rss_limit_mb=4096", str(corpus)]
     started = time.monotonic()
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]))
-    proc = subprocess.run(command, cwd=ROOT, env=env, capture_output=True, text=True, errors="replace")
+    log_path = out / f"{target}.log"  # (written as libFuzzer goes: ``tail -f`` shows a long run's progress)
+    with open(log_path, "w", encoding="utf-8") as log_file:
+        proc = subprocess.run(command, cwd=ROOT, env=env, stdout=log_file, stderr=subprocess.STDOUT)
     seconds = time.monotonic() - started
-    log = proc.stdout + proc.stderr
-    (out / f"{target}.log").write_text(log, encoding="utf-8")
+    log = log_path.read_text(encoding="utf-8", errors="replace")
     executed = re.findall(r"stat::number_of_executed_units:\s*(\d+)", log) or re.findall(r"^#(\d+)\s", log, re.M)
     made = sorted(p.name for p in findings.iterdir() if p.name not in before)
     return {"target": target, "runs": runs, "executions": int(executed[-1]) if executed else 0,
