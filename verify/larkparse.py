@@ -316,7 +316,8 @@ def _syntax_help(expected: set[str], token: Token, glued: tuple[str, Token, Toke
         return (f"`{shorten(word)}` is not a keyword of the language; specs/language.md gives the syntax of each "
                 "declaration")
     if len(expected) == 1:
-        return f"insert {_describe_expected(expected)} before {_describe_found(token)}, or remove {_describe_found(token)}"
+        found = _describe_found(token)
+        return f"insert {_describe_expected(expected)} before {found}, or remove {found}"
     return (f"remove {_describe_found(token)}, or write what the declaration needs before it; "
             f"specs/language.md gives the syntax of each declaration")
 
@@ -340,7 +341,7 @@ def _accepted(err: UnexpectedInput) -> set[str]:
 def _exponent_after(text: str, number: tuple[str, tuple[int, int, int, int]]) -> str | None:
     """``e5`` in ``1e5`` (exponent notation right after the number), or None."""
     (digits, (line, col, _, end_col)) = number
-    offset = sum(len(l) + 1 for l in text.split("\n")[:line - 1]) + end_col - 1
+    offset = sum(len(row) + 1 for row in text.split("\n")[:line - 1]) + end_col - 1
     m = _EXPONENT_RE.match(text, offset)
     return m.group(0) if m else None
 

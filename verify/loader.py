@@ -11,7 +11,6 @@ from __future__ import annotations
 import os
 import stat
 from dataclasses import dataclass, field
-from typing import Union
 from collections.abc import Callable, Mapping
 
 from . import syntax as s
@@ -24,7 +23,7 @@ from .source import Span, SourceFile
 
 #: text held in memory in place of files (an editor's unsaved buffers): a mapping from paths, or a
 #: function of an absolute path giving the text or None (then the file on disk is read)
-Overlay = Union[Mapping[str, str], Callable[[str], str | None]]
+Overlay = Mapping[str, str] | Callable[[str], str | None]
 
 
 @dataclass(frozen=True)
@@ -56,7 +55,8 @@ def _shown(path: str) -> str:
     return "".join(c if c.isprintable() else repr(c)[1:-1] for c in path)
 
 
-def read_bytes(path: str, sink: DiagnosticSink, at: Span | None, limit: int = DEFAULT_LIMITS.file_bytes) -> bytes | None:
+def read_bytes(path: str, sink: DiagnosticSink, at: Span | None,
+               limit: int = DEFAULT_LIMITS.file_bytes) -> bytes | None:
     """The bytes of regular file ``path``, at most ``limit`` + 1 of them (more than ``limit``: the file is
     too large), or None after reporting why it cannot be read."""
     where = at or Span(path, 1, 1, 1, 1)

@@ -16,7 +16,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Literal, TypedDict, Union
+from typing import Literal, TypedDict
 
 from . import syntax as s
 from .activations import KINDS as KINDS
@@ -35,7 +35,7 @@ def _span() -> Span:
 
 # ------------------------------------------------------------------ activations (verify.activations)
 
-ActivationModel = Union[Periodic, SporadicSource, DataTriggered, Hole]
+ActivationModel = Periodic | SporadicSource | DataTriggered | Hole
 
 
 # ------------------------------------------------------------------ system

@@ -298,8 +298,8 @@ class _Builder:
     (``lalr.position``; None for an empty rule) and its children as Lark's tree would hold them: nodes built by these
     methods and the tokens the rule keeps (``tokens``: a NAME is a ``syntax.Name``, a NUMBER the tuple (value,
     start, end) — its span is made only where a rule keeps one —, an RBRACE its ``Span``, a STRING (its text,
-    its ``Span``), a UNIT its text). ``verify.lalr`` calls them while parsing; ``transform`` applies them to a Lark tree (the
-    error-recovering path)."""
+    its ``Span``), a UNIT its text). ``verify.lalr`` calls them while parsing; ``transform`` applies them to a
+    Lark tree (the error-recovering path)."""
 
     def __init__(self, path: str, sink: DiagnosticSink, limits: Limits = DEFAULT_LIMITS) -> None:
         self.path = path

@@ -178,7 +178,8 @@ def read_settings(pyproject: str) -> Settings | SettingsError:
     except tomllib.TOMLDecodeError as err:
         line, column = _toml_position(str(err))
         return fail(Span(pyproject, line, column, line, column + 1),
-                    f"{pyproject} is not valid TOML: {str(err).split(' (at ')[0]}", "invalid TOML", "fix the TOML syntax")
+                    f"{pyproject} is not valid TOML: {str(err).split(' (at ')[0]}", "invalid TOML",
+                    "fix the TOML syntax")
     tool = data.get("tool")
     table = tool.get("verify") if isinstance(tool, dict) else None
     if table is None:

@@ -40,7 +40,8 @@ import random
 from bisect import bisect_left
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Callable, Mapping
+from typing import Any, cast
+from collections.abc import Callable, Mapping
 
 from .model import Activation, ChainModel, LinkModel, SystemModel, TaskModel
 
@@ -105,8 +106,8 @@ class Draw:
     seed: int
     bounds: Mapping[tuple[str, ...], tuple[Fraction, Fraction]]
 
-    def __call__(self, *key) -> Fraction:
-        lo, hi = self.bounds[tuple(key[:-1])]
+    def __call__(self, *key: object) -> Fraction:
+        lo, hi = self.bounds[cast("tuple[str, ...]", key[:-1])]  # (the names: ids, all str)
         return pick_in(random.Random(f"{self.seed}|{'|'.join(map(str, key))}"), lo, hi)
 
 
@@ -128,8 +129,9 @@ def random_scenario(system: SystemModel, rng: random.Random, horizon: Fraction) 
             gaps[(t.id,)] = act.gaps
         if act.trigger_port is not None:
             counters[t.id] = rng.randrange(act.release_every)
-    execs = {(t.id,): (t.bcet, t.wcet) for t in system.tasks}
-    delays = {(lk.source, lk.target): (lk.delay_min, lk.delay_max) for lk in system.links}
+    execs: dict[tuple[str, ...], tuple[Fraction, Fraction]] = {(t.id,): (t.bcet, t.wcet) for t in system.tasks}
+    delays: dict[tuple[str, ...], tuple[Fraction, Fraction]] = {
+        (lk.source, lk.target): (lk.delay_min, lk.delay_max) for lk in system.links}
     return Scenario(Fraction(horizon), phases, Draw(rng.getrandbits(64), execs),
                     Draw(rng.getrandbits(64), delays), Draw(rng.getrandbits(64), gaps), counters)
 
@@ -198,7 +200,7 @@ class _Job:
     finish: Fraction | None = None
     reads: dict[str, Message | None] = field(default_factory=dict)
 
-    def key(self) -> tuple:
+    def key(self) -> tuple[int, Fraction, int, int]:
         """Dispatch rank (§1): higher priority, then earlier release, then task order."""
         return (-self.task.priority, self.release, self.order, self.index)
 
@@ -249,6 +251,7 @@ class _Simulator:
                 _check(phase is None or phase == act.fixed_phase, f"{t.id}: phase is fixed to {act.fixed_phase}")
                 phase = act.fixed_phase
             else:
+                assert act.offset_window is not None, "a released-by-time kind without a fixed phase has a window"
                 phase = ZERO if phase is None else phase
                 _check(0 <= phase < act.offset_window,
                        f"{t.id}: {act.offset_name} {phase} outside [0, {act.offset_window})")
@@ -275,6 +278,7 @@ class _Simulator:
 
     def _gap(self, t: TaskModel, act: Activation, index: int) -> Fraction:
         """The time from release ``index`` of ``t`` (released by time) to the next one."""
+        assert act.gaps is not None, "only a task released by time has gaps"
         low, high = act.gaps
         if low == high:
             return low
@@ -316,7 +320,7 @@ class _Simulator:
                 job.remaining -= t - self.now
         self.now = t
 
-    def _pop_due(self, phase: int, handle: Callable) -> None:
+    def _pop_due(self, phase: int, handle: Callable[[Any], None]) -> None:
         while self.heap and self.heap[0][0] == self.now and self.heap[0][1] == phase:
             self._count()
             handle(heapq.heappop(self.heap)[3])
@@ -466,11 +470,12 @@ class ChainLatencies:
     def _samples(self, kind: str) -> tuple[Sample, ...]:
         if kind not in KINDS:
             raise ValueError(f"unknown latency kind {kind!r}; one of {KINDS}")
-        return getattr(self, kind)
+        samples: tuple[Sample, ...] = getattr(self, kind)
+        return samples
 
 
 def _stamp(trace: Trace, chain: ChainModel, pos: int, job: JobRecord,
-           memo: dict) -> tuple[int, Fraction] | None:
+           memo: dict[tuple[int, str, int], tuple[int, Fraction] | None]) -> tuple[int, Fraction] | None:
     """The provenance (τ₁ job index, its read time) held by ``job`` at chain position ``pos``."""
     if pos == 0:
         assert job.start is not None
@@ -487,7 +492,7 @@ def chain_latencies(trace: Trace, chain: ChainModel) -> ChainLatencies:
     τₙ jobs completed before the horizon count; the first job of τ₁ opens no reaction sample."""
     first, n = chain.tasks[0], len(chain.tasks)
     reads = {j.index: j.start for j in trace.jobs[first] if j.start is not None}
-    memo: dict = {}
+    memo: dict[tuple[int, str, int], tuple[int, Fraction] | None] = {}
     holders: list[tuple[Fraction, int, JobRecord]] = []  # (stamp time, stamp index, τn job)
     for job in trace.finished(chain.tasks[-1]):
         st = _stamp(trace, chain, n - 1, job, memo)
@@ -495,6 +500,7 @@ def chain_latencies(trace: Trace, chain: ChainModel) -> ChainLatencies:
             holders.append((st[1], st[0], job))
     age, age_nr = [], []
     for s, k, job in holders:
+        assert job.finish is not None, "trace.finished gives finished jobs"
         age.append(Sample(job.finish - s, s, job.finish, k, k, job.index))
         if k >= 1:
             age_nr.append(Sample(job.finish - reads[k - 1], reads[k - 1], job.finish, k - 1, k, job.index))
@@ -502,17 +508,20 @@ def chain_latencies(trace: Trace, chain: ChainModel) -> ChainLatencies:
     return ChainLatencies(chain.name, tuple(react), tuple(react_r), tuple(age), tuple(age_nr))
 
 
-def _reactions(reads: dict[int, Fraction], holders: list) -> tuple[list[Sample], list[Sample]]:
+def _reactions(reads: dict[int, Fraction], holders: list[tuple[Fraction, int, JobRecord]]
+               ) -> tuple[list[Sample], list[Sample]]:
     """For τ₁ job j ≥ 1 at s_j: the earliest-completing τₙ job holding a stamp ≥ s_j ends both
     the reaction from s_{j−1} (non-reduced) and from s_j (reduced)."""
     holders = sorted(holders, key=lambda h: h[0])
     stamps = [h[0] for h in holders]
-    best_from: list[tuple[Fraction, int, int]] = [None] * len(holders)  # type: ignore[list-item]
-    running = None
-    for i in range(len(holders) - 1, -1, -1):  # suffix minimum of (finish, τn index, stamp index)
-        cand = (holders[i][2].finish, holders[i][2].index, holders[i][1])
+    best_from: list[tuple[Fraction, int, int]] = []  # (built backwards, then reversed)
+    running: tuple[Fraction, int, int] | None = None
+    for _stamp_time, stamp_index, job in reversed(holders):  # suffix minimum of (finish, τn index, stamp index)
+        assert job.finish is not None, "holders are finished jobs"
+        cand = (job.finish, job.index, stamp_index)
         running = cand if running is None or cand < running else running
-        best_from[i] = running
+        best_from.append(running)
+    best_from.reverse()
     react, react_r = [], []
     for j in sorted(reads):
         pos = bisect_left(stamps, reads[j])

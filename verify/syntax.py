@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Literal, Union
+from typing import Literal
 
 from .source import NO_SPAN, Span
 
@@ -218,7 +218,7 @@ class UnknownActivation:
     span: Span = _span()
 
 
-Activation = Union[Timer, Trigger, Sporadic, UnknownActivation]
+Activation = Timer | Trigger | Sporadic | UnknownActivation
 
 
 def is_hole(act: Activation | None) -> bool:

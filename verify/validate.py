@@ -6,6 +6,7 @@ the timing analysis, which runs after this pass succeeds.
 """
 from __future__ import annotations
 
+from collections.abc import Iterable, Iterator
 from fractions import Fraction
 
 import networkx as nx
@@ -13,7 +14,8 @@ import networkx as nx
 from . import syntax as s
 from .diagnostics import DiagnosticSink, Label, name_list
 from .model import SystemModel, chain_path, quantity_base, quantity_hertz, quantity_seconds
-from .resolve import ComponentScope, Resolution, SystemScope
+from .resolve import ComponentScope, MemberNode, Resolution, SystemScope
+from .source import Span
 from .units import fmt_number, fmt_quantity, fmt_rate, fmt_time
 
 
@@ -34,7 +36,7 @@ def validate_component(scope: ComponentScope, sink: DiagnosticSink) -> None:
     _check_producers(scope, sink)
 
 
-def _check_repeated(spans, what: str, sink: DiagnosticSink) -> None:
+def _check_repeated(spans: Iterable[Span], what: str, sink: DiagnosticSink) -> None:
     for span in spans:
         sink.emit("E212", f"this clause is given more than once for {what}", span, "given again here",
                   help="keep one of them")
@@ -58,7 +60,8 @@ def _positive(q: s.Quantity | None, role: str, sink: DiagnosticSink, allow_zero:
     return False
 
 
-def _ordered(low, high, role: str, sink: DiagnosticSink, span) -> bool:
+def _ordered(low: s.Quantity | s.Number | None, high: s.Quantity | s.Number | None, role: str,
+             sink: DiagnosticSink, span: Span) -> bool:
     """E303: ``low .. high`` must not be inverted (compared in the dimension written)."""
     if low is None or high is None:
         return True
@@ -66,7 +69,9 @@ def _ordered(low, high, role: str, sink: DiagnosticSink, span) -> bool:
     hv = quantity_base(high) if isinstance(high, s.Quantity) else high.value
     if lv <= hv:
         return True
-    show = fmt_quantity if isinstance(low, s.Quantity) else (lambda n: fmt_number(n.value))
+    def show(bound: s.Quantity | s.Number) -> str:
+        return fmt_quantity(bound) if isinstance(bound, s.Quantity) else fmt_number(bound.value)
+
     sink.emit("E303", f"{role} is inverted: {show(low)} .. {show(high)} contains nothing", span,
               "lower bound above upper bound", help=f"write it as {show(high)} .. {show(low)}")
     return False
@@ -89,7 +94,8 @@ def _check_execution_times(task: s.Task, sink: DiagnosticSink) -> None:
 def _check_constraint(c: s.ActivationConstraint, sink: DiagnosticSink) -> None:
     ok = _dimension(c.min, "frequency", "an activation-constraint bound", sink)
     ok &= _dimension(c.max, "frequency", "an activation-constraint bound", sink)
-    ok &= _positive(c.min, "minimum activation frequency", sink) & _positive(c.max, "maximum activation frequency", sink)
+    ok &= _positive(c.min, "minimum activation frequency", sink)
+    ok &= _positive(c.max, "maximum activation frequency", sink)
     if ok:
         _ordered(c.min, c.max, "activation constraint", sink, c.span)
 
@@ -103,7 +109,7 @@ def _check_reads(task: s.Task, sink: DiagnosticSink) -> None:
                       help="merge the two `reads` lines")
         seen[read.port.text] = read
         for tol in (read.oversampling, read.undersampling):
-            if tol is not None and tol.kind == "max" and tol.factor.value < 1:
+            if tol is not None and tol.kind == "max" and tol.factor is not None and tol.factor.value < 1:
                 sink.emit("E303", f"a sampling factor below 1 ({fmt_number(tol.factor.value)}) allows nothing",
                           tol.span, "factor below 1", help="use `forbidden`, or a factor of at least 1")
 
@@ -140,7 +146,7 @@ def _check_producers(scope: ComponentScope, sink: DiagnosticSink) -> None:
 # ================================================================== systems
 
 
-def _instance_tasks(scope: SystemScope):
+def _instance_tasks(scope: SystemScope) -> Iterator[tuple[s.Instance, ComponentScope, s.Task, s.TaskBinding | None]]:
     """Every (instance, component scope, task definition, binding or None), in source order."""
     for inst in scope.system.instances:
         comp = scope.component_of.get(inst.name.text)
@@ -265,7 +271,7 @@ def _check_timer(t: s.Timer, sink: DiagnosticSink) -> bool:
     return ok
 
 
-def _check_prescaler(p, sink: DiagnosticSink) -> bool:
+def _check_prescaler(p: s.Number | s.PrescalerHole, sink: DiagnosticSink) -> bool:
     if isinstance(p, s.PrescalerHole):
         ok = all(_check_prescaler(n, sink) for n in (p.low, p.high) if n is not None)
         return ok and _ordered(p.low, p.high, "prescaler range", sink, p.span)
@@ -360,6 +366,7 @@ def _allowed_periods(c: s.ActivationConstraint) -> str:
         return f"{fmt_time(1 / quantity_hertz(c.max))} .. {fmt_time(1 / quantity_hertz(c.min))}"
     if c.max is not None:
         return f"at least {fmt_time(1 / quantity_hertz(c.max))}"
+    assert c.min is not None, "a constraint has a bound"
     return f"at most {fmt_time(1 / quantity_hertz(c.min))}"
 
 
@@ -372,6 +379,7 @@ def _constraint_text(c: s.ActivationConstraint) -> str:
         return f"{fmt_quantity(c.min)} .. {fmt_quantity(c.max)}"
     if c.min is not None:
         return f"at least {fmt_quantity(c.min)}"
+    assert c.max is not None, "a constraint has a bound"
     return f"at most {fmt_quantity(c.max)}"
 
 
@@ -398,7 +406,7 @@ def _check_trigger_reads(act: s.Trigger, task: s.Task, comp: ComponentScope, who
 # ------------------------------------------------------------------ connections
 
 
-def _port_node(scope: SystemScope, ref: s.PortRef):
+def _port_node(scope: SystemScope, ref: s.PortRef) -> MemberNode | None:
     comp = scope.component_of.get(ref.instance.text)
     return comp.get(ref.member.text) if comp else None
 
@@ -444,7 +452,8 @@ def _check_unconnected(scope: SystemScope, incoming: dict[str, s.Connection], si
                                f"or mark the read `optional` in component `{comp.name}`")
 
 
-def _check_trigger_connected(inst, act: s.Trigger, comp: ComponentScope, incoming, sink: DiagnosticSink) -> None:
+def _check_trigger_connected(inst: s.Instance, act: s.Trigger, comp: ComponentScope, incoming: dict[str, s.Connection],
+                             sink: DiagnosticSink) -> None:
     node = comp.get(act.port.text)
     members = [m.text for m in node.members] if isinstance(node, s.CompoundPort) else [act.port.text]
     unconnected = [m for m in members if f"{inst.name.text}.{m}" not in incoming]
@@ -476,8 +485,8 @@ def _trigger_graph(scope: SystemScope) -> tuple[list[str], list[tuple[str, str]]
         for task in comp.component.tasks:
             if any(p.text == conn.source.member.text for p in task.produces):
                 writer_of[str(conn.target)] = f"{conn.source.instance.text}.{task.name.text}"
-    for (inst, task), binding in scope.bindings.items():
-        tid = f"{inst}.{task}"
+    for (inst, task_name), binding in scope.bindings.items():
+        tid = f"{inst}.{task_name}"
         nodes[tid] = None
         act = binding.activation
         if not isinstance(act, s.Trigger):
@@ -522,7 +531,7 @@ def _check_trigger_sources(scope: SystemScope, sink: DiagnosticSink) -> None:
     live = _activated(edges, modes, sources)
     if len(live) == len(nodes):  # (the common case: nothing to report)
         return
-    graph = nx.DiGraph()
+    graph: nx.DiGraph[str] = nx.DiGraph()
     graph.add_nodes_from(nodes)
     graph.add_edges_from(edges)
     dead = graph.subgraph(n for n in graph.nodes if n not in live)
@@ -533,19 +542,24 @@ def _check_trigger_sources(scope: SystemScope, sink: DiagnosticSink) -> None:
             continue
         cycle = _cycle_through(dead.subgraph(members), members[0], order)
         others = [m for m in members if m not in cycle]
-        inst, task = members[0].split(".", 1)
-        binding = scope.bindings[(inst, task)]
         sink.emit("E210", "these tasks only trigger each other and are never activated: "
-                  + " -> ".join(f"`{m}`" for m in cycle + [cycle[0]]), binding.activation.span,
+                  + " -> ".join(f"`{m}`" for m in cycle + [cycle[0]]), _trigger_span(scope, members[0]),
                   "part of the cycle",
-                  secondary=tuple(Label(scope.bindings[tuple(m.split(".", 1))].activation.span, f"`{m}`")
-                                  for m in members[1:]),
+                  secondary=tuple(Label(_trigger_span(scope, m), f"`{m}`") for m in members[1:]),
                   notes=(("in the same cycle of triggers: " + name_list(others),)
                          if others else ()),
                   help="activate one task of the cycle by a timer or a sporadic source")
 
 
-def _cycle_through(component: nx.DiGraph, first: str, order: dict[str, int]) -> list[str]:
+def _trigger_span(scope: SystemScope, tid: str) -> Span:
+    """Where task ``tid`` (in a cycle of triggers: bound, by a data trigger) is bound."""
+    inst, task = tid.split(".", 1)
+    activation = scope.bindings[(inst, task)].activation
+    assert activation is not None, "a task in a cycle of triggers is bound to a trigger"
+    return activation.span
+
+
+def _cycle_through(component: nx.DiGraph[str], first: str, order: dict[str, int]) -> list[str]:
     """A shortest cycle of the strongly connected ``component`` through ``first``, in the direction of the
     triggers, as its nodes from ``first`` on (ties broken by source order, so the text is stable)."""
     best: list[str] | None = None
@@ -553,6 +567,7 @@ def _cycle_through(component: nx.DiGraph, first: str, order: dict[str, int]) -> 
         back = nx.shortest_path(component, succ, first)  # succ … first (``[first]`` for a self-loop)
         if best is None or len(back) < len(best):
             best = back
+    assert best is not None, "a node of a strongly connected component with an edge has a successor"
     return [first] + best[:-1]
 
 
@@ -568,6 +583,7 @@ def validate_chains(scope: SystemScope, model: SystemModel, sink: DiagnosticSink
         index, kind, detail = problem
         prev, ref = chain.refs[index - 1], chain.refs[index]
         if kind == "ambiguous":
+            assert isinstance(detail, tuple), "an ambiguous end names its readers"
             sink.emit("E209", f"chain `{chain.name.text}` ends at in-port `{ref}`, which "
                       + " and ".join(f"`{d}`" for d in detail) + (" both read" if len(detail) == 2 else " all read"),
                       ref.span, "ambiguous end",
@@ -621,6 +637,7 @@ def _consumer_notes(ref: s.PortRef, scope: SystemScope, model: SystemModel) -> l
     if comp.kind_of(ref.member.text) != "out-port":
         return []
     producer = model.producer(str(ref))
+    assert producer is not None, "a task produces every out-port (E202)"
     task = model.task(producer)
     reads = ", ".join(f"`{r.port}`" for r in task.reads) or "nothing"
     return [f"`{ref}` is produced by `{producer}`, which reads {reads}"]
@@ -631,8 +648,8 @@ def _consumer_notes(ref: s.PortRef, scope: SystemScope, model: SystemModel) -> l
 
 def validate(resolution: Resolution, sink: DiagnosticSink) -> None:
     """Run every component and system rule; collect all diagnostics."""
-    for scope in resolution.components.values():
-        validate_component(scope, sink)
-    for scope in resolution.systems.values():
-        if scope.resolved:
-            validate_system(scope, sink)
+    for component in resolution.components.values():
+        validate_component(component, sink)
+    for system in resolution.systems.values():
+        if system.resolved:
+            validate_system(system, sink)

@@ -7,8 +7,8 @@ testing its class:
 
 - *Releases by time* (a source, in CPA terms: Richter 2005, §2): ``gaps`` is the least and greatest
   distance between two releases (the event model's δ⁻(2) and δ⁺(2)); ``strict_period`` the period of a
-  strictly periodic one (only those have a hyperperiod; the others are ``irregular``); ``fixed_phase`` the first release when it is
-  fixed, else the scenario chooses it in ``[0, offset_window)``.
+  strictly periodic one (only those have a hyperperiod; the others are ``irregular``); ``fixed_phase`` the
+  first release when it is fixed, else the scenario chooses it in ``[0, offset_window)``.
 - *Releases by data*: ``trigger_members`` are the in-ports whose arrivals count, ``release_every`` the
   prescaler (the task runs on every k-th activation event), ``all_members`` whether an event needs a
   fresh sample on every member, ``trigger_port`` the port or compound it names, ``single_port`` that port

@@ -19,7 +19,8 @@ class Periodic(Activation):
 
     period: Fraction
     phase: Fraction | None = None
-    span: Span = field(default=NO_SPAN, compare=False, repr=False)  # the activation in the binding (NO_SPAN when synthesised)
+    #: the activation in the binding (NO_SPAN when synthesised)
+    span: Span = field(default=NO_SPAN, compare=False, repr=False)
 
     @property
     def gaps(self) -> tuple[Fraction, Fraction]:

@@ -11,6 +11,7 @@ Exit codes (stable, documented in README.md):
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import stat
 import sys
@@ -115,10 +116,8 @@ def replace_file(path: str, text: str) -> int:
         return cannot_write(path, err)
     finally:
         if tmp is not None:
-            try:
+            with contextlib.suppress(OSError):
                 os.unlink(tmp)
-            except OSError:
-                pass
     return EXIT_OK
 
 

@@ -33,7 +33,8 @@ MODEL, SYSTEM = True, True
 def add_arguments(p: argparse.ArgumentParser) -> None:
     from ..prove.core import DEFAULT_BUDGET
 
-    p.add_argument("--trace-svg", metavar="FILE", help="write every counterexample as an SVG Gantt chart (one below the other)")
+    p.add_argument("--trace-svg", metavar="FILE",
+                   help="write every counterexample as an SVG Gantt chart (one below the other)")
     p.add_argument("--budget", metavar="N", type=int, default=DEFAULT_BUDGET,
                    help=f"scenarios the exact and falsifying searches may simulate (default {DEFAULT_BUDGET})")
     p.add_argument("--timeout", metavar="S", type=float, default=None,

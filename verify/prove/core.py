@@ -13,6 +13,7 @@ import time
 from collections.abc import Mapping, Sequence
 from contextlib import closing
 from dataclasses import dataclass
+from functools import partial
 from fractions import Fraction
 from typing import cast
 
@@ -190,16 +191,8 @@ def _search_round(model: SystemModel, cones: list[_Cone], todo: list[int], round
         workers = resolve_workers(jobs) if size >= PARALLEL_TASK_SCENARIOS else 1
         items = {k: [r for r in cones[k].items if round_ == 0 or out[r.i].status == "undecided"] for k in batch}
 
-        def one(k: int) -> tuple[dict[int, Verdict], int, bool, SearchResult | None]:
-            """Cone k's search and the replay of its counterexamples on the whole system (both
-            in a worker when the batch is spread): (verdicts, scenarios used, carried over, search)."""
-            cone = cones[k]
-            found, used = _search_cone(cone.sub, items[k], shares[k], budget.deadline, cone.horizon, cone.given,
-                                       cone.found, round_)
-            verdicts = _search_verdicts(items[k], found, budget)
-            return verdicts, used, cone.sub is model or _carries_over(model, verdicts, known), found
-
-        with closing(ordered_map(lambda j: one(batch[j]), range(len(batch)), workers)) as runs:
+        work = partial(_search_batch_member, model, cones, batch, items, shares, budget, round_, known)
+        with closing(ordered_map(work, range(len(batch)), workers)) as runs:
             for k, (verdicts, used, carried, found) in zip(batch, runs):  # (closing stops the workers)
                 budget.spend(used)
                 cones[k].found = found
@@ -240,6 +233,19 @@ def _shared_firsts(model: SystemModel, pending: list[tuple[SystemModel, list[_Le
     if any(m is None for m in runs):
         return (), False
     return cast("tuple[Measured, ...]", runs), union is model  # (no run is None: checked above)
+
+
+def _search_batch_member(model: SystemModel, cones: list[_Cone], batch: list[int], items: dict[int, list[_Left]],
+                         shares: dict[int, int], budget: Budget, round_: int,
+                         known: Mapping[ConcreteScenario, Measured], j: int
+                         ) -> tuple[dict[int, Verdict], int, bool, SearchResult | None]:
+    """The search of cone ``batch[j]`` and the replay of its counterexamples on the whole system (both
+    in a worker when the batch is spread): (verdicts, scenarios used, carried over, search)."""
+    cone = cones[batch[j]]
+    found, used = _search_cone(cone.sub, items[batch[j]], shares[batch[j]], budget.deadline, cone.horizon, cone.given,
+                               cone.found, round_)
+    verdicts = _search_verdicts(items[batch[j]], found, budget)
+    return verdicts, used, cone.sub is model or _carries_over(model, verdicts, known), found
 
 
 def _search_cone(model: SystemModel, items: list[_Left], share: int, deadline: float | None, horizon: Fraction,

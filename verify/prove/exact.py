@@ -485,11 +485,8 @@ def search(model: SystemModel, goals: list[Goal], budget: Budget, horizon: Fract
                 return False
             if g.below is not None and not _beyond(b, g.target, "best", g.below):
                 return False
-            if g.spread is not None:
-                # (a run kept in the result has its sample)
-                if w is None or b is None or not (w.values[g.target].worst.value  # type: ignore[union-attr]
-                                                  - b.values[g.target].best.value > g.spread):  # type: ignore[union-attr]
-                    return False
+            if g.spread is not None and not _spread_over(w, b, g.target, g.spread):
+                return False
         return True
 
     def consider(m: Measured) -> bool:
@@ -543,6 +540,14 @@ def search(model: SystemModel, goals: list[Goal], budget: Budget, horizon: Fract
         if m is not None:
             consider(m)
     return result
+
+
+def _spread_over(worst: Measured | None, best: Measured | None, target: Target, spread: Fraction) -> bool:
+    """Whether the worst sample of ``worst`` and the best of ``best`` are more than ``spread`` apart."""
+    if worst is None or best is None:
+        return False
+    w, b = worst.values[target].worst, best.values[target].best
+    return w is not None and b is not None and w.value - b.value > spread
 
 
 def _beyond(m: Measured | None, target: Target, side: str, threshold: Fraction) -> bool:

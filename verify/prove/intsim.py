@@ -25,7 +25,7 @@ from collections.abc import Callable, Iterable, Sequence
 from fractions import Fraction
 from typing import TYPE_CHECKING, Protocol, TypeAlias
 
-from ..model import ChainModel, SystemModel, TaskModel
+from ..model import ChainModel, LinkModel, SystemModel, TaskModel
 from ..sim import (DEFAULT_MAX_EVENTS, JobRecord, Message, Sample, ScenarioError, SimulationError,
                    Trace)
 from ..timebase import TimeBase
@@ -270,8 +270,7 @@ class IntSimulator:
                 delay = self.delay[c]
             else:
                 lk = self.links[c]
-                delay = pattern.at(index, lambda v: f"{lk.source}->{lk.target}#{index}: delay {v} outside "
-                                                    f"[{lk.delay_min}, {lk.delay_max}]")
+                delay = pattern.at(index, _delay_outside(lk, index))
             arrival = self.now + delay
             last = self.last_arrival.get(c)
             if last is not None and last > arrival:
@@ -451,6 +450,11 @@ class _Pattern(tuple[int | None, ...]):
         if value is None:
             raise ScenarioError(refusal(self.values[index % len(self)]))
         return value
+
+
+def _delay_outside(lk: LinkModel, index: int) -> Callable[[Fraction], str]:
+    """The refusal of an out-of-range delay of message ``index`` on ``lk``."""
+    return lambda v: f"{lk.source}->{lk.target}#{index}: delay {v} outside [{lk.delay_min}, {lk.delay_max}]"
 
 
 def _pattern(values: Sequence[Fraction] | None, legal: tuple[Fraction, Fraction], base: TimeBase) -> _Pattern | None:

@@ -253,7 +253,7 @@ def to_svg_all(model: SystemModel, verdicts: list[Verdict]) -> str:
     charts = [_chart(model, v, f"arrow{i}", position=True, traces=traces) for i, v in enumerate(verdicts, 1)]
     width = max(w for w, _, _ in charts)
     out, y = [], 0
-    for w, h, lines in charts:
+    for _w, h, lines in charts:
         out.append(lines[0].replace("<svg ", f'<svg x="0" y="{y}" ', 1))
         out.extend(lines[1:])
         y += h

@@ -44,11 +44,13 @@ class Counterexample:
     best_sample: object | None = None
 
     @staticmethod
-    def of(target: Target, worst: Measured, best: Measured | None = None) -> "Counterexample":
+    def of(target: Target, worst: Measured, best: Measured | None = None) -> Counterexample:
         w = worst.values[target].worst
+        assert w is not None, "a counterexample is made of a scenario that measured the target"
         if best is None:
             return Counterexample(target, worst.scenario, w, w.value)
         b = best.values[target].best
+        assert b is not None, "a counterexample is made of a scenario that measured the target"
         return Counterexample(target, worst.scenario, w, w.value - b.value, best.scenario, b)
 
 

@@ -10,13 +10,13 @@ no phase is fixed: only relative phases matter) and the prescaler counter phases
 It covers the subclass (``z3_applicable``): the exact class of ``exact.exact_class``, preemptive
 tasks only, single-port data triggers, distinct priorities on each core, execution times > 0.
 
-The window is justified by a query that must be unsatisfiable (in *no* scenario do the timing
-states at ``t_s`` and ``t_s + H`` differ, so the timing repeats from ``t_s`` in all of them) and by
-the analysis' bounds, which say by when every sample class has completed (``W``). Then the supremum is found by asking for a sample above the best
-value so far; every model is replayed in the reference simulator (``measure_periodic``), whose
-value becomes the new best, until the query is unsatisfiable. All queries share one resource limit
-in Z3 ``rlimit`` units (deterministic) and stop at the caller's deadline; an exhausted limit gives no
-result (the caller reports "undecided").
+The window is justified by a query that must be unsatisfiable (in *no* scenario do the timing states at
+``t_s`` and ``t_s + H`` differ, so the timing repeats from ``t_s`` in all of them) and by the analysis'
+bounds, which say by when every sample class has completed (``W``). Then the supremum is found by asking for a
+sample above the best value so far; every model is replayed in the reference simulator (``measure_periodic``),
+whose value becomes the new best, until the query is unsatisfiable. All queries share one resource limit in Z3
+``rlimit`` units (deterministic) and stop at the caller's deadline; an exhausted limit gives no result (the
+caller reports "undecided").
 """
 from __future__ import annotations
 
@@ -338,7 +338,7 @@ class _Spend:
 def _rlimit_count(solver: z3.Solver) -> int:
     """Z3's resource counter (one per context, cumulative; absent before the context's first query)."""
     stats = solver.statistics()
-    return stats.get_key_value("rlimit count") if "rlimit count" in stats.keys() else 0
+    return stats.get_key_value("rlimit count") if "rlimit count" in stats.keys() else 0  # noqa: SIM118 (no dict)
 
 
 def z3_exact(model: SystemModel, targets: list[Target], want_best: Iterable[Target] = frozenset(), *,

@@ -84,7 +84,8 @@ class Candidate:
 
     def text(self) -> str:
         if self.kind == "timer":
-            return f"timer {fmt_time(self.period)}" + (f" phase {fmt_time(self.phase)}" if self.phase is not None else "")
+            phase = f" phase {fmt_time(self.phase)}" if self.phase is not None else ""
+            return f"timer {fmt_time(self.period)}{phase}"
         return f"trigger {self.port}" + (f" every {self.prescaler}" if self.prescaler != 1 else "")
 
 

@@ -75,12 +75,14 @@ def parse_objective(text: str | None, model: SystemModel) -> list[Goal]:
             if chain not in chains:
                 hint = suggest(chain, chains)
                 raise ObjectiveError(f"no chain `{chain}` in system `{model.name}`"
-                                     + (f"; did you mean `{hint}`?" if hint else f" (chains: {', '.join(chains) or 'none'})"))
+                                     + (f"; did you mean `{hint}`?" if hint
+                                        else f" (chains: {', '.join(chains) or 'none'})"))
             goals.append(Goal(kind, chain))
         else:
             raise ObjectiveError(f"unknown objective `{part}`; use one of {', '.join(OBJECTIVES)}, "
                                  "comma-separated for a lexicographic combination")
-    if any(g.kind == "slack" for g in goals) and not any(c.reaction_time or c.data_age or c.jitter for c in model.chains):
+    specs = any(c.reaction_time or c.data_age or c.jitter for c in model.chains)
+    if any(g.kind == "slack" for g in goals) and not specs:
         raise ObjectiveError("objective `slack` needs at least one spec")
     return goals
 

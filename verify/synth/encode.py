@@ -222,7 +222,8 @@ class Encoding:
         if not pre:
             self.add(c)
         else:
-            self.add(z3.Implies(pre[0] if len(pre) == 1 else z3.And(*pre), z3.BoolVal(False, self.ctx) if c is False else c))
+            then = z3.BoolVal(False, self.ctx) if c is False else c
+            self.add(z3.Implies(pre[0] if len(pre) == 1 else z3.And(*pre), then))
 
     def slot(self, task: str, name: str) -> str | None:
         return self.slots.get(task, {}).get(name)
@@ -600,7 +601,8 @@ class Encoding:
         return t.mul(k - 1, gap)
 
 
-def first_job_bounds(model: SystemModel, choices: Mapping[str, Choice], *, relaxed: bool = False) -> dict[str, Fraction]:
+def first_job_bounds(model: SystemModel, choices: Mapping[str, Choice], *,
+                     relaxed: bool = False) -> dict[str, Fraction]:
     """A response-time lower bound per task, valid in every configuration: the first job of the
     level-i busy window (specs/timing.md §6.2), ``w = C + Σ_{hp} η·C`` with ``η = ⌈w / T_max⌉`` for
     an interferer that is a timer in every configuration (``T_max`` its longest candidate period) and

@@ -85,7 +85,10 @@ def activation_bounds(model: SystemModel, task: TaskModel, act: Activation, know
         p_min = min(m.p_min for m in members)
     else:
         fl, fh, p_min = members[0].fl, members[0].fh, members[0].p_min
-    div: Callable[[Range | None], Range | None] = (lambda r: None if r is None else (r[0] / k, r[1] / k))
+
+    def div(r: Range | None) -> Range | None:
+        return None if r is None else (r[0] / k, r[1] / k)
+
     return Bounds(div(fl), div(fh), k * p_min)
 
 
@@ -298,10 +301,7 @@ def _violates(direction: str, w: Bounds, r: Bounds, limit: Fraction) -> bool:
 def _triggered_by(reader: TaskModel, choice: Choice | None, port: str) -> bool:
     """Whether some activation of ``reader`` is a single-port trigger on ``port`` (then the writer's
     rate does not matter to that activation's tolerance)."""
-    for _, act in activation_options(reader, choice):
-        if act.single_port == port:
-            return True
-    return False
+    return any(act.single_port == port for _, act in activation_options(reader, choice))
 
 
 def _r_min(task: TaskModel) -> Fraction:

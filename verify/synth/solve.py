@@ -10,10 +10,10 @@ A configuration the analysis rejects is also blocked exactly. Only configuration
 accepts are ever returned. The space is finite and every round cuts the current answer off, so the
 loop ends; the solver budget (Z3 ``rlimit``) and an optional wall clock bound it.
 
-Objectives are optimised lexicographically by strengthening with the same incremental solver
-(``_best``). An accepted configuration becomes the incumbent, and the next question is "is there one
-strictly better than it?"; the optimum is proven when that is unsatisfiable. Encoded objective values are optimistic (response times are lower
-bounds), so a proven optimum of the encoding that the analysis confirms is the true optimum.
+Objectives are optimised lexicographically by strengthening with the same incremental solver (``_best``). An
+accepted configuration becomes the incumbent, and the next question is "is there one strictly better than
+it?"; the optimum is proven when that is unsatisfiable. Encoded objective values are optimistic (response
+times are lower bounds), so a proven optimum of the encoding that the analysis confirms is the true optimum.
 Period optimization in this style follows Davare et al., DAC 2007.
 """
 from __future__ import annotations
@@ -84,7 +84,7 @@ def implies(parts: list[z3.BoolRef], fact: z3.BoolRef) -> z3.BoolRef:
 
 def _rlimit_count(obj: z3.Solver) -> int:
     stats = obj.statistics()
-    for key in stats.keys():
+    for key in stats.keys():  # noqa: SIM118 (z3's Statistics is no dict: iterating it gives (key, value) pairs)
         if key == "rlimit count":
             return int(stats.get_key_value(key))
     return 0

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 from typing import TypeAlias
 from collections.abc import Mapping
 
-import networkx as nx  # type: ignore[import-untyped, unused-ignore]  # types-networkx: not installed yet
+import networkx as nx
 
 from ..activations import Activation
 from ..model import LinkModel, SystemModel, TaskModel

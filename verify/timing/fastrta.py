@@ -35,7 +35,9 @@ from bisect import bisect_left, bisect_right
 from dataclasses import dataclass
 from fractions import Fraction
 from math import lcm
-from typing import Mapping
+from collections.abc import Callable, Sequence
+from typing import overload
+from collections.abc import Mapping
 
 from ..construct import direct_constructor
 from ..model import SystemModel
@@ -44,6 +46,17 @@ from .rates import EventModel
 from .rta import (MAX_JOBS, MAX_STEPS, ZERO, TaskResponse, bcrt, deadline_of, ratio)
 
 _new_response = direct_constructor(TaskResponse)  # (``verify.construct``: one per task)
+
+#: what ``Round._lfp`` returns: (the fixed point in ticks or None, why not, the step budget left)
+_Run = tuple[int | None, str | None, int]
+#: a task's WCRT in ``Round._wcrt``: (R, Q, critical q, failure)
+_Wcrt = tuple[Fraction | None, int | None, int | None, str | None]
+#: a task's result in ``Round.result``: ``_Wcrt`` and (blocking, remote sibling streams)
+_Result = tuple[Fraction | None, int | None, int | None, str | None, Fraction | None, "list[_Stream]"]
+#: a stream of hp(i) with a causal cap on i: (stream, Π prescalers, carry-in)
+_Capped = tuple["_Stream", int, int]
+#: ``Round._interference``'s correction: the extra demand, by the number of jobs q and then window w
+_ExtraAt = Callable[[int], Callable[[int], int]]
 
 
 class Static:
@@ -87,7 +100,7 @@ class _Stream:
     """A stream of demand in ticks (``rta.Interferer``): None fields are unbounded."""
 
     task: int
-    cost: int | None
+    cost: int
     period: int | None
     jitter: int | None
     silent: bool
@@ -167,27 +180,30 @@ class Round:
         tasks = self.tasks = system.tasks
         self.events = [events[t.id] for t in tasks]
         self.estimates = [estimates.get(t.id) for t in tasks]
-        kept = ([previous is not None and e is previous.events[n] for n, e in enumerate(self.events)]
+        kept = ([e is previous.events[n] for n, e in enumerate(self.events)]
                 if previous is not None else [False] * len(tasks))
-        self.deadlines = [previous.deadlines[n] if kept[n] else deadline_of(t, self.events[n])
-                          for n, t in enumerate(tasks)]
+        self.deadlines: list[tuple[Fraction | None, str]] = [
+            previous.deadlines[n] if previous is not None and kept[n] else deadline_of(t, self.events[n])
+            for n, t in enumerate(tasks)]
         self.base = self._time_base(previous, kept)
         self.scale = self.base.scale
         if previous is None or previous.scale != self.scale:
             kept = [False] * len(tasks)
-        periods = [previous.streams[n].period if kept[n] else self.ticks(e.period_min)
+        periods = [previous.streams[n].period if previous is not None and kept[n] else self.ticks(e.period_min)
                    for n, e in enumerate(self.events)]
         #: U: utilisations are kept as integers in units of 1/U (U: lcm of the periods in ticks)
         self.unit = lcm(*{p for p in periods if p is not None})
         if previous is None or previous.unit != self.unit:
             kept = [False] * len(tasks)
         siblings = static.siblings
-        self.streams = [previous.streams[n] if kept[n] and (not siblings[n] or self.estimates[n] == previous.estimates[n])
-                        else self._stream(n) for n in range(len(tasks))]
+        self.streams: list[_Stream] = [
+            previous.streams[n] if previous is not None and kept[n]
+            and (not siblings[n] or self.estimates[n] == previous.estimates[n])
+            else self._stream(n) for n in range(len(tasks))]
         self.capped = self._causal_paths()
-        self._hold_run: list[tuple | None] = [None] * len(tasks)  # (ticks or None, failure, steps left)
+        self._hold_run: list[_Run | None] = [None] * len(tasks)  # (ticks or None, failure, steps left)
         self._hold_limit: list[int | None] = [None] * len(tasks)  # the deadline in ticks
-        self.result: list[tuple] = [()] * len(tasks)  # (computed, q, critical, failure, blocking, remote)
+        self.result: list[_Result | None] = [None] * len(tasks)  # (computed, q, critical, failure, blocking, remote)
         # last round, if its ticks are these (then a stream of the same object is the same stream)
         self.previous = previous if previous is not None and previous.scale == self.scale and \
             previous.unit == self.unit else None
@@ -198,9 +214,9 @@ class Round:
 
     # ------------------------------------------------------------------ ticks
     def _time_base(self, previous: Round | None, kept: list[bool]) -> TimeBase:
-        """1/D seconds (``verify.timebase``): every duration of the round is a multiple of 1/D seconds. Any multiple of the least such
-        D would do as well; after the first round D grows only by what tasks with new event models
-        bring (last round's D covers the others, and the execution times)."""
+        """1/D seconds (``verify.timebase``): every duration of the round is a multiple of 1/D seconds. Any
+        multiple of the least such D would do as well; after the first round D grows only by what tasks with
+        new event models bring (last round's D covers the others, and the execution times)."""
         dens = {1 if previous is None else previous.scale}
         if previous is None:  # what no round changes: execution times and the delays of trigger links
             dens.update(t.wcet.denominator for t in self.tasks)
@@ -214,8 +230,18 @@ class Round:
         dens.update(r.denominator for r in self.estimates if r is not None)
         return TimeBase.per_second(dens)
 
+    @overload
+    def ticks(self, value: Fraction) -> int: ...
+    @overload
+    def ticks(self, value: Fraction | None) -> int | None: ...
+
     def ticks(self, value: Fraction | None) -> int | None:
         return None if value is None else self.base.ticks(value)
+
+    @overload
+    def seconds(self, ticks: int) -> Fraction: ...
+    @overload
+    def seconds(self, ticks: int | None) -> Fraction | None: ...
 
     def seconds(self, ticks: int | None) -> Fraction | None:
         return None if ticks is None else self.base.seconds(ticks)
@@ -240,7 +266,7 @@ class Round:
         otherwise hold a tuple per pair of its tasks). L⁺ is a sum of delays and WCRT estimates, all
         multiples of the tick (``_time_base``), so it is summed in ticks: a trigger chain of n tasks
         has n²/2 paths, each sum a Python int addition rather than a ``Fraction`` one."""
-        capped: dict[int, list] = {}
+        capped: dict[int, list[tuple[int, int, int]]] = {}
         tasks = self.tasks
         trigger = [None if t is None else (t[0], self.ticks(t[1]), t[2]) for t in self.static.trigger]
         estimates = [self.ticks(e) for e in self.estimates]
@@ -249,18 +275,19 @@ class Round:
             product, latency, current = 1, 0, source
             seen[source] = source
             core, priority = tasks[source].core, tasks[source].priority
-            while trigger[current] is not None:
-                k, delay, writer = trigger[current]
+            while (step := trigger[current]) is not None:
+                k, delay, writer = step
                 product *= k
                 latency += delay
                 if seen[writer] == source:  # a trigger cycle: the path ends (the writer has its tuple)
                     break
                 if tasks[writer].core == core and priority >= tasks[writer].priority:
                     capped.setdefault(writer, []).append((source, product, latency))
-                if estimates[writer] is None:
+                estimate = estimates[writer]
+                if estimate is None:
                     break
                 seen[writer] = source
-                latency += estimates[writer]
+                latency += estimate
                 current = writer
         return capped
 
@@ -311,7 +338,9 @@ class Round:
         return (self.streams[n] is previous.streams[n] and not self.static.siblings[n]
                 and self.estimates[n] == previous.estimates[n] and self.capped.get(n) == previous.capped.get(n))
 
-    def _interference(self, n: int, core: _Core, with_self: bool, capped=(), remote=()):
+    def _interference(self, n: int, core: _Core, with_self: bool, capped: Sequence[_Capped] = (),
+                      remote: Sequence[_Stream] = ()
+                      ) -> tuple[list[_Period], _ExtraAt | None, int | None, int | None]:
         """n's interfering streams for ``_lfp``: the core's period groups, ``extra_at`` (``extra_at(q)``
         is the demand, for w > 0 in ticks, to add to theirs in the busy window of q jobs; None:
         nothing), the first stream whose demand is not bounded, and the utilisation of the uncapped
@@ -333,9 +362,10 @@ class Round:
         minus = ((own.jitter, own.period, own.cost),) if (with_self and not own.silent and own.period is not None
                                                           and own.jitter is not None) else ()
         tokens = [s for s in remote if not s.silent]
-        plus = [(s.jitter, s.period, s.cost) for s in tokens]  # (only evaluated when all are bounded)
+        # (used only when every token is bounded: ``first_bad`` stops ``_lfp`` before it asks ``extra``)
+        plus = [(s.jitter, s.period, s.cost) for s in tokens if s.period is not None and s.jitter is not None]
 
-        def extra_at(q: int):
+        def extra_at(q: int) -> Callable[[int], int]:
             base = sum(_cap(product, carry, q) * cost for cost, product, carry in fixed)
             before = 1 - q  # the cap of a path is ⌈(q − 1 + carry)/Π⌉ (``_cap``, inlined)
 
@@ -356,7 +386,7 @@ class Round:
 
         excluded = {s.task for s in exclude}
         bad = [m for m in core.unbounded if m not in excluded]
-        bad_tokens = [s for s in tokens if s.cost is None or s.period is None or s.jitter is None]
+        bad_tokens = [s for s in tokens if s.period is None or s.jitter is None]
         first_bad = (min(bad, key=self.static.position.__getitem__) if bad
                      else bad_tokens[0].task if bad_tokens else None)
         load = core.load
@@ -371,8 +401,8 @@ class Round:
                 load += s.load
         return core.groups, extra_at, first_bad, None if unrated else load
 
-    def _lfp(self, base: int, start: int, groups: list[_Period], extra, first_bad: int | None, load: int | None,
-             limit: int | None, left: int) -> tuple[int | None, str | None, int]:
+    def _lfp(self, base: int, start: int, groups: list[_Period], extra: Callable[[int], int] | None,
+             first_bad: int | None, load: int | None, limit: int | None, left: int) -> _Run:
         """``rta.least_fixed_point`` in ticks (``load`` in units of 1/U) for the streams that
         ``_interference`` describes; ``left`` is the step budget, returned as used."""
         if limit is None and load is None:
@@ -418,16 +448,18 @@ class Round:
 
     def hold(self, n: int) -> Fraction | None:
         """Eᵢ, the hold time of task n."""
-        return self.seconds(self._hold_run[n][0])
+        run = self._hold_run[n]
+        assert run is not None, "the first sweep of n's core runs (or takes over) its hold time"
+        return self.seconds(run[0])
 
     # ------------------------------------------------------------------ one task
-    def _response(self, n: int, core: _Core, with_self: bool) -> tuple:
+    def _response(self, n: int, core: _Core, with_self: bool) -> _Result:
         """``rta.response_time`` less what ``responses`` assembles: (R, Q, critical q, failure,
         blocking, remote sibling streams)."""
         blocking, remote = self._blocking(n)
         if blocking is None:
             return None, None, None, "a cooperative sibling's hold time is not bounded", None, remote
-        capped = []
+        capped: list[_Capped] = []
         paths = self._capped_into(n)
         if paths:
             reach = self._carry_reach(n)
@@ -462,48 +494,60 @@ class Round:
         task = self.tasks[n]
         values = [self.hold(s) for s in sibs
                   if self.tasks[s].core != task.core or self.tasks[s].priority < task.priority]
-        blocking = None if any(v is None for v in values) else max(values, default=ZERO)
+        known = [v for v in values if v is not None]
+        blocking = max(known, default=ZERO) if len(known) == len(values) else None
         remote = []
         for s in sibs:
             if self.tasks[s].core == task.core:
                 continue
             events, response = self.events[s], self.estimates[s]
             jitter = None if events.jitter_min is None or response is None else events.jitter_min + response
-            cost, period = self._hold_run[s][0], self.ticks(events.period_min)
-            load = 0 if events.silent else None if cost is None or period is None else cost * (self.unit // period)
+            run = self._hold_run[s]
+            assert run is not None, "a sibling's hold time is run in the first sweep"
+            # (a hold time that is not bounded makes a stream whose demand is not: no period)
+            cost, period = (0, None) if run[0] is None else (run[0], self.ticks(events.period_min))
+            load = 0 if events.silent else None if period is None else cost * (self.unit // period)
             remote.append(_Stream(s, cost, period, self.ticks(jitter), events.silent, load))
         return blocking, remote
 
-    def _wcrt(self, n: int, core: _Core, with_self: bool, blocking: Fraction, capped, remote) -> tuple:
+    def _wcrt(self, n: int, core: _Core, with_self: bool, blocking: Fraction, capped: Sequence[_Capped],
+              remote: Sequence[_Stream]) -> _Wcrt:
         """``rta.wcrt`` in ticks: (R, Q, critical q, failure)."""
         own = self.events[n]
         if not own.silent and (own.period_min is None or own.jitter_min is None):
             return None, None, None, ("its activations are not bounded" if own.period_min is None else
                                       "its activation jitter is not bounded (a writer upstream has no WCRT bound)")
         stream = self.streams[n]
+        # δ⁻(q) = max(0, (q−1)·P − J) in ticks (a silent task never has a second job: q = 1 only, and
+        # neither P nor J enters)
+        period = 1 if own.silent else stream.period
+        jitter = 0 if own.silent else self.ticks(own.jitter_min) if self.static.siblings[n] else stream.jitter
+        assert period is not None and jitter is not None, "bounded (checked above)"
         deadline = self.deadlines[n][0]
         if deadline is None:
             total = self._all_loads(n, core, with_self, remote)
             if total is not None and not own.silent:
-                total += (stream.cost + self.ticks(blocking)) * (self.unit // stream.period)
+                total += (stream.cost + self.ticks(blocking)) * (self.unit // period)
             if total is not None and total >= self.unit:
                 return None, None, None, "the utilisation of its level is 1 or more and it has no deadline"
         blocking_ticks = self.ticks(blocking) if blocking else 0
         cost = stream.cost + blocking_ticks
-        # δ⁻(q) = max(0, (q−1)·P − J) in ticks (a silent task never has a second job: q = 1 only)
-        period = stream.period
-        jitter = self.ticks(own.jitter_min) if self.static.siblings[n] else stream.jitter
         reuse = not capped and not remote and not blocking_ticks
         limit_base = self._hold_limit[n]
-        best, best_q = None, None
-        w, left = 0, MAX_STEPS
+        best: int | None = None
+        best_q: int | None = None
+        w: int | None = 0
+        left = MAX_STEPS
         groups, extra_at, first_bad, load = self._interference(n, core, with_self, capped, remote)
         for q in range(1, MAX_JOBS + 1):
             offset = 0 if q == 1 else max(0, (q - 1) * period - jitter)
             limit = None if limit_base is None else limit_base + offset
             if q == 1 and reuse:  # the same iteration as the hold time's
-                w, why, left = self._hold_run[n]
+                run = self._hold_run[n]
+                assert run is not None, "n's hold time is run before its WCRT"
+                w, why, left = run
             else:
+                assert w is not None, "(a failed iteration returns)"
                 w, why, left = self._lfp(q * cost, w + cost, groups, extra_at and extra_at(q), first_bad, load,
                                          limit, left)
             if w is None:
@@ -514,27 +558,33 @@ class Round:
                 return self.seconds(best), q, best_q, None
         return None, MAX_JOBS, None, f"the busy window does not close within {MAX_JOBS} jobs"
 
-    def _all_loads(self, n: int, core: _Core, with_self: bool, remote) -> int | None:
+    def _all_loads(self, n: int, core: _Core, with_self: bool, remote: Sequence[_Stream]) -> int | None:
         """Σ cost/period (units of 1/U) over all of n's streams (capped ones included) and its remote
         token streams."""
         if any(m != n for m in core.unrated) or any(s.load is None for s in remote):
             return None
-        load = core.load + sum(s.load for s in remote)
-        if with_self and self.streams[n].load is not None:
-            load -= self.streams[n].load
+        load = core.load + sum(s.load or 0 for s in remote)  # (none is None)
+        own = self.streams[n].load
+        if with_self and own is not None:
+            load -= own
         return load
 
     # ------------------------------------------------------------------ results
     def wcrts(self) -> dict[str, Fraction | None]:
         """The WCRT every later step uses, per task (the user's bound if given)."""
-        return {t.id: (t.wcrt_bound if t.wcrt_bound is not None else self.result[n][0])
+        return {t.id: (t.wcrt_bound if t.wcrt_bound is not None else self._computed(n))
                 for n, t in enumerate(self.tasks)}
+
+    def _computed(self, n: int) -> Fraction | None:
+        result = self.result[n]
+        assert result is not None, "every task's result is computed (or taken over) in its core's sweeps"
+        return result[0]
 
     def responses(self) -> dict[str, TaskResponse]:
         """The ``TaskResponse`` of every task, in system order."""
-        out = {}
+        out: dict[int, TaskResponse] = {}
         static = self.static
-        for core, members in static.by_core.items():
+        for core, _members in static.by_core.items():
             # hp(i) in declaration order: the positions (and ids) of the tasks above i, kept sorted
             positions: list[int] = []
             ids: list[str] = []
@@ -554,10 +604,13 @@ class Round:
 
     def _task_response(self, n: int, hp_names: tuple[str, ...]) -> TaskResponse:
         task = self.tasks[n]
-        computed, q, crit, failure, blocking, remote = self.result[n]
+        result = self.result[n]
+        assert result is not None, "every task's result is computed (or taken over) in its core's sweeps"
+        computed, q, crit, failure, blocking, remote = result
         names = hp_names + tuple(self.tasks[s.task].id for s in remote)
         if task.activation.unknown:
             failure = "its activation is an unresolved synthesis hole (run `synth` first)"
+        used: Fraction | None
         if task.wcrt_bound is not None:
             used, rule = task.wcrt_bound, "user bound"
         else:
