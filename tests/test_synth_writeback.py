@@ -115,3 +115,54 @@ def test_canonical_is_the_formatted_file(tmp_path, capsys):
     minimal = tmp_path / "minimal.vfy"
     assert main(["synth", str(path), "-o", str(minimal)]) == 0
     assert main(["fmt", str(minimal), "--check"]) == 1  # (the user's layout is kept)
+
+
+def _project(tmp_path):
+    """A copy of the navigation example in ``tmp_path/models`` (the holes file imports its components)."""
+    models = tmp_path / "models"
+    models.mkdir()
+    shutil.copy(NAV / "components.vfy", models / "components.vfy")
+    shutil.copy(NAV / "navigation-holes.vfy", models / "holes.vfy")
+    return models
+
+
+def test_output_elsewhere_names_the_same_imported_files(tmp_path, capsys, monkeypatch):
+    """The README's ``synth examples/navigation/navigation-holes.vfy -o configured.vfy``, from the
+    repository root: the written file imports the components from where it is, and nothing else moves."""
+    models = _project(tmp_path)
+    monkeypatch.chdir(tmp_path)
+    assert main(["synth", "models/holes.vfy", "-o", "configured.vfy"]) == 0
+    capsys.readouterr()
+    written = (tmp_path / "configured.vfy").read_text()
+    assert 'import "models/components.vfy"' in written
+    changed = _changed_lines((models / "holes.vfy").read_text(), written)
+    loaded = verify.load(str(models / "holes.vfy"))
+    import_line = loaded.project.root_module.imports[0].span.line
+    assert changed <= _hole_lines(loaded) | {import_line} and import_line in changed
+    assert main(["check", "configured.vfy"]) == 0
+    assert main(["prove", "configured.vfy"]) == 0
+    # written into a subdirectory, the import climbs back out: inside a root given for both
+    (tmp_path / "models" / "out").mkdir()
+    assert main(["synth", "models/holes.vfy", "-o", "models/out/done.vfy", "--root", "models"]) == 0
+    assert 'import "../components.vfy"' in (tmp_path / "models" / "out" / "done.vfy").read_text()
+    assert main(["check", "models/out/done.vfy", "--root", "models"]) == 0
+    # next to the input, the import is kept byte for byte
+    assert main(["synth", "models/holes.vfy", "-o", "models/next.vfy"]) == 0
+    assert 'import "components.vfy"' in (models / "next.vfy").read_text()
+
+
+def test_output_whose_imports_would_leave_its_root_is_refused(tmp_path, capsys):
+    """Written where its imports would lead outside the output's own root, nothing is written: one
+    located error at the import (not its follow-on unknown names), exit 2."""
+    models = _project(tmp_path)
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    out = elsewhere / "configured.vfy"
+    assert main(["synth", str(models / "holes.vfy"), "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert not out.exists()
+    assert "error[E006]" in err and "../models/components.vfy" in err and "nothing was written" in err
+    assert "E101" not in err and err.count("error[") == 1
+    # a root that holds both makes it loadable: then it is written, and loads with that root
+    assert main(["synth", str(models / "holes.vfy"), "-o", str(out), "--root", str(tmp_path)]) == 0
+    assert main(["check", str(out), "--root", str(tmp_path)]) == 0

@@ -21,10 +21,10 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 from ..api import LoadResult
-from ..diagnostics import Diagnostic
+from ..diagnostics import Diagnostic, DiagnosticSink
 from ..outputs import Report, render
 from .common import (EXIT_INVALID, EXIT_OK, EXIT_UNDECIDED, EXIT_VIOLATED, load_or_fail, replace_file, select, show,
-                     write_new_file)
+                     show_diagnostics, write_new_file)
 
 if TYPE_CHECKING:
     from ..synth.driver import SynthResult
@@ -71,6 +71,9 @@ def run(args: argparse.Namespace) -> int:
     from ..synth.candidates import TooManyCandidates
     from ..synth.driver import ObjectiveError, parse_objective, synthesize
 
+    if args.file == "-" and args.in_place:
+        print("error: --in-place needs a file, not standard input (`-`)", file=sys.stderr)
+        return EXIT_INVALID
     loaded = load_or_fail(args)
     if isinstance(loaded, int):
         return loaded
@@ -106,10 +109,15 @@ def _show(args: argparse.Namespace, loaded: LoadResult, diagnostics: Sequence[Di
 def _write_back(args: argparse.Namespace, loaded: LoadResult, result: SynthResult, code: int) -> int:
     from ..synth.writeback import completed_text, recheck, unified_diff
 
-    text = completed_text(loaded, result.system, result.choices, canonical=args.canonical)
+    imports = _relocated_imports(args, loaded) if args.output else {}
+    if isinstance(imports, int):
+        return imports
+    text = completed_text(loaded, result.system, result.choices, canonical=args.canonical, imports=imports)
     _, _, _, problems = recheck(loaded, result.system, text)
     if problems:  # never print what the analysis would reject
         raise RuntimeError("the synthesized configuration does not pass the re-check: " + "; ".join(problems))
+    if args.output and not _loads_from(args, loaded, text):
+        return EXIT_INVALID
     original = loaded.sources[loaded.project.root].text
     diff = unified_diff(original, text, args.file) if args.diff else None
     written = None
@@ -126,3 +134,44 @@ def _write_back(args: argparse.Namespace, loaded: LoadResult, result: SynthResul
         written = args.output
     _show(args, loaded, result.diagnostics, result, dsl=text, diff=diff, written=written)
     return code
+
+
+def _relocated_imports(args: argparse.Namespace, loaded: LoadResult) -> dict[str, str] | int:
+    """The new names of the root file's imports for the file written to ``-o OUT`` (the same files named
+    from OUT's directory), or EXIT_INVALID after a located error for an import that cannot be renamed."""
+    from ..roots import Refusal, project_roots
+    from ..synth.writeback import relocated_imports
+
+    roots, _ = project_roots(args.file, args.root, tuple(args.include or ()))
+    module = loaded.project.root_module
+    if roots is None or module is None:  # (it loaded with these roots)
+        return {}
+    found = relocated_imports(module, loaded.project.root, roots, args.output)
+    spans = {imp.path: imp.path_span for imp in module.imports}
+    sink = DiagnosticSink()
+    for name, new in found.items():
+        if isinstance(new, Refusal):
+            sink.emit(new.code, new.message, spans[name], new.label, help=new.help)
+    if sink.items:
+        show_diagnostics(args, sink.items, loaded.sources)
+        return EXIT_INVALID
+    return {name: new for name, new in found.items() if isinstance(new, str)}
+
+
+def _loads_from(args: argparse.Namespace, loaded: LoadResult, text: str) -> bool:
+    """Whether ``text`` written to ``-o OUT`` loads from there (its imports resolve within OUT's roots,
+    found for OUT as they will be when it is checked); else, False after showing why, noted as being
+    about the file not written."""
+    from dataclasses import replace
+
+    from .. import api
+
+    again = api.load(args.output, root=args.root, include=tuple(args.include or ()), overlay={args.output: text})
+    if again.ok:
+        return True
+    note = (f"in the completed file as it would be written to {args.output}; nothing was written (write it "
+            f"next to {args.file}, or choose a root that holds both with `--root DIR`)")
+    # (an import that does not resolve is the cause; the unknown names it leaves follow from it)
+    causes = [d for d in again.diagnostics if d.code < "E100"] or list(again.diagnostics)
+    show_diagnostics(args, [replace(d, notes=d.notes + (note,)) for d in causes], {**loaded.sources, **again.sources})
+    return False

@@ -8,6 +8,9 @@ to the syntax tree with the holes filled in (``filled_module``), or nothing is w
 ``canonical=True`` the whole root file is printed by the canonical formatter instead, comments and blank
 lines kept (``verify.fmt``).
 
+Written to another directory (``-o``), the root file's imports are rewritten so that they name the same
+files from there (``relocated_imports``): only the quoted file names change.
+
 ``recheck`` runs the complete front end (parse, resolve, validate, model) and the timing analysis on
 the text exactly as it will be written, with the original imports: the text is printed only if that
 analysis accepts it.
@@ -15,6 +18,7 @@ analysis accepts it.
 from __future__ import annotations
 
 import difflib
+import os
 from dataclasses import dataclass, replace
 from fractions import Fraction
 from collections.abc import Mapping
@@ -26,6 +30,7 @@ from ..fmt import blank_lines, collect_comments, format_activation, format_modul
 from ..loader import Project
 from ..model import SystemModel
 from ..parse import parse_text
+from ..roots import Refusal, Roots
 from ..source import SourceFile, Span
 from ..timing import AnalysisResult, analyze
 from .candidates import Candidate
@@ -73,19 +78,60 @@ def filled_module(module: s.Module, system: str, choices: Mapping[str, Candidate
     return replace(module, systems=tuple(systems))
 
 
-def completed_text(load: LoadResult, system: str, choices: Mapping[str, Candidate], *, canonical: bool = False) -> str:
+def completed_text(load: LoadResult, system: str, choices: Mapping[str, Candidate], *, canonical: bool = False,
+                   imports: Mapping[str, str] | None = None) -> str:
     """The root file with the holes of ``system`` filled: only the holes edited, or (``canonical``) the
-    whole file canonically formatted with its comments kept."""
+    whole file canonically formatted with its comments kept. ``imports`` (``relocated_imports``) gives
+    new file names for imports, for a file written elsewhere."""
     root = load.project.root_module
+    assert root is not None, "a loaded project has its root module"
     source = load.project.sources[load.project.root]
-    filled = filled_module(root, system, choices)  # type: ignore[arg-type]  # (a loaded project has its root)
+    filled = _renamed_imports(filled_module(root, system, choices), imports or {})
     if canonical:
         return format_module(filled, collect_comments(source.text), blank_lines(source.text))
-    edited = apply_edits(source.text, hole_edits(source, root, system, choices))  # type: ignore[arg-type]
+    edits = hole_edits(source, root, system, choices) + import_edits(source, root, imports or {})
+    edited = apply_edits(source.text, sorted(edits, key=lambda e: e.start))
     again = parse_text(edited, load.project.root, DiagnosticSink())
     if again != filled:  # (a tree compares without its spans)
         raise RuntimeError("filling the holes in the text did not give the configuration chosen")
     return edited
+
+
+def relocated_imports(module: s.Module, path: str, roots: Roots, target: str) -> dict[str, str | Refusal]:
+    """For the root file ``path`` (``module``) written to ``target`` instead: the new file name of each
+    import whose name, relative to the importing file, changes — the same file named from ``target``'s
+    directory — or why it cannot be named (a file name with a ``"``, which no import can hold). An import
+    found in a library directory (``--include``) is found there from anywhere, and keeps its name."""
+    renamed: dict[str, str | Refusal] = {}
+    for imp in module.imports:
+        found = roots.resolve(path, imp.path)
+        local = os.path.normpath(os.path.join(os.path.dirname(path), imp.path))
+        if isinstance(found, Refusal) or found != local:
+            continue
+        name = os.path.relpath(os.path.abspath(local), os.path.dirname(os.path.abspath(target)))
+        name = name.replace(os.sep, "/")
+        if '"' in name or "\n" in name:
+            renamed[imp.path] = Refusal("E006", f"import `{imp.path}` cannot be written as a file name relative "
+                                        f"to `{target}`", "cannot be renamed", "write the output next to the input")
+        elif name != imp.path:
+            renamed[imp.path] = name
+    return renamed
+
+
+def import_edits(source: SourceFile, module: s.Module, imports: Mapping[str, str]) -> list[Edit]:
+    """One edit per import of ``module`` that ``imports`` renames: its quoted file name."""
+    edits = []
+    for imp in module.imports:
+        if imp.path in imports:
+            start, end = source.map.span_offsets(imp.path_span)
+            edits.append(Edit(start, end, f'"{imports[imp.path]}"'))
+    return edits
+
+
+def _renamed_imports(module: s.Module, imports: Mapping[str, str]) -> s.Module:
+    if not imports:
+        return module
+    return replace(module, imports=tuple(replace(i, path=imports.get(i.path, i.path)) for i in module.imports))
 
 
 @dataclass(frozen=True)
