@@ -97,6 +97,29 @@ def test_analyze_navigation_outline_and_chain_table(capsys):
         assert chain in out
 
 
+def test_analyze_ends_with_a_verdict_per_spec_in_the_words_of_prove(capsys):
+    """A bound above a spec proves nothing either way: `analyze` says "not proved by the bound" and exits
+    3, as `prove` says undecided before its search decides (here: violated, exit 1)."""
+    import json
+
+    path = str(EXAMPLES / "navigation" / "navigation-violated.vfy")
+    assert main(["analyze", path]) == 3
+    out = capsys.readouterr().out
+    assert "VIOLATED" not in out and "violated" not in out
+    last = out.rstrip("\n").split("\n")[-4:]
+    assert last[0].startswith("3 specs: 2 proved by the bound, 1 not proved by the bound")
+    assert "chain reactive: reaction time" in last[1] and "not proved by the bound: 189.3 ms exceeds it by 39.3 ms" \
+        in last[1]
+    assert all("proved by the bound: " in line and "not proved" not in line for line in last[2:])
+    assert main(["analyze", path, "--format", "json"]) == 3
+    specs = [s for c in json.loads(capsys.readouterr().out)["chains"] for s in c["specs"]]
+    assert [s["status"] for s in specs] == ["undecided", "proved", "proved"]
+    assert main(["prove", path]) == 1  # (the search finds a run above the spec)
+    capsys.readouterr()
+    assert main(["analyze", str(EXAMPLES / "navigation" / "navigation.vfy")]) == 0
+    assert capsys.readouterr().out.rstrip("\n").split("\n")[-4].startswith("3 specs: 3 proved by the bound, 0 not")
+
+
 def test_analyze_refuses_holes_with_a_located_error(capsys):
     assert main(["analyze", str(EXAMPLES / "navigation" / "navigation-holes.vfy")]) == 2
     err = capsys.readouterr().err

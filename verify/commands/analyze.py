@@ -1,4 +1,9 @@
-"""``verify analyze FILE``: rates, sampling, response times and chain latencies (specs/timing.md)."""
+"""``verify analyze FILE``: rates, sampling, response times and chain latencies (specs/timing.md).
+
+Exit codes: 0 every latency spec proved by the analysis' bounds; 3 a spec not proved by its bound (an
+upper bound above the spec proves nothing either way: ``prove`` decides it); 1 the system misses its
+timing (``TIMING_FAILURES``); 2 invalid input; 70 internal error.
+"""
 from __future__ import annotations
 
 import argparse
@@ -6,7 +11,7 @@ from collections.abc import Iterable
 
 from ..diagnostics import Diagnostic
 from ..outputs import Report, render
-from .common import EXIT_INVALID, EXIT_OK, EXIT_VIOLATED, load_configured, show
+from .common import EXIT_INVALID, EXIT_OK, EXIT_UNDECIDED, EXIT_VIOLATED, load_configured, show
 
 HELP = "rates, sampling, response times and chain latencies"
 RESULT = "analysis"
@@ -33,7 +38,10 @@ def run(args: argparse.Namespace) -> int:
     analysis = analyze(system, data_age=args.data_age)
     problems = diagnostics_of(analysis)
     show(render(RESULT, args.format, Report(RESULT, args.file, tuple(problems), result.sources, analysis, system)))
-    return analysis_exit_code(problems)
+    code = analysis_exit_code(problems)
+    if code == EXIT_OK and any(not s.ok for c in analysis.chains for s in c.specs):
+        return EXIT_UNDECIDED  # (a spec the bound does not prove: as `prove` before it decides)
+    return code
 
 
 def analysis_exit_code(problems: Iterable[Diagnostic]) -> int:

@@ -105,7 +105,9 @@ class Bound:
 
 @dataclass(frozen=True)
 class SpecCheck:
-    """A chain spec against its bound: ``margin = spec − bound`` (negative: violated; None: unbounded)."""
+    """A chain spec against its bound: ``margin = spec − bound`` (None: unbounded). The bound is an upper
+    bound, so a spec at or above it is proved; below it, the bound proves nothing either way (``status``
+    "undecided": ``prove`` decides it)."""
 
     kind: str  # "reaction_time" | "data_age" | "jitter"
     spec: Fraction
@@ -119,6 +121,11 @@ class SpecCheck:
     @property
     def ok(self) -> bool:
         return self.bound is not None and self.bound <= self.spec
+
+    @property
+    def status(self) -> str:
+        """"proved" (by the bound) or "undecided" (not proved by it), in the words of ``prove``."""
+        return "proved" if self.ok else "undecided"
 
 
 @dataclass(frozen=True)

@@ -137,7 +137,7 @@ def _chain(c: ChainBounds) -> dict[str, Any]:
                    "data_age_non_reduced": _bound(c.data_age_non_reduced)},
         "data_age_variant": c.data_age_variant,
         "specs": [{"kind": s.kind, "variant": s.variant, "spec": exact(s.spec), "bound": exact(s.bound),
-                   "margin": exact(s.margin), "ok": s.ok} for s in c.specs],
+                   "margin": exact(s.margin), "ok": s.ok, "status": s.status} for s in c.specs],
         "dominating": {"reaction_time": c.dominating_reaction, "data_age": c.dominating_age,
                        "data_age_reduced": c.dominating_data_age,
                        "data_age_non_reduced": c.dominating_data_age_non_reduced},
@@ -227,7 +227,8 @@ JSON_SCHEMA: dict[str, Any] = _obj({
         "data_age_variant": {"enum": ["reduced", "non-reduced"]},
         "specs": {"type": "array", "items": _obj({
             "kind": {"enum": ["reaction_time", "data_age", "jitter"]}, "variant": {"type": "string"},
-            "spec": _NUM, "bound": _NUM, "margin": _NUM, "ok": {"type": "boolean"}})},
+            "spec": _NUM, "bound": _NUM, "margin": _NUM, "ok": {"type": "boolean"},
+            "status": {"enum": ["proved", "undecided"]}})},
         "dominating": _obj({k: {"type": ["integer", "null"]} for k in ("reaction_time", "data_age",
                                                                          "data_age_reduced",
                                                                          "data_age_non_reduced")})})},
@@ -312,9 +313,35 @@ def _spec_cell(c: ChainBounds, kind: str) -> tuple[str, str]:
     if check is None:
         return "-", "-"
     margin = "unbounded" if check.margin is None else _t(check.margin)
-    if check.margin is not None and check.margin < 0:
-        margin += " VIOLATED"
+    if not check.ok:
+        margin += " not proved"
     return f"<= {_t(check.spec)}", margin
+
+
+#: how the text names a spec's kind (as ``prove`` does)
+_SPEC_WORDS = {"reaction_time": "reaction time", "data_age": "data age", "jitter": "jitter"}
+
+
+def _spec_verdicts(result: AnalysisResult) -> list[str]:
+    """One line per spec with its verdict by the bound, after a count: the end of the text view."""
+    checks = [(c, s) for c in result.chains for s in c.specs]
+    if not checks:
+        return ["no latency specs"]
+    proved = sum(s.ok for _, s in checks)
+    head = (f"{len(checks)} spec{'s' if len(checks) != 1 else ''}: {proved} proved by the bound, "
+            f"{len(checks) - proved} not proved by the bound")
+    if proved < len(checks):
+        head += " (a bound above a spec proves nothing either way: `prove` decides it)"
+    rows = []
+    for c, s in checks:
+        if s.bound is None:
+            verdict = "not proved by the bound: no bound"
+        elif s.ok:
+            verdict = f"proved by the bound: {_t(s.bound)}, margin {_t(s.margin)}"
+        else:
+            verdict = f"not proved by the bound: {_t(s.bound)} exceeds it by {_t(s.bound - s.spec)}"
+        rows.append([f"chain {c.name}: {_SPEC_WORDS.get(s.kind, s.kind)}", f"<= {_t(s.spec)}", verdict])
+    return [head] + _table(rows)
 
 
 def _dominating(c: ChainBounds, index: int | None) -> str:
@@ -412,6 +439,7 @@ def to_text(result: AnalysisResult) -> str:
     if result.diagnostics:
         out += ["", f"{len(result.diagnostics)} problem{'s' if len(result.diagnostics) != 1 else ''}: "
                 + ", ".join(sorted({d.code for d in result.diagnostics}))]
+    out += [""] + _spec_verdicts(result)
     return "\n".join(out)
 
 
