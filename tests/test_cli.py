@@ -301,3 +301,34 @@ def test_an_empty_file_name_and_a_code_prefix(capsys):
     assert "error[E004]: no file name given" in err and "directory" not in err
     assert main(["explain", "E10"]) == 2
     assert "did you mean one of E101, E102" in capsys.readouterr().err
+
+
+def _stdin(monkeypatch, data: bytes) -> None:
+    import io
+
+    monkeypatch.setattr(sys, "stdin", io.TextIOWrapper(io.BytesIO(data), encoding="utf-8"))
+
+
+def test_file_dash_reads_standard_input(monkeypatch, capsys):
+    """FILE `-` is standard input for every command that reads a model: named `<stdin>` in messages,
+    its imports relative to the working directory; never rewritten in place."""
+    nav = EXAMPLES / "navigation"
+    monkeypatch.chdir(nav)
+    text = (nav / "navigation.vfy").read_bytes()
+    for argv, code in ((["check", "-"], 0), (["analyze", "-"], 0), (["prove", "-"], 0), (["fmt", "-"], 0)):
+        _stdin(monkeypatch, text)
+        assert main(argv) == code, argv
+    assert capsys.readouterr().out.endswith(text.decode())  # (fmt: the example is formatted)
+    _stdin(monkeypatch, (nav / "navigation-holes.vfy").read_bytes())
+    assert main(["synth", "-", "--diff"]) == 0
+    assert capsys.readouterr().out.startswith("--- <stdin>\n+++ <stdin> (synthesized)\n")
+    for argv in (["synth", "-", "--in-place"], ["fmt", "-", "--in-place"]):
+        _stdin(monkeypatch, text)
+        assert main(argv) == 2
+        assert "--in-place needs a file" in capsys.readouterr().err
+    _stdin(monkeypatch, b"component X {\n  task T {\n    wcet 2 ms\n    wcet 3 ms\n  }\n}\n")
+    assert main(["check", "-"]) == 2
+    assert "--> <stdin>:4:5" in capsys.readouterr().err
+    _stdin(monkeypatch, b"\xff\xfe")
+    assert main(["check", "-"]) == 2
+    assert "error[E003]: <stdin> is not UTF-8 text" in capsys.readouterr().err

@@ -12,6 +12,7 @@ import os
 import stat
 from dataclasses import dataclass, field
 from collections.abc import Callable, Mapping
+from typing import BinaryIO
 
 from . import syntax as s
 from .diagnostics import DiagnosticSink
@@ -91,6 +92,21 @@ def read_bytes(path: str, sink: DiagnosticSink, at: Span | None,
                   help="check that the file exists and is readable")
         return None
     return data
+
+
+def read_stream(stream: BinaryIO, path: str, sink: DiagnosticSink, limits: Limits = DEFAULT_LIMITS) -> str | None:
+    """The text of ``stream`` (standard input: FILE ``-``), named ``path`` in messages, within the size
+    limit of one file, or None after an E003 or E008 (the text read so far in ``sources`` is not kept)."""
+    try:
+        data = stream.read(limits.file_bytes + 1)
+    except OSError as err:
+        sink.emit("E004", f"cannot read {path}: {err.strerror or err}", Span(path, 1, 1, 1, 1), "cannot be read",
+                  help="pipe a model into the command, or name a file")
+        return None
+    if len(data) > limits.file_bytes:
+        _file_too_large(path, limits, None, sink)
+        return None
+    return decode(data, path, sink)
 
 
 def _size(limit: int) -> str:

@@ -20,6 +20,7 @@ from collections.abc import Mapping, Sequence
 
 from .. import api
 from ..diagnostics import Diagnostic, DiagnosticSink
+from ..loader import Project
 from ..model import SystemModel
 from ..outputs import Output, Report, render
 from ..render import render_all_text
@@ -28,9 +29,29 @@ from ..source import SourceFile, Span
 EXIT_OK, EXIT_VIOLATED, EXIT_INVALID, EXIT_UNDECIDED, EXIT_INTERNAL = 0, 1, 2, 3, 70
 
 
+#: how messages name standard input (FILE ``-``); its imports are relative to the working directory
+STDIN = "<stdin>"
+
+
+def read_stdin(sink: DiagnosticSink) -> str | None:
+    """The text piped into the command (FILE ``-``), or None after reporting why not (E003, E008)."""
+    from ..loader import read_stream
+
+    return read_stream(sys.stdin.buffer, STDIN, sink)
+
+
 def load_args(args: argparse.Namespace) -> api.LoadResult:
-    """``api.load`` of the command's FILE, with its ``--root`` and ``--include``."""
-    return api.load(args.file, root=args.root, include=tuple(args.include or ()))
+    """``api.load`` of the command's FILE, with its ``--root`` and ``--include``. FILE ``-`` is standard
+    input, read once (then named ``<stdin>``, in the working directory)."""
+    include = tuple(args.include or ())
+    if args.file != "-":
+        return api.load(args.file, root=args.root, include=include)
+    args.file = STDIN
+    sink = DiagnosticSink()
+    text = read_stdin(sink)
+    if text is None:
+        return api.LoadResult(Project(STDIN, (), {}), None, {}, tuple(sink.items))
+    return api.load(STDIN, root=args.root, include=include, overlay={STDIN: text})
 
 
 def show(output: Output) -> None:

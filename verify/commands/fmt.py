@@ -8,7 +8,7 @@ import sys
 from ..diagnostics import DiagnosticSink
 from ..render import render_all_text
 from ..source import SourceFile
-from .common import EXIT_INVALID, EXIT_OK, EXIT_VIOLATED, replace_file, write_new_file
+from .common import EXIT_INVALID, EXIT_OK, EXIT_VIOLATED, STDIN, read_stdin, replace_file, write_new_file
 
 HELP = "print the canonical formatting of a file"
 DESCRIPTION = "print the canonical formatting of a file (comments are kept)"
@@ -17,7 +17,7 @@ MODEL, SYSTEM = False, False
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("file", metavar="FILE")
+    p.add_argument("file", metavar="FILE", help="the .vfy file; `-`: standard input")
     group = p.add_mutually_exclusive_group()
     group.add_argument("--check", action="store_true", help="exit 1 if the file is not canonically formatted")
     group.add_argument("--in-place", action="store_true", help="rewrite FILE itself")
@@ -30,7 +30,14 @@ def run(args: argparse.Namespace) -> int:
     from ..loader import _read
 
     sink = DiagnosticSink()
-    text = _read(os.path.normpath(args.file), sink, None)
+    if args.file == "-":
+        if args.in_place:
+            print("error: --in-place needs a file, not standard input (`-`)", file=sys.stderr)
+            return EXIT_INVALID
+        args.file = STDIN
+        text = read_stdin(sink)
+    else:
+        text = _read(os.path.normpath(args.file), sink, None)
     if text is None:
         print(render_all_text(sink.items, {}), file=sys.stderr)
         return EXIT_INVALID
