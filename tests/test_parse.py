@@ -330,3 +330,38 @@ def test_a_unit_in_the_wrong_case_is_one_error_naming_the_unit(written, unit, tm
     (d,) = sink.items
     assert d.code == "E001" and f"`{written}`" in d.message and "case-sensitive" in d.message
     assert (d.span.line, d.span.column) == (9, 32) and d.help == f"write `{unit}`"
+
+
+@pytest.mark.parametrize("written, unit, fix", [
+    ("2 mss", "mss", "; did you mean `ms`?"), ("50 sec", "sec", "; did you mean `s`?"),
+    ("3 msec", "msec", "; did you mean `ms`?"), ("40 hertz", "hertz", "; did you mean `Hz`?"),
+    ("2 foo", "foo", ""),
+])
+def test_an_unknown_unit_is_one_error_at_the_word(written, unit, fix):
+    """`wcet 2 mss`: one error, under the word, naming the unit meant when it is close; the parser
+    goes on as if the unit were written (no second error at the next `}`)."""
+    text = f"component Laser {{\n  task LaserTask {{\n    wcet {written}\n  }}\n}}\n"
+    sink = DiagnosticSink()
+    assert parse_text(text, "u.vfy", sink) is None
+    [d] = sink.items
+    column = text.split("\n")[2].index(unit) + 1
+    assert (d.code, d.message) == ("E001", f"unknown unit `{unit}`{fix}")
+    assert (d.span.line, d.span.column, d.span.end_column) == (3, column, column + len(unit))
+
+
+def test_a_missing_unit_still_points_at_the_number():
+    sink = DiagnosticSink()
+    parse_text("component Laser {\n  task LaserTask {\n    wcet 2\n  }\n}\n", "u.vfy", sink)
+    [d] = sink.items
+    assert d.message == "expected a unit after the number `2`, found '}'" and d.span.column == 10
+
+
+@pytest.mark.parametrize("constraint, message", [
+    ("activation 100 ms fixed", "an activation-constraint bound must be a frequency, found the time 100 ms"),
+    ("activation 100 ms .. 1 s", "an activation constraint is a range of frequencies, found the times 100 ms .. 1 s"),
+])
+def test_a_constraint_written_in_times_is_one_error(constraint, message):
+    """One slip, one error: an exact rate is one quantity, a range of times one E302 (not one per bound)."""
+    text = f"component Laser {{\n  task LaserTask {{\n    wcet 2 ms\n    {constraint}\n  }}\n}}\n"
+    result = verify.load_text(text, "c.vfy")
+    assert [(d.code, d.message) for d in result.diagnostics] == [("E302", message)]

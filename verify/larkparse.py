@@ -346,6 +346,28 @@ def _exponent_after(text: str, number: tuple[str, tuple[int, int, int, int]]) ->
     return m.group(0) if m else None
 
 
+#: other spellings of the units (a word here after a number is read as its unit, with a hint)
+_UNIT_SPELLINGS = {
+    "sec": "s", "secs": "s", "second": "s", "seconds": "s", "msec": "ms", "msecs": "ms", "millisecond": "ms",
+    "milliseconds": "ms", "usec": "us", "usecs": "us", "microsecond": "us", "microseconds": "us", "nsec": "ns",
+    "nsecs": "ns", "nanosecond": "ns", "nanoseconds": "ns", "hertz": "Hz", "kilohertz": "kHz",
+}
+
+
+def _unit_meant(token: Token) -> tuple[str, bool] | None:
+    """For a word where a unit must follow a number (``50 mss``, ``50 sec``, ``50 foo``): the unit the
+    parser goes on with, and whether the word is close enough to it to suggest it (another spelling, or
+    at most two edits away); None for anything but a word that is no keyword (on_error has made those
+    keyword tokens)."""
+    word = str(token)
+    if token.type != "NAME":
+        return None
+    if word.lower() in _UNIT_SPELLINGS:
+        return _UNIT_SPELLINGS[word.lower()], True
+    distance, unit = min((_edit_distance(word, u), u) for u in _UNITS)
+    return unit, distance <= min(2, len(word) - 1)
+
+
 def _unit_in_other_case(token: Token) -> str | None:
     """The unit ``token`` spells in another case (``hz``, ``KHZ``, ``MS``), if it is a word that does."""
     word = str(token)
@@ -401,6 +423,13 @@ def _report_unexpected(sink: DiagnosticSink, path: str, err: UnexpectedInput, te
         if unit is not None:
             sink.emit("E001", f"unknown unit `{err.token}`: units are case-sensitive", span, "not a unit",
                       help=f"write `{unit}`")
+            return
+        meant = _unit_meant(err.token) if number is not None else None
+        if meant is not None:
+            close, sure = meant
+            sink.emit("E001", f"unknown unit `{err.token}`" + (f"; did you mean `{close}`?" if sure else ""),
+                      span, "not a unit", help="the units are s, ms, us and ns for times, Hz and kHz for "
+                                               f"frequencies: write e.g. `{number[0]} {close if sure else 'ms'}`")
             return
         if number is not None:  # a missing unit: point at the number that lacks it
             sink.emit("E001", f"expected a unit after the number `{number[0]}`, found {_describe_found(err.token)}",
@@ -478,6 +507,9 @@ def _repair(err: UnexpectedToken, text: str) -> None:
         parser.feed_token(glued[2])
         return
     unit = _unit_in_other_case(err.token) if "UNIT" in (err.expected or ()) else None
+    meant = _unit_meant(err.token) if "UNIT" in (err.expected or ()) else None
+    if unit is None and meant is not None:  # `50 mss`, `50 sec`: go on as if it read a unit
+        unit = meant[0]
     if unit is not None:  # `50 hz`: go on as if it read `50 Hz`
         parser.feed_token(Token("UNIT", unit, line=err.token.line, column=err.token.column))
         return

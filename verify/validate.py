@@ -92,12 +92,32 @@ def _check_execution_times(task: s.Task, sink: DiagnosticSink) -> None:
 
 
 def _check_constraint(c: s.ActivationConstraint, sink: DiagnosticSink) -> None:
-    ok = _dimension(c.min, "frequency", "an activation-constraint bound", sink)
-    ok &= _dimension(c.max, "frequency", "an activation-constraint bound", sink)
-    ok &= _positive(c.min, "minimum activation frequency", sink)
-    ok &= _positive(c.max, "maximum activation frequency", sink)
+    """E302, E307, E303 on an activation constraint; one report per slip: an exact rate (``activation
+    10 Hz``: both bounds one quantity) is checked once, and a range written in times is one E302."""
+    exact = c.min is c.max
+    bounds = [(q, role) for q, role in ((c.min, "minimum activation frequency"),
+                                        (c.max, "maximum activation frequency")) if q is not None]
+    if exact:
+        bounds = bounds[:1]
+    times = [q for q, _ in bounds if q.dimension == "time"]
+    if len(times) == 2 and c.min is not None and c.max is not None:
+        sink.emit("E302", f"an activation constraint is a range of frequencies, found the times "
+                  f"{fmt_quantity(c.min)} .. {fmt_quantity(c.max)}", c.min.span.to(c.max.span), "times",
+                  help=f"write the rates, e.g. `{_as_rate(c.max)} .. {_as_rate(c.min)}`")
+        return
+    for q in times:
+        sink.emit("E302", f"an activation-constraint bound must be a frequency, found the time {fmt_quantity(q)}",
+                  q.span, "a time", help=f"write the rate, e.g. `{_as_rate(q)}` for a period of {fmt_quantity(q)}")
+    ok = not times
+    for q, role in bounds:
+        ok &= _positive(q, role if not exact else "activation frequency", sink)
     if ok:
         _ordered(c.min, c.max, "activation constraint", sink, c.span)
+
+
+def _as_rate(q: s.Quantity) -> str:
+    """The frequency of period ``q`` as the user would write it (``100 ms`` → ``10 Hz``)."""
+    return fmt_rate(quantity_hertz(q)) if q.value.numerator > 0 else "10 Hz"
 
 
 def _check_reads(task: s.Task, sink: DiagnosticSink) -> None:
