@@ -12,3 +12,53 @@ def test_every_subpackage_is_installed():
     listed = set(config["tool"]["setuptools"]["packages"])
     found = {".".join(p.parent.relative_to(ROOT).parts) for p in (ROOT / "verify").rglob("__init__.py")}
     assert found <= listed, f"missing from [tool.setuptools] packages: {sorted(found - listed)}"
+
+
+def _config() -> dict:
+    return tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))
+
+
+def test_the_distribution_has_a_name_of_its_own_and_the_readme_installs_it():
+    """`verify` on the package index is an unrelated library: the distribution is `verify-timing`, and
+    the installed metadata says so (the import package and the commands stay `verify`)."""
+    from importlib.metadata import distribution
+
+    assert _config()["project"]["name"] == "verify-timing"
+    dist = distribution("verify-timing")
+    assert {ep.name for ep in dist.entry_points if ep.group == "console_scripts"} >= {"verify", "synth", "prove"}
+    assert "verify-timing" in (ROOT / "README.md").read_text(encoding="utf-8")
+
+
+def test_version_is_one_number_everywhere(capsys):
+    """`verify --version` (and `synth --version`, `prove --version`) print the package's version, the one
+    the installed metadata holds, with those of the libraries results depend on."""
+    import sys
+    from importlib.metadata import version
+
+    import pytest
+
+    import verify
+    from verify import cli
+
+    assert version("verify-timing") == verify.__version__
+    assert cli.main(["--version"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith(f"verify {verify.__version__} (distribution verify-timing; Python ")
+    assert f"z3-solver {version('z3-solver')}" in out and f"lark {version('lark')}" in out
+    for script in (cli.synth_main, cli.prove_main):
+        saved = sys.argv
+        sys.argv = ["x", "--version"]
+        try:
+            with pytest.raises(SystemExit) as exit_:
+                script()
+        finally:
+            sys.argv = saved
+        assert exit_.value.code == 0 and capsys.readouterr().out == out
+
+
+def test_license_file_matches_the_metadata():
+    text = (ROOT / "LICENSE").read_text(encoding="utf-8")
+    assert text.startswith("MIT License") and "Permission is hereby granted, free of charge" in text
+    project = _config()["project"]
+    assert project["license"] == {"text": "MIT"}
+    assert "License :: OSI Approved :: MIT License" in project["classifiers"]

@@ -22,7 +22,7 @@ __all__ = ["main", "prove_main", "synth_main"]
 def _model_options(p: argparse.ArgumentParser, module: ModuleType) -> None:
     from .outputs import formats
 
-    p.add_argument("file", metavar="FILE", help="the .vfy file (imports are followed)")
+    p.add_argument("file", metavar="FILE", help="the .vfy file (imports are followed); `-`: standard input")
     p.add_argument("--format", choices=formats(module.RESULT), default="text",
                    help=getattr(module, "FORMAT_HELP", "output format"))
     p.add_argument("--root", metavar="DIR", help="the project root: imports must stay inside it (default: "
@@ -36,6 +36,7 @@ def _model_options(p: argparse.ArgumentParser, module: ModuleType) -> None:
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="verify", description="Timing verification for component-based "
                                      "robotics software: check, analyze, synthesize and prove.")
+    parser.add_argument("--version", action="version", version=version_text())
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name in COMMANDS:
         module = command(name)
@@ -85,8 +86,26 @@ def main(argv: list[str] | None = None) -> int:
         return EXIT_INTERNAL
 
 
+def version_text() -> str:
+    """What ``--version`` prints: verify's version, and those of Python and of the libraries whose
+    behaviour its results depend on (Lark's parse tables, Z3's solver and resource counts)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    from . import __version__
+
+    def of(dist: str) -> str:
+        try:
+            return version(dist)
+        except PackageNotFoundError:
+            return "not installed"
+
+    return (f"verify {__version__} (distribution verify-timing; Python {sys.version.split()[0]}, "
+            f"lark {of('lark')}, z3-solver {of('z3-solver')}, networkx {of('networkx')})")
+
+
 def _command_main(command_name: str) -> None:
-    sys.exit(main([command_name, *sys.argv[1:]]))
+    argv = sys.argv[1:]
+    sys.exit(main(argv if argv == ["--version"] else [command_name, *argv]))
 
 
 def synth_main() -> None:
