@@ -84,9 +84,9 @@ SECTIONS = parse_spec(SPEC.read_text(encoding="utf-8"))
 REQUIRED = sorted(c for c in CODES if not c.startswith(("E4", "E5")))
 
 
-def _params():
-    for code in sorted(SECTIONS):
-        yield pytest.param(code, id=code)
+def _params() -> list:
+    """One parameter per section (a list: pytest 10 refuses a generator)."""
+    return [pytest.param(code, id=code) for code in sorted(SECTIONS)]
 
 
 def run_example(section: Section, directory: Path):
