@@ -36,7 +36,7 @@ def _model_options(p: argparse.ArgumentParser, module: ModuleType) -> None:
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="verify", description="Timing verification for component-based "
                                      "robotics software: check, analyze, synthesize and prove.")
-    parser.add_argument("--version", action="version", version=version_text())
+    parser.add_argument("--version", action=_Version, help="print the version and those of the libraries, and exit")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name in COMMANDS:
         module = command(name)
@@ -84,6 +84,18 @@ def main(argv: list[str] | None = None) -> int:
               "This is a bug in verify; please report it with the input file. "
               "Set VERIFY_DEBUG=1 to see the traceback.", file=sys.stderr)
         return EXIT_INTERNAL
+
+
+class _Version(argparse.Action):
+    """``--version``: ``version_text()`` as it is (argparse's own action re-wraps it to the terminal)."""
+
+    def __init__(self, option_strings: list[str], dest: str, help: str | None = None) -> None:
+        super().__init__(option_strings, dest, nargs=0, default=argparse.SUPPRESS, help=help)
+
+    def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace, values: object,
+                 option_string: str | None = None) -> None:
+        print(version_text())
+        parser.exit()
 
 
 def version_text() -> str:

@@ -425,7 +425,7 @@ def _report_unexpected(sink: DiagnosticSink, path: str, err: UnexpectedInput, te
                       help=f"write `{unit}`")
             return
         meant = _unit_meant(err.token) if number is not None else None
-        if meant is not None:
+        if number is not None and meant is not None:
             close, sure = meant
             sink.emit("E001", f"unknown unit `{err.token}`" + (f"; did you mean `{close}`?" if sure else ""),
                       span, "not a unit", help="the units are s, ms, us and ns for times, Hz and kHz for "
