@@ -55,11 +55,20 @@ def load_args(args: argparse.Namespace) -> api.LoadResult:
 
 
 def show(output: Output) -> None:
-    """Write a rendered report: its standard output part, then its standard error part."""
+    """Write a rendered report: its standard output part, then its standard error part (diagnostics:
+    coloured on a terminal, ``verify.colour``)."""
     if output.stdout:
         sys.stdout.write(output.stdout)
     if output.stderr:
-        sys.stderr.write(output.stderr)
+        to_stderr(output.stderr, end="")
+
+
+def to_stderr(text: str, end: str = "\n") -> None:
+    """``text`` (diagnostics as ``render_all_text`` makes them) on standard error, coloured when that is
+    a terminal and colour is not turned off (``verify.colour.wanted``)."""
+    from ..colour import paint, wanted
+
+    sys.stderr.write((paint(text) if wanted(sys.stderr) else text) + end)
 
 
 def show_diagnostics(args: argparse.Namespace, diagnostics: Sequence[Diagnostic],
@@ -104,7 +113,7 @@ def load_configured(args: argparse.Namespace, command: str) -> tuple[api.LoadRes
 
 def fail(message: str) -> int:
     """A usage error (exit 2)."""
-    print(f"error: {message}", file=sys.stderr)
+    to_stderr(f"error: {message}")
     return EXIT_INVALID
 
 
@@ -113,7 +122,7 @@ def cannot_write(path: str, err: OSError) -> int:
     sink = DiagnosticSink()
     sink.emit("E004", f"cannot write {path}: {err.strerror or err}", Span(path, 1, 1, 1, 1), "cannot be written",
               help="check that the file and its directory are writable; nothing was changed")
-    print(render_all_text(sink.items, {}), file=sys.stderr)
+    to_stderr(render_all_text(sink.items, {}))
     return EXIT_INVALID
 
 
@@ -145,7 +154,7 @@ def replace_file(path: str, text: str) -> int:
 def write_new_file(path: str, text: str, force: bool) -> int:
     """Write ``text`` to ``path``, which must not exist unless ``force``."""
     if os.path.exists(path) and not force:
-        print(f"error: {path} exists; refusing to overwrite it (pass --force to replace it)", file=sys.stderr)
+        to_stderr(f"error: {path} exists; refusing to overwrite it (pass --force to replace it)")
         return EXIT_INVALID
     try:
         with open(path, "w", encoding="utf-8") as fh:

@@ -8,7 +8,7 @@ import sys
 from ..diagnostics import DiagnosticSink
 from ..render import render_all_text
 from ..source import SourceFile
-from .common import EXIT_INVALID, EXIT_OK, EXIT_VIOLATED, STDIN, read_stdin, replace_file, write_new_file
+from .common import EXIT_INVALID, EXIT_OK, EXIT_VIOLATED, STDIN, read_stdin, replace_file, to_stderr, write_new_file
 
 HELP = "print the canonical formatting of a file"
 DESCRIPTION = "print the canonical formatting of a file (comments are kept)"
@@ -32,21 +32,21 @@ def run(args: argparse.Namespace) -> int:
     sink = DiagnosticSink()
     if args.file == "-":
         if args.in_place:
-            print("error: --in-place needs a file, not standard input (`-`)", file=sys.stderr)
+            to_stderr("error: --in-place needs a file, not standard input (`-`)")
             return EXIT_INVALID
         args.file = STDIN
         text = read_stdin(sink)
     else:
         text = _read(os.path.normpath(args.file), sink, None)
     if text is None:
-        print(render_all_text(sink.items, {}), file=sys.stderr)
+        to_stderr(render_all_text(sink.items, {}))
         return EXIT_INVALID
     formatted, diagnostics = format_text(text, args.file)
     if formatted is None:
         from ..parse import parse_source
 
         opaque = parse_source(text, args.file).opaque
-        print(render_all_text(diagnostics, {args.file: SourceFile(args.file, text, opaque)}), file=sys.stderr)
+        to_stderr(render_all_text(diagnostics, {args.file: SourceFile(args.file, text, opaque)}))
         return EXIT_INVALID
     if args.check:
         if formatted != text:

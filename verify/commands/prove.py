@@ -20,7 +20,7 @@ from ..diagnostics import Diagnostic
 from ..model import SystemModel
 from ..outputs import Output, Report, render
 from ..source import SourceFile
-from .common import EXIT_INVALID, EXIT_OK, fail, load_args
+from .common import EXIT_INVALID, EXIT_OK, fail, load_args, to_stderr
 
 if TYPE_CHECKING:
     from ..prove.verdict import ProofResult
@@ -124,7 +124,7 @@ def run(args: argparse.Namespace) -> int:
 def _trace_svg(model: SystemModel, proof: ProofResult, args: argparse.Namespace) -> int | None:
     drawn = [v for v in proof.verdicts if v.counterexample is not None]
     if not drawn:
-        print(f"note: no counterexample, so nothing was drawn to {args.trace_svg}", file=sys.stderr)
+        to_stderr(f"note: no counterexample, so nothing was drawn to {args.trace_svg}")
         return None
     from ..prove.trace import to_svg_all
 

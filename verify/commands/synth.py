@@ -16,7 +16,6 @@ written changes only the holes of the file (``--canonical``: the whole file as `
 from __future__ import annotations
 
 import argparse
-import sys
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
@@ -24,7 +23,7 @@ from ..api import LoadResult
 from ..diagnostics import Diagnostic, DiagnosticSink
 from ..outputs import Report, render
 from .common import (EXIT_INVALID, EXIT_OK, EXIT_UNDECIDED, EXIT_VIOLATED, load_or_fail, replace_file, select, show,
-                     show_diagnostics, write_new_file)
+                     show_diagnostics, to_stderr, write_new_file)
 
 if TYPE_CHECKING:
     from ..synth.driver import SynthResult
@@ -72,7 +71,7 @@ def run(args: argparse.Namespace) -> int:
     from ..synth.driver import ObjectiveError, parse_objective, synthesize
 
     if args.file == "-" and args.in_place:
-        print("error: --in-place needs a file, not standard input (`-`)", file=sys.stderr)
+        to_stderr("error: --in-place needs a file, not standard input (`-`)")
         return EXIT_INVALID
     loaded = load_or_fail(args)
     if isinstance(loaded, int):
@@ -83,7 +82,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         goals = parse_objective(args.objective, system)
     except ObjectiveError as err:
-        print(f"error: --objective: {err}", file=sys.stderr)
+        to_stderr(f"error: --objective: {err}")
         return EXIT_INVALID
     try:
         result = synthesize(loaded, system.name, objective=goals, rlimit=args.rlimit, timeout=args.timeout)
