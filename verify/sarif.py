@@ -1,24 +1,31 @@
-"""SARIF 2.1.0 logs of diagnostics (of `prove` and `check`), for code scanning (specs/proof.md §9).
+"""SARIF 2.1.0 logs of diagnostics (of `check`, `analyze` and `prove`), for code scanning (specs/proof.md §9).
 
-One run, tool driver "verify" whose rules are the diagnostic codes used (in code order); one result
+One run, tool driver "verify" whose rules are the diagnostic codes used (in code order), each with the
+text of ``verify explain CODE`` as its help (plain and Markdown) and, when the installed distribution
+names its documentation (``[project.urls] Documentation``), a ``helpUri`` to that section; one result
 per diagnostic: ``level`` from the severity, the primary location at the diagnostic's span (for a
 violated spec: the spec in the DSL), ``relatedLocations`` for its secondary labels (the chain's
-hops), notes and help appended to the message. URIs are relative to the working directory with
+hops), notes and help appended to the message, and ``partialFingerprints`` that stay the same when
+lines are added above it (``verifyFingerprint/v1``: the code, the file and the text of the primary
+line, numbered among equal ones). URIs are relative to the working directory with
 forward slashes (percent-encoded); a file outside it gets an absolute ``file:`` URI. The output is
 deterministic (no timestamps; no absolute paths for files below the working directory).
 """
 from __future__ import annotations
 
+import hashlib
 import os
 import pathlib
 import re
+from collections.abc import Mapping
 from typing import Any
 from urllib.parse import quote
 
 from . import __version__ as VERSION
 from .codes import CODES, spec_anchor
 from .diagnostics import Diagnostic, Severity
-from .source import Span
+from .explain import explain
+from .source import SourceFile, Span
 
 SCHEMA_URI = "https://json.schemastore.org/sarif-2.1.0.json"
 LEVELS = {Severity.ERROR: "error", Severity.WARNING: "warning", Severity.NOTE: "note"}
@@ -56,16 +63,50 @@ def _rule_name(title: str) -> str:
     return "".join(w.capitalize() for w in re.findall(r"[A-Za-z0-9]+", title))
 
 
-def to_sarif(diagnostics: list[Diagnostic] | tuple[Diagnostic, ...]) -> dict[str, Any]:
+def documentation_uri() -> str | None:
+    """The documentation URL the installed distribution names (``Project-URL: Documentation``), if any."""
+    from importlib.metadata import PackageNotFoundError, metadata
+
+    try:
+        urls = metadata("verify-timing").get_all("Project-URL") or []
+    except PackageNotFoundError:
+        return None
+    return next((u.split(",", 1)[1].strip() for u in urls if u.split(",", 1)[0].strip().lower() == "documentation"),
+                None)
+
+
+def _rule(code: str, docs: str | None) -> dict[str, Any]:
+    title = CODES[code].title
+    section = explain(code)
+    rule: dict[str, Any] = {
+        "id": code, "name": _rule_name(title), "shortDescription": {"text": title},
+        "fullDescription": {"text": f"{title}; explained in {spec_anchor(code)} (`verify explain {code}`)"},
+        "defaultConfiguration": {"level": LEVELS[CODES[code].severity]},
+        "help": {"text": section, "markdown": section}}
+    if docs:
+        rule["helpUri"] = docs.rstrip("/") + "/" + spec_anchor(code)
+    return rule
+
+
+def _fingerprint(d: Diagnostic, sources: Mapping[str, SourceFile], seen: dict[str, int]) -> str:
+    """A hash of the code, the file and the primary line's text (blanks collapsed), with ``:n`` counting
+    equal ones: it does not change when lines are added or removed elsewhere in the file."""
+    span = d.primary.span
+    source = sources.get(span.file)
+    line = " ".join(source.line(span.line).split()) if source is not None and span.line >= 1 else d.message
+    key = hashlib.sha256(f"{d.code}\0{_uri(span.file)}\0{line}".encode("utf-8", "surrogatepass")).hexdigest()[:32]
+    seen[key] = seen.get(key, 0) + 1
+    return f"{key}:{seen[key]}"
+
+
+def to_sarif(diagnostics: list[Diagnostic] | tuple[Diagnostic, ...],
+             sources: Mapping[str, SourceFile] | None = None) -> dict[str, Any]:
     codes = sorted({d.code for d in diagnostics})
-    rules = [{"id": c, "name": _rule_name(CODES[c].title), "shortDescription": {"text": CODES[c].title},
-              "fullDescription": {"text": f"{CODES[c].title}; explained in {spec_anchor(c)} "
-                                          f"(`verify explain {c}`)"},
-              "defaultConfiguration": {"level": LEVELS[CODES[c].severity]},
-              "help": {"text": f"Run `verify explain {c}` for the meaning and a minimal failing example."}}
-             for c in codes]
+    docs = documentation_uri()
+    rules = [_rule(c, docs) for c in codes]
     index = {c: i for i, c in enumerate(codes)}
     results = []
+    seen: dict[str, int] = {}
     for d in diagnostics:
         text = d.message
         if d.primary.message:
@@ -74,7 +115,8 @@ def to_sarif(diagnostics: list[Diagnostic] | tuple[Diagnostic, ...]) -> dict[str
         if extra:
             text += "\n" + "\n".join(extra)
         result = {"ruleId": d.code, "ruleIndex": index[d.code], "level": LEVELS[d.severity],
-                  "message": {"text": text}, "locations": [_location(d.primary.span)]}
+                  "message": {"text": text}, "locations": [_location(d.primary.span)],
+                  "partialFingerprints": {"verifyFingerprint/v1": _fingerprint(d, sources or {}, seen)}}
         if d.secondary:
             result["relatedLocations"] = [_location(lb.span, lb.message or "related", n)
                                           for n, lb in enumerate(d.secondary, 1)]

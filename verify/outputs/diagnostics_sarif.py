@@ -8,4 +8,4 @@ from . import Output, Report
 
 
 def render(report: Report) -> Output:
-    return Output(stdout=json.dumps(to_sarif(list(report.diagnostics)), indent=2) + "\n")
+    return Output(stdout=json.dumps(to_sarif(list(report.diagnostics), report.sources), indent=2) + "\n")

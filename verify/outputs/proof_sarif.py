@@ -10,4 +10,5 @@ from .diagnostics_text import render as diagnostics
 
 
 def render(report: Report) -> Output:
-    return Output(json.dumps(to_sarif(list(report.diagnostics)), indent=2) + "\n", diagnostics(report).stderr)
+    log = to_sarif(list(report.diagnostics), report.sources)
+    return Output(json.dumps(log, indent=2) + "\n", diagnostics(report).stderr)
