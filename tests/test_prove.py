@@ -257,7 +257,7 @@ def test_jitter_violation_has_two_runs():
     hi = chain_latencies(replay(sysm, cex.scenario), sysm.chains[0]).worst("data_age").value
     lo = chain_latencies(replay(sysm, cex.best_scenario), sysm.chains[0]).best("data_age").value
     assert hi - lo == cex.latency > F(5, 1000)
-    from verify.prove.trace import to_svg
+    from verify.prove.gantt import to_svg
     from verify.units import fmt_time
 
     label = ET.fromstring(to_svg(sysm, v)).findall(".//{http://www.w3.org/2000/svg}text")
@@ -641,7 +641,7 @@ def test_a_crowded_row_of_a_chart_draws_bars_less_than_a_pixel_apart_as_one():
     reference simulator ran in the chart's interval is in exactly one bar."""
     import re
 
-    from verify.prove.trace import to_svg
+    from verify.prove.gantt import to_svg
 
     model = _overloaded()
     v = next(v for v in prove(model, budget=10).verdicts if v.counterexample is not None)

@@ -126,7 +126,7 @@ def _trace_svg(model: SystemModel, proof: ProofResult, args: argparse.Namespace)
     if not drawn:
         to_stderr(f"note: no counterexample, so nothing was drawn to {args.trace_svg}")
         return None
-    from ..prove.trace import to_svg_all
+    from ..prove.gantt import to_svg_all
 
     try:
         with open(args.trace_svg, "w", encoding="utf-8") as fh:
