@@ -365,3 +365,12 @@ def test_a_constraint_written_in_times_is_one_error(constraint, message):
     text = f"component Laser {{\n  task LaserTask {{\n    wcet 2 ms\n    {constraint}\n  }}\n}}\n"
     result = verify.load_text(text, "c.vfy")
     assert [(d.code, d.message) for d in result.diagnostics] == [("E302", message)]
+
+
+def test_an_invalid_constraint_is_not_reported_again_at_its_bindings():
+    """`activation 0 Hz fixed`: E307 at the constraint, not an E306 at every binding as well."""
+    text = ("component Laser {\n  out scan : LaserScan\n  task LaserTask {\n    produces scan\n    wcet 2 ms\n"
+            "    activation 0 Hz fixed\n  }\n}\nsystem S {\n  core cpu0\n  instance laser : Laser on cpu0 {\n"
+            "    task LaserTask priority 1 timer 100 ms\n  }\n}\n")
+    result = verify.load_text(text, "c.vfy")
+    assert [d.code for d in result.diagnostics] == ["E307"]

@@ -316,7 +316,7 @@ def _binding_rates(act: s.Activation) -> tuple[Fraction, Fraction] | None:
 
 def _check_against_constraint(act: s.Activation, task: s.Task, who: str, sink: DiagnosticSink) -> None:
     c = task.constraint
-    if c is None:
+    if c is None or not _well_formed(c):  # (an invalid one is reported once, in its component)
         return
     if not c.changeable and s.is_hole(act):
         sink.emit("E216", f"task {who} has a fixed rate ({_constraint_text(c)}), so it cannot be left to synthesis",
@@ -373,6 +373,7 @@ def _check_hole_candidates(h: s.PeriodHole, c: s.ActivationConstraint, who: str,
 
 
 def _well_formed(c: s.ActivationConstraint) -> bool:
+    """What ``_check_constraint`` accepts: positive frequencies, not inverted."""
     bounds = [q for q in (c.min, c.max) if q is not None]
     if any(q.dimension != "frequency" or q.value <= 0 for q in bounds):
         return False
