@@ -424,7 +424,7 @@ def _report_unexpected(sink: DiagnosticSink, path: str, err: UnexpectedInput, te
             sink.emit("E001", f"unknown unit `{err.token}`: units are case-sensitive", span, "not a unit",
                       help=f"write `{unit}`")
             return
-        meant = _unit_meant(err.token) if number is not None else None
+        meant = getattr(err, "verify_unit", None)
         if number is not None and meant is not None:
             close, sure = meant
             sink.emit("E001", f"unknown unit `{err.token}`" + (f"; did you mean `{close}`?" if sure else ""),
@@ -507,12 +507,16 @@ def _repair(err: UnexpectedToken, text: str) -> None:
         parser.feed_token(glued[2])
         return
     unit = _unit_in_other_case(err.token) if "UNIT" in (err.expected or ()) else None
-    meant = _unit_meant(err.token) if "UNIT" in (err.expected or ()) else None
-    if unit is None and meant is not None:  # `50 mss`, `50 sec`: go on as if it read a unit
-        unit = meant[0]
     if unit is not None:  # `50 hz`: go on as if it read `50 Hz`
         parser.feed_token(Token("UNIT", unit, line=err.token.line, column=err.token.column))
         return
+    meant = _unit_meant(err.token) if "UNIT" in (err.expected or ()) else None
+    if meant is not None and err.token.end_pos is not None:  # `50 mss`, `50 sec`: as if it read a unit ...
+        unit_token = Token("UNIT", meant[0], line=err.token.line, column=err.token.column)
+        if _fits(parser, [unit_token], text, err.token.end_pos):  # ... if what follows fits then
+            err.verify_unit = meant  # type: ignore[attr-defined]  # (ours, read back with getattr)
+            parser.feed_token(unit_token)
+            return
     keywords = _keyword_terminals()
     keyword_names = set(keywords.values())
     expected = sorted(err.expected or (), key=lambda n: (n not in _INSERTION_ORDER,
