@@ -170,6 +170,7 @@ def test_generate_cli_refuses_to_overwrite(tmp_path, capsys):
     assert out.read_text(encoding="utf-8") == generate_system(12, 3, hole_share=Fraction(1, 2))
 
 
+@pytest.mark.slow
 def test_runner_quick_mode_writes_json(tmp_path, capsys):
     out = tmp_path / "out" / "results.json"
     assert run.main(["--quick", "--out", str(out)]) == 0  # 0: no stage failed

@@ -15,6 +15,7 @@ from __future__ import annotations
 import random
 from fractions import Fraction
 
+import pytest
 from hypothesis import HealthCheck, find, given, settings
 from hypothesis import strategies as st
 
@@ -142,6 +143,7 @@ def _slowest(scenario: Scenario, model) -> Scenario:
     return Scenario(scenario.horizon, scenario.phases, None, delay, None, scenario.counter_phase)
 
 
+@pytest.mark.slow
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(systems(), st.integers(0, 2**16))
 def test_no_simulated_latency_beyond_the_analytic_bounds(text, seed):
@@ -158,6 +160,7 @@ def test_no_simulated_latency_beyond_the_analytic_bounds(text, seed):
         _record_tightness(model, analysis, trace)
 
 
+@pytest.mark.slow
 def test_the_generator_draws_phases_deadlines_and_user_bounds():
     """The rules for fixed phases (§3, §5.2 `F = φ`), explicit deadlines (§6.2) and user bounds (rule
     "user bound") are drawn, together, by the generator above."""
@@ -167,6 +170,7 @@ def test_the_generator_draws_phases_deadlines_and_user_bounds():
     assert verify.load_text(text, "random.vfy").ok
 
 
+@pytest.mark.slow
 @settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(systems())
 def test_generated_user_bounds_are_kept_promises(text):

@@ -6,6 +6,7 @@ from __future__ import annotations
 import random
 from fractions import Fraction as F
 
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -43,6 +44,7 @@ def _mixed(inside: Scenario, outside: Scenario, tasks: frozenset[str], model) ->
     return Scenario(inside.horizon, pick, exec_time, delay, gap, counters)
 
 
+@pytest.mark.slow
 @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(systems(), st.integers(0, 2**16))
 def test_a_cone_runs_as_in_the_whole_system_whatever_the_rest_does(text, seed):
@@ -208,6 +210,7 @@ def test_a_counterexample_that_does_not_carry_over_is_decided_on_the_whole_syste
     assert v.counterexample.sample in chain_latencies(trace, sysm.chains[0]).reaction_time
 
 
+@pytest.mark.slow
 def test_the_searches_of_the_cones_give_the_same_verdicts_side_by_side(monkeypatch):
     """A generated system whose specs are half their reference bound leaves many cones to the
     falsifying search; run in one process or spread over two (the batches forced parallel), every
@@ -231,6 +234,7 @@ def test_the_searches_of_the_cones_give_the_same_verdicts_side_by_side(monkeypat
             assert v.counterexample.sample in getattr(chain_latencies(trace, c), v.kind)
 
 
+@pytest.mark.slow
 def test_every_cone_starts_from_the_shared_first_runs():
     """The first two scenarios of every search (all phases 0 with wcet and d⁺, then with bcet and d⁻)
     run once on the union of the cones: with a budget of 4 scenarios and more than four cones to

@@ -31,6 +31,7 @@ def fmt(text: str) -> str:
 # ------------------------------------------------------------------ properties
 
 
+@pytest.mark.slow
 @settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(modules)
 def test_roundtrip_and_idempotence(module):
@@ -63,6 +64,7 @@ def _insert_comments(text: str, picks: list[tuple[int, str]]) -> tuple[str, list
     return "".join(pieces), inserted
 
 
+@pytest.mark.slow
 @settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(modules, st.lists(st.tuples(st.integers(0, 10**6), st.sampled_from(sorted(_COMMENT_FORMS))), max_size=8))
 def test_comments_survive_in_order(module, picks):
@@ -345,6 +347,7 @@ def _models_of_tree(module: s.Module):
     return _finish(Project(MODULE_PATH, (module,), {MODULE_PATH: SourceFile(MODULE_PATH, "")}), sink)
 
 
+@pytest.mark.slow
 @settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(valid_modules())
 def test_random_valid_models_check_format_and_parse_back(module):

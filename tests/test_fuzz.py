@@ -16,6 +16,8 @@ from fuzz.targets import TARGETS, Finding, run
 
 from .conftest import ROOT, in_ci
 
+pytestmark = pytest.mark.slow  # (the quick loop leaves it out: README, Tests)
+
 REGRESSIONS = ROOT / "tests" / "fuzz_regressions"
 SEEDS = seeds()
 

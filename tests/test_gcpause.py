@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import gc
 
+import pytest
 import verify
 from verify import gcpause
 
@@ -22,6 +23,7 @@ def _garbage_per_load() -> int:
         gc.set_debug(0)
 
 
+@pytest.mark.slow
 def test_repeated_loads_stay_bounded(monkeypatch):
     per_load = _garbage_per_load()
     assert per_load > 20  # the error path makes cycles: without collections they would pile up

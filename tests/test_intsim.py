@@ -54,6 +54,7 @@ def _targets(model) -> list[Target]:
     return [Target(k, c.name) for c in model.chains for k in KINDS] + [Target("response", t.id) for t in model.tasks]
 
 
+@pytest.mark.slow
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(systems(), st.integers(0, 2**16))
 def test_the_integer_run_is_the_reference_run(text, seed):

@@ -62,3 +62,16 @@ def test_license_file_matches_the_metadata():
     project = _config()["project"]
     assert project["license"] == {"text": "MIT"}
     assert "License :: OSI Approved :: MIT License" in project["classifiers"]
+
+
+def test_the_quick_loop_is_documented_and_leaves_out_the_slow_tests():
+    """`pytest -m "not slow"`: the marker is registered, the README gives the command, and the slowest
+    tests of the suite carry it."""
+    from . import test_fuzz, test_static, test_synth, test_synth_properties
+
+    assert any(m.startswith("slow:") for m in _config()["tool"]["pytest"]["ini_options"]["markers"])
+    assert 'python3 -m pytest -m "not slow"' in (ROOT / "README.md").read_text(encoding="utf-8")
+    marked = [test_synth.test_navigation_optimum_agrees_with_brute_force_over_the_pruned_space,
+              test_synth_properties.test_synth_agrees_with_brute_force]
+    assert all(any(m.name == "slow" for m in getattr(f, "pytestmark", [])) for f in marked)
+    assert all(m.name == "slow" for m in (test_fuzz.pytestmark, test_static.pytestmark))

@@ -134,6 +134,7 @@ def test_fast_path_decides_the_benchmark_systems_and_agrees():
         assert _assert_fast_path_exact(LOAD_CASES[name]), name
 
 
+@pytest.mark.slow
 def test_fast_path_agrees_with_lark_on_mutants():
     for _name, text in LOAD_CASES.items():
         _assert_fast_path_exact(text)
@@ -147,6 +148,7 @@ try:
 
     from .strategies import modules
 
+    @pytest.mark.slow
     @settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
     @given(modules, st.randoms(use_true_random=False))
     def test_fast_path_agrees_with_lark_on_random_modules(module, rng):
@@ -198,6 +200,7 @@ def _rounds_agree(model, max_rounds: int = 6) -> None:
 try:
     from .test_bounds_vs_simulation import systems as random_systems
 
+    @pytest.mark.slow
     @settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
     @given(random_systems())
     def test_fast_rounds_agree_with_rta_on_random_systems(text):
@@ -205,6 +208,7 @@ try:
         assert result.ok
         _rounds_agree(result.system())
 
+    @pytest.mark.slow
     @settings(max_examples=60, deadline=None)
     @given(st.integers(1, 10**6), st.integers(3, 40), st.integers(1, 4))
     def test_fast_rounds_agree_with_rta_on_cooperative_systems(seed, n, load):

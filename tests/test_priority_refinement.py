@@ -21,6 +21,7 @@ from __future__ import annotations
 import random
 from fractions import Fraction
 
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -316,6 +317,7 @@ def hop_systems(draw) -> tuple[str, bool]:
     return text, applies
 
 
+@pytest.mark.slow
 @settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(hop_systems(), st.integers(0, 2**16))
 def test_no_simulated_latency_beyond_the_bounds_around_a_same_core_hop(drawn, seed):

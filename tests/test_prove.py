@@ -392,6 +392,7 @@ def _same_measurement(sysm, scenario, targets, hyper):
     return fast
 
 
+@pytest.mark.slow
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(rigid_systems_with_siblings(), st.randoms(use_true_random=False))
 def test_integer_evaluator_matches_the_reference_simulator(sysm, rnd):
@@ -415,6 +416,7 @@ def test_integer_evaluator_matches_the_reference_simulator(sysm, rnd):
             assert extremes(replay(sysm, m.scenario), sysm, t).worst == m.values[t].worst
 
 
+@pytest.mark.slow
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(rigid_systems(max_free=1), st.sampled_from(KINDS))
 def test_z3_agrees_with_enumeration(sysm, kind):
@@ -434,6 +436,7 @@ def test_z3_agrees_with_enumeration(sysm, kind):
     assert z.worst[target].value == ex.worst[target].value
 
 
+@pytest.mark.slow
 def test_z3_agrees_with_enumeration_on_a_known_case():
     from verify.prove.z3bmc import z3_exact
 

@@ -27,12 +27,14 @@ def _assert_located(result: verify.LoadResult) -> None:
         assert not any(bad in text for bad in FORBIDDEN), text
 
 
+@pytest.mark.slow
 @settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(st.text(max_size=400))
 def test_random_text_never_raises(text):
     _assert_located(verify.load_text(text))
 
 
+@pytest.mark.slow
 @settings(max_examples=100, deadline=None)
 @given(st.binary(max_size=300))
 def test_random_bytes_never_raise(tmp_path_factory, data):
@@ -62,6 +64,7 @@ def _mutations(text: str, rng: random.Random) -> str:
     return "".join(chars)
 
 
+@pytest.mark.slow
 @settings(max_examples=300, deadline=None)
 @given(st.integers(min_value=0, max_value=2**32 - 1))
 def test_mutated_examples_never_raise(seed):
@@ -79,6 +82,7 @@ def test_deep_nesting_and_huge_numbers():
     assert [d.code for d in result.diagnostics] == ["E005"]
 
 
+@pytest.mark.slow
 def test_every_syntax_error_has_a_help_and_an_accepted_expected_set():
     from verify.larkparse import describe_token_type
 

@@ -3,10 +3,14 @@ whole repository, both with the settings in pyproject.toml. Both tools come with
 one fails the run (it is never skipped)."""
 from __future__ import annotations
 
+import pytest
+
 import os
 import subprocess
 import sys
 from pathlib import Path
+
+pytestmark = pytest.mark.slow  # (the quick loop leaves it out: README, Tests)
 
 ROOT = Path(__file__).resolve().parent.parent
 

@@ -77,6 +77,7 @@ def test_navigation_answer_is_rechecked_as_written(holes):
     assert problems == [] and model.is_configured
 
 
+@pytest.mark.slow
 def test_navigation_optimum_agrees_with_brute_force_over_the_pruned_space(holes):
     loaded, result = holes
     naive = brute_force(loaded, prune=True)
@@ -149,6 +150,7 @@ def test_repair_turns_a_rejected_seed_into_an_accepted_configuration(seed):
     assert result.status == "sat" and result.stats["solver_calls"] == 0 and accepted(result.model)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", [1, 4])
 def test_core_seeded_from_the_blamed_chain_is_unsat_and_minimal(seed):
     """Pruning blames a chain; minimisation starts from the statements about it. The core is checked

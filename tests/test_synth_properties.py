@@ -17,6 +17,7 @@ import random
 from dataclasses import dataclass, field
 from fractions import Fraction as F
 
+import pytest
 from hypothesis import HealthCheck, assume, example, given, settings
 from hypothesis import strategies as st
 
@@ -173,6 +174,7 @@ def load(text: str):
 OBJECTIVES = ["utilisation", "slack", "latency:ch", "age:ch,utilisation"]
 
 
+@pytest.mark.slow
 @settings(max_examples=100, **SETTINGS)
 @given(systems(), st.sampled_from(OBJECTIVES))
 def test_synth_agrees_with_brute_force(system, objective):
@@ -188,6 +190,7 @@ def test_synth_agrees_with_brute_force(system, objective):
         simulated_within_bounds(result.model, runs=1, horizon=F(1))
 
 
+@pytest.mark.slow
 @settings(max_examples=50, **SETTINGS)
 @given(systems())
 def test_unsat_cores_are_minimal(system):
@@ -212,6 +215,7 @@ def _periods(result) -> dict:
     return {t: (c.kind, c.period, c.port, c.prescaler) for t, c in result.choices.items()}
 
 
+@pytest.mark.slow
 @settings(max_examples=25, **SETTINGS)
 @given(systems(), st.sampled_from(["utilisation", "slack"]))
 def test_scaling_every_time_by_10_scales_the_answer(system, objective):
@@ -231,6 +235,7 @@ def test_scaling_every_time_by_10_scales_the_answer(system, objective):
                  Task(1, 0, "trigger 1", 2, 0, 0, 1, (F(1), F(2))),
                  Task(2, 0, "trigger 1", 2, 0, 0, 1, (F(1), F(2)), tolerance="oversampling forbidden")],
                 1, age=20), 0)  # two symmetric cores: pruning's blame must not follow declaration order
+@pytest.mark.slow
 @given(systems(), st.integers(0, 2**16))
 def test_reordering_declarations_changes_nothing(system, seed):
     plain = synthesize(load(render(system)))

@@ -661,6 +661,7 @@ def test_bounds_hold_in_simulation(seed):
         assert bound_violations(sysm, simulate(sysm, scenario)) == []
 
 
+@pytest.mark.slow
 def test_random_systems_draw_phases_deadlines_and_user_bounds():
     """The cross-check above covers fixed phases, explicit deadlines and user bounds, and every user
     bound is a kept promise: at least the WCRT computed with all bounds in place."""

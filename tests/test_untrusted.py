@@ -192,6 +192,7 @@ def test_the_search_for_pyproject_stops_at_the_repository(tmp_path):
 _SEGMENTS = st.sampled_from(["..", ".", "a", "b", "link", "out", "x.vfy", "", "secret.vfy", "lib", "/"])
 
 
+@pytest.mark.slow
 @settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(paths=st.lists(st.lists(_SEGMENTS, min_size=1, max_size=6).map("/".join), min_size=1, max_size=4))
 def test_no_import_ever_opens_a_file_outside_the_allowed_directories(tmp_path_factory, paths):
