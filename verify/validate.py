@@ -8,8 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Iterator
 from fractions import Fraction
-
-import networkx as nx
+from typing import TYPE_CHECKING
 
 from . import syntax as s
 from .diagnostics import DiagnosticSink, Label, name_list
@@ -17,6 +16,9 @@ from .model import SystemModel, chain_path, quantity_base, quantity_hertz, quant
 from .resolve import ComponentScope, MemberNode, Resolution, SystemScope
 from .source import Span
 from .units import fmt_number, fmt_quantity, fmt_rate, fmt_time
+
+if TYPE_CHECKING:  # (networkx is imported where a cycle of triggers is reported: it costs start-up time)
+    import networkx as nx
 
 
 # ================================================================== components
@@ -552,6 +554,8 @@ def _check_trigger_sources(scope: SystemScope, sink: DiagnosticSink) -> None:
     live = _activated(edges, modes, sources)
     if len(live) == len(nodes):  # (the common case: nothing to report)
         return
+    import networkx as nx
+
     graph: nx.DiGraph[str] = nx.DiGraph()
     graph.add_nodes_from(nodes)
     graph.add_edges_from(edges)
@@ -583,9 +587,11 @@ def _trigger_span(scope: SystemScope, tid: str) -> Span:
 def _cycle_through(component: nx.DiGraph[str], first: str, order: dict[str, int]) -> list[str]:
     """A shortest cycle of the strongly connected ``component`` through ``first``, in the direction of the
     triggers, as its nodes from ``first`` on (ties broken by source order, so the text is stable)."""
+    import networkx
+
     best: list[str] | None = None
     for succ in sorted(component.successors(first), key=order.__getitem__):
-        back = nx.shortest_path(component, succ, first)  # succ … first (``[first]`` for a self-loop)
+        back = networkx.shortest_path(component, succ, first)  # succ … first (``[first]`` for a self-loop)
         if best is None or len(back) < len(best):
             best = back
     assert best is not None, "a node of a strongly connected component with an edge has a successor"

@@ -31,7 +31,7 @@ MODEL, SYSTEM = True, True
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from ..prove.core import DEFAULT_BUDGET
+    from ..budgets import PROVE_BUDGET as DEFAULT_BUDGET
 
     p.add_argument("--trace-svg", metavar="FILE",
                    help="write every counterexample as an SVG Gantt chart (one below the other)")

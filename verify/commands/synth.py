@@ -51,7 +51,7 @@ def _seconds(text: str) -> float:
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from ..synth.driver import DEFAULT_RLIMIT
+    from ..budgets import SYNTH_RLIMIT as DEFAULT_RLIMIT
 
     p.add_argument("--objective", metavar="OBJ", default="utilisation", help=OBJECTIVE_HELP)
     where = p.add_mutually_exclusive_group()

@@ -31,9 +31,10 @@ from .exact import (SEARCH_EVENTS, Budget, ExactResult, Extreme, Goal, approach,
 from .parallel import ordered_map, resolve_workers
 from .scenario import ConcreteScenario, Measured, ResponseSample, Target, measure
 from .verdict import Counterexample, ProofResult, Verdict
+from ..budgets import PROVE_BUDGET, PROVE_RLIMIT
 
-DEFAULT_BUDGET = 1000  # simulated scenarios
-DEFAULT_RLIMIT = 20_000_000  # Z3 resource units (deterministic), per query
+DEFAULT_BUDGET = PROVE_BUDGET  # simulated scenarios
+DEFAULT_RLIMIT = PROVE_RLIMIT  # Z3 resource units (deterministic), per query
 
 
 def prove(model: SystemModel, *, budget: int = DEFAULT_BUDGET, rlimit: int = DEFAULT_RLIMIT,

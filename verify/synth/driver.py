@@ -32,8 +32,9 @@ from .encode import Encoding
 from .problem import Config, Evaluation, Problem, build_problem
 from .solve import Budget, Engine, Objective, Outcome, lex_better, quick_answer
 from .statements import Statement
+from ..budgets import SYNTH_RLIMIT
 
-DEFAULT_RLIMIT = 50_000_000  # Z3 resource units for one run (deterministic); --rlimit changes it
+DEFAULT_RLIMIT = SYNTH_RLIMIT  # Z3 resource units for one run (deterministic); --rlimit changes it
 OBJECTIVES = ("utilisation", "slack", "latency:CHAIN", "age:CHAIN", "none")
 
 
