@@ -18,13 +18,16 @@ import sys
 import tempfile
 from collections.abc import Mapping, Sequence
 
-from .. import api
+from typing import TYPE_CHECKING
+
 from ..diagnostics import Diagnostic, DiagnosticSink
-from ..loader import Project
-from ..model import SystemModel
 from ..outputs import Output, Report, render
 from ..render import render_all_text
 from ..source import SourceFile, Span
+
+if TYPE_CHECKING:  # (the front end is imported when a command runs: `--help` stays quick)
+    from .. import api
+    from ..model import SystemModel
 
 EXIT_OK, EXIT_VIOLATED, EXIT_INVALID, EXIT_UNDECIDED, EXIT_INTERNAL = 0, 1, 2, 3, 70
 
@@ -43,6 +46,9 @@ def read_stdin(sink: DiagnosticSink) -> str | None:
 def load_args(args: argparse.Namespace) -> api.LoadResult:
     """``api.load`` of the command's FILE, with its ``--root`` and ``--include``. FILE ``-`` is standard
     input, read once (then named ``<stdin>``, in the working directory)."""
+    from .. import api
+    from ..loader import Project
+
     include = tuple(args.include or ())
     if args.file != "-":
         return api.load(args.file, root=args.root, include=include)
@@ -89,6 +95,8 @@ def load_or_fail(args: argparse.Namespace) -> api.LoadResult | int:
 
 def select(result: api.LoadResult, args: argparse.Namespace) -> SystemModel | None:
     """The system ``--system`` names (or the only one), or None after showing why there is none."""
+    from .. import api
+
     try:
         return result.system(args.system)
     except api.SelectionError as err:
@@ -104,6 +112,8 @@ def load_configured(args: argparse.Namespace, command: str) -> tuple[api.LoadRes
     system = select(result, args)
     if system is None:
         return EXIT_INVALID
+    from .. import api
+
     holes = api.require_configured(system, command)
     if holes:
         show_diagnostics(args, holes, result.sources)

@@ -15,14 +15,13 @@ import sys
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING
 
-from .. import api
 from ..diagnostics import Diagnostic
-from ..model import SystemModel
 from ..outputs import Output, Report, render
 from ..source import SourceFile
 from .common import EXIT_INVALID, EXIT_OK, fail, load_args, to_stderr
 
 if TYPE_CHECKING:
+    from ..model import SystemModel
     from ..prove.verdict import ProofResult
 
 HELP = "prove every latency spec and deadline of a configured system"
@@ -95,6 +94,8 @@ def _invalid(diagnostics: Sequence[Diagnostic], sources: Mapping[str, SourceFile
 
 
 def run(args: argparse.Namespace) -> int:
+    from .. import api
+
     refused = _check_paths(args)
     if refused is not None:
         return refused

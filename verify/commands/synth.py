@@ -19,13 +19,13 @@ import argparse
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
-from ..api import LoadResult
 from ..diagnostics import Diagnostic, DiagnosticSink
 from ..outputs import Report, render
 from .common import (EXIT_INVALID, EXIT_OK, EXIT_UNDECIDED, EXIT_VIOLATED, load_or_fail, replace_file, select, show,
                      show_diagnostics, to_stderr, write_new_file)
 
 if TYPE_CHECKING:
+    from ..api import LoadResult
     from ..synth.driver import SynthResult
 
 HELP = "synthesize periods, prescalers and activation kinds, or explain why no configuration exists"
