@@ -141,7 +141,7 @@ class FastParser:
         except AttributeError:  # pragma: no cover - another Lark version
             return None
         patterns = {t.name: t.pattern for t in lark.terminals}
-        if set(lark.ignore_tokens) != {"WS", "LINE_COMMENT", "BLOCK_COMMENT"}:
+        if set(lark.lexer_conf.ignore) != {"WS", "LINE_COMMENT", "BLOCK_COMMENT"}:
             return None
         name_re = re.compile(LEXICAL_SHAPE["NAME"])
         keywords, punct = {}, {}
