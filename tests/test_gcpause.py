@@ -36,5 +36,5 @@ def test_repeated_loads_stay_bounded(monkeypatch):
         verify.load_text(BROKEN)
         if i % 25 == 0:
             peak = max(peak, len(gc.get_objects()))
-    # a full collection when the tracked objects doubled: never much more than twice the start
+    # a full collection once the pauses made as many objects as there were: never much more than twice the start
     assert peak < 2 * start + 10_000, (per_load, loads, start, peak)

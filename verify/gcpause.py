@@ -19,10 +19,13 @@ Objects moved this way do not count towards the collector's own trigger of a ful
 oldest generation grew by a quarter), so garbage cycles made inside pauses — Lark's error path,
 networkx views, Z3 references and exception tracebacks make plenty — would never be found in a long
 process (an editor's language server, a fuzzer, a library loading many models: 80 MB more per 1,000
-loads). So the outermost pause runs a full collection itself when the collector tracks more than
-twice as many objects as after the previous one, and at least ``FULL_COLLECTION_FLOOR``: garbage stays
-bounded, the cost of the collections is amortised over the work that made the objects, and a single
-command on a 10,000-task model (1.6 million objects tracked at its end) never pays one.
+loads). So the outermost pause runs a full collection itself when the pauses since the previous one
+have made more tracked objects than the collector tracked after it, and at least
+``FULL_COLLECTION_FLOOR``: garbage stays bounded, the cost of the collections is amortised over the
+work that made the objects, and a single command on a 10,000-task model (1.6 million objects tracked at
+its end) never pays one. What a pause made is the growth of the collector's own allocation count
+(``gc.get_count()[0]``: tracked objects allocated less those freed, which nothing resets while the
+collector is disabled) — read in constant time, where counting the tracked objects walks all of them.
 """
 from __future__ import annotations
 
@@ -37,29 +40,32 @@ def paused_gc() -> Iterator[None]:
     Leaving the outermost pause moves what survived it to the oldest generation (see above)."""
     enabled = gc.isenabled()
     gc.disable()
+    at_start = gc.get_count()[0]
     try:
         yield
     finally:
         if enabled:
-            _promote_survivors()
+            _promote_survivors(max(0, gc.get_count()[0] - at_start))
             gc.enable()
 
 
-#: a full collection runs only when the collector tracks more objects than this (see above)
+#: a full collection runs only when the pauses since the last one made more objects than this (see above)
 FULL_COLLECTION_FLOOR = 2_000_000
 _after_last_full = [0]  # objects tracked after the last full collection run here
+_made = [0]  # tracked objects the outermost pauses made since then
 
 
-def _promote_survivors() -> None:
+def _promote_survivors(made: int) -> None:
     """Move every object the collector tracks to its oldest generation without traversing them, and
-    run a full collection when their number has doubled since the last one (see above)."""
+    run a full collection when the pauses since the last one made more objects than it left (see above)."""
     if gc.get_freeze_count() != 0:
         return
     gc.freeze()
-    tracked = gc.get_freeze_count()
     gc.unfreeze()
-    if tracked > max(2 * _after_last_full[0], FULL_COLLECTION_FLOOR):
+    _made[0] += made
+    if _made[0] > max(_after_last_full[0], FULL_COLLECTION_FLOOR):
         gc.collect()
         gc.freeze()
-        _after_last_full[0] = gc.get_freeze_count()
+        _after_last_full[0] = gc.get_freeze_count()  # (a walk of every object, after a collection that walked them)
         gc.unfreeze()
+        _made[0] = 0
