@@ -76,7 +76,8 @@ class TimeBase:
 
     def ticks(self, value: Fraction) -> int:
         """``value`` in ticks (ValueError if it is not a whole number of them)."""
-        value = Fraction(value)
+        if type(value) is not Fraction:
+            value = Fraction(value)
         q, r = divmod(value.numerator * self.unit.denominator, value.denominator * self.unit.numerator)
         if r:
             raise ValueError(f"{value} s is not a multiple of the tick {self.unit} s")

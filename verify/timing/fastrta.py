@@ -236,7 +236,8 @@ class Round:
     def ticks(self, value: Fraction | None) -> int | None: ...
 
     def ticks(self, value: Fraction | None) -> int | None:
-        return None if value is None else self.base.ticks(value)
+        # (``self.base.ticks`` for a base of 1/D s, inlined: a round converts some 10⁴ values)
+        return None if value is None else value.numerator * (self.scale // value.denominator)
 
     @overload
     def seconds(self, ticks: int) -> Fraction: ...
@@ -244,7 +245,7 @@ class Round:
     def seconds(self, ticks: int | None) -> Fraction | None: ...
 
     def seconds(self, ticks: int | None) -> Fraction | None:
-        return None if ticks is None else self.base.seconds(ticks)
+        return None if ticks is None else Fraction(ticks, self.scale)
 
     def _stream(self, n: int) -> _Stream:
         """Task n as an interferer (``rta.interferer``): its jitter grows by ``R − C`` if it is
