@@ -337,6 +337,10 @@ _new_link = direct_constructor(LinkModel)
 _new_hop = direct_constructor(HopModel)
 _new_port = direct_constructor(PortModel)
 _new_port_decl = direct_constructor(PortDecl)
+_new_instance = direct_constructor(InstanceModel)
+_new_component = direct_constructor(ComponentModel)
+_new_task_decl = direct_constructor(TaskDecl)
+_new_compound_decl = direct_constructor(CompoundDecl)
 
 #: each unit's factor to seconds or hertz as (numerator, denominator)
 _UNIT_RATIOS = {unit: factor.as_integer_ratio() for unit, factor in {**s.TIME_UNITS, **s.FREQUENCY_UNITS}.items()}
@@ -492,16 +496,16 @@ def _component_model(component: s.Component) -> ComponentModel:
     them; validation reports duplicates)."""
     ports = {p.name.text: _new_port_decl(p.name.text, "in", p.type.text, p.span) for p in component.in_ports}
     ports.update({p.name.text: _new_port_decl(p.name.text, "out", p.type.text, p.span) for p in component.out_ports})
-    compounds = {c.name.text: CompoundDecl(c.name.text, c.mode, tuple(m.text for m in c.members), c.span)
+    compounds = {c.name.text: _new_compound_decl(c.name.text, c.mode, tuple(m.text for m in c.members), c.span)
                  for c in component.compounds}
     tasks = tuple(_task_decl(t) for t in component.tasks)
-    return ComponentModel(component.name.text, tuple(ports.values()), tuple(compounds.values()), tasks,
+    return _new_component(component.name.text, tuple(ports.values()), tuple(compounds.values()), tasks,
                           component.span)
 
 
 def _task_decl(task: s.Task) -> TaskDecl:
     c = task.constraint
-    return TaskDecl(task.name.text, task.kind,
+    return _new_task_decl(task.name.text, task.kind,
                     tuple([_new_read(r.port.text, r.optional, r.oversampling, r.undersampling, r.span)
                            for r in task.reads]),
                     tuple(p.text for p in task.produces),
@@ -525,7 +529,7 @@ def _structure(scope: SystemScope) -> tuple[tuple[InstanceModel, ...], tuple[Com
         own = [_new_port(PortId(f"{name}.{p.name}"), name, p.name, p.direction, p.message_type, p.span)
                for p in comp.ports]
         ports.extend(own)
-        instances.append(InstanceModel(name, comp.name, inst.core.text if inst.core else None,
+        instances.append(_new_instance(name, comp.name, inst.core.text if inst.core else None,
                                        tuple(TaskId(f"{name}.{t.name}") for t in comp.tasks),
                                        tuple(p.id for p in own), inst.span))
     return tuple(instances), tuple(components.values()), tuple(ports)
