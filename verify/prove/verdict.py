@@ -13,6 +13,7 @@ from fractions import Fraction
 
 from ..diagnostics import Diagnostic
 from ..source import NO_SPAN, Span
+from ..timing.chains import SPEC_WORDS
 from .scenario import ConcreteScenario, Measured, Target
 
 METHODS = ("bound", "exact-enumeration", "exact-z3", "search")
@@ -89,8 +90,7 @@ class Verdict:
 
     @property
     def label(self) -> str:
-        what = {"reaction_time": "reaction time", "data_age": "data age", "jitter": "jitter",
-                "deadline": "deadline"}[self.kind]
+        what = SPEC_WORDS[self.kind]
         return f"chain {self.name}: {what}" if self.subject == "chain" else f"task {self.name}: {what}"
 
 

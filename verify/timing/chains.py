@@ -103,6 +103,10 @@ class Bound:
         return None if self.worst is None else self.worst - self.best
 
 
+#: how a spec's (or a deadline's) kind is named in messages and reports
+SPEC_WORDS = {"reaction_time": "reaction time", "data_age": "data age", "jitter": "jitter", "deadline": "deadline"}
+
+
 @dataclass(frozen=True)
 class SpecCheck:
     """A chain spec against its bound: ``margin = spec − bound`` (None: unbounded). The bound is an upper

@@ -19,7 +19,7 @@ from typing import Any
 
 from ..units import fmt_number, fmt_time
 from . import AnalysisResult, TaskTiming
-from .chains import Bound, ChainBounds, Step, Term
+from .chains import SPEC_WORDS, Bound, ChainBounds, Step, Term
 from .rates import EventModel, LinkSampling, RateInterval
 from .rta import CoreLoad, percent
 
@@ -318,8 +318,6 @@ def _spec_cell(c: ChainBounds, kind: str) -> tuple[str, str]:
     return f"<= {_t(check.spec)}", margin
 
 
-#: how the text names a spec's kind (as ``prove`` does)
-_SPEC_WORDS = {"reaction_time": "reaction time", "data_age": "data age", "jitter": "jitter"}
 
 
 def _spec_verdicts(result: AnalysisResult) -> list[str]:
@@ -340,7 +338,7 @@ def _spec_verdicts(result: AnalysisResult) -> list[str]:
             verdict = f"proved by the bound: {_t(s.bound)}, margin {_t(s.margin)}"
         else:
             verdict = f"not proved by the bound: {_t(s.bound)} exceeds it by {_t(s.bound - s.spec)}"
-        rows.append([f"chain {c.name}: {_SPEC_WORDS.get(s.kind, s.kind)}", f"<= {_t(s.spec)}", verdict])
+        rows.append([f"chain {c.name}: {SPEC_WORDS.get(s.kind, s.kind)}", f"<= {_t(s.spec)}", verdict])
     return [head] + _table(rows)
 
 
