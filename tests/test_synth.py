@@ -319,3 +319,31 @@ def test_a_rate_hint_whose_budget_runs_out_is_left_out(write, capsys):
     assert "this statement cannot hold" in small and "would need to run" not in small
     assert main(["synth", path]) == 1
     assert "`base.RobotTask` would need to run at up to 10 Hz (at most 0.5 Hz now)" in capsys.readouterr().err
+
+
+def test_terms_built_through_the_c_api_equal_z3py_operators():
+    """``encode.Terms`` builds through Z3's C API the very terms z3py's operators build (same
+    argument order, also where Python dispatches to the numeral's reflected operator), so the
+    solver — and every answer — is unchanged by it."""
+    import z3
+
+    from verify.synth.encode import Terms
+
+    ctx = z3.Context()
+    t = Terms(ctx)
+    x, y, b = z3.Int("x", ctx), z3.Int("y", ctx), z3.Bool("b", ctx)
+    iv = lambda k: z3.IntVal(k, ctx)  # noqa: E731
+    cases = [
+        (t.add(x, y, 3), x + y + 3), (t.add(x, 0), x), (t.add(2, 3), 5), (t.mul(4, x), 4 * x), (t.mul(1, x), x),
+        (t.le(x, 5), x <= iv(5)), (t.le(5, x), iv(5) <= x), (t.le(x, y), x <= y),
+        (t.ge(x, 5), x >= iv(5)), (t.ge(x, y), x >= y), (t.eq(x, 7), x == iv(7)), (t.eq(7, x), iv(7) == x),
+        (t.eq(x, y), x == y), (t.at_least(x, 9), x >= 9),
+        (t.max(x, 2), z3.If(x >= iv(2), x, iv(2))), (t.min(1, y), z3.If(iv(1) <= y, iv(1), y)),
+        (t.ite(b, x, 3), z3.If(b, x, iv(3))), (t.implies([b], x <= y), z3.Implies(b, x <= y)),
+        (t.implies([b, z3.Not(b)], x <= y), z3.Implies(z3.And(b, z3.Not(b)), x <= y)),
+    ]
+    for ours, theirs in cases:
+        if isinstance(theirs, int):
+            assert ours == theirs
+        else:
+            assert ours.sexpr() == theirs.sexpr() and ours.eq(theirs), (ours, theirs)

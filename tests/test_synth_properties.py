@@ -190,6 +190,38 @@ def test_synth_agrees_with_brute_force(system, objective):
         simulated_within_bounds(result.model, runs=1, horizon=F(1))
 
 
+@settings(max_examples=40, **SETTINGS)
+@given(systems())
+def test_utilisation_floor_is_below_every_configuration(system):
+    """The floor ``_best`` starts from (``Encoding.utilisation_floor``) is below the utilisation of
+    every configuration of the pruned space, each analysed; when the incumbent reaches it, the
+    optimum is proven without another solver call."""
+    import itertools
+
+    import z3
+
+    from verify.synth.driver import _inputs, _utilisation
+    from verify.synth.problem import Config, build_problem
+
+    loaded = load(render(system))
+    model, scope = _inputs(loaded, None, None)
+    problem = build_problem(model, scope)
+    assume(problem.infeasible is None)
+    enc = problem.encoding(z3.Context())
+    floor = enc.utilisation_floor()
+    assert floor is not None
+    tids = sorted(problem.choices)
+    combos = itertools.product(*(range(len(problem.choices[t].candidates)) for t in tids))
+    values = []
+    for combo in itertools.islice(combos, 300):
+        result = problem.evaluate(Config(tuple(zip(tids, combo)))).result
+        if all(c.utilisation is not None for c in result.cores):
+            values.append(_utilisation(result) * enc.M)
+    assert all(floor <= v for v in values), (floor, values)
+    if all(len(problem.choices[t].candidates) == 1 for t in tids) and values:
+        assert values == [floor]  # one configuration: the floor is its utilisation
+
+
 @pytest.mark.slow
 @settings(max_examples=50, **SETTINGS)
 @given(systems())

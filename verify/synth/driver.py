@@ -93,7 +93,7 @@ def objectives_for(goals: list[Goal], enc: Encoding) -> list[Objective]:
     for g in goals:
         if g.kind == "utilisation":
             out.append(Objective(g.name, "min", enc.utilisation,
-                                 lambda c, ev: int(_utilisation(ev.result) * enc.M)))
+                                 lambda c, ev: int(_utilisation(ev.result) * enc.M), enc.utilisation_floor()))
         elif g.kind == "slack":
             slack = z3.Int("objective|slack", enc.ctx)
             for _, term, bound in enc.specs:

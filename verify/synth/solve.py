@@ -101,6 +101,7 @@ class Objective:
     sense: str  # "min" | "max"
     term: object  # an int or a z3 term
     real: Callable[[Config, Evaluation], int | None]
+    floor: int | None = None  # for "min": a value no configuration's ``term`` lies below (None: unknown)
 
     def better(self, a: int, b: int) -> bool:
         return a < b if self.sense == "min" else a > b
@@ -241,24 +242,30 @@ class Engine:
     def _value(self, model: z3.ModelRef, term: object) -> int:
         return term if isinstance(term, int) else model.eval(term, model_completion=True).as_long()
 
-    def _best(self, objectives: Sequence[Objective], assumptions: list[z3.BoolRef]) -> tuple[str, Any]:
-        """The encoded lexicographic optimum under ``assumptions``, by strengthening: ask for a value
-        better than the last answer by a step (a sixteenth of it at first) that doubles while answers
-        come; then alternately bisect between the best answer and the closest value found impossible
-        and ask for anything better than the best answer at all (which often ends the search at
-        once). The last, unsatisfiable question proves it."""
+    def _best(self, objectives: Sequence[Objective], assumptions: list[z3.BoolRef]) -> tuple[str, Any, bool]:
+        """The encoded lexicographic optimum under ``assumptions``, by strengthening, and whether it
+        is proven (every objective's last question unsatisfiable, or its answer at its ``floor``).
+        First ask for a value better than the last answer by a step (a sixteenth of it at first) that
+        doubles while answers come; once a value is known impossible (found so, or below the floor),
+        alternately bisect between the best answer and it and ask for anything better than the best
+        answer at all (which often ends the search at once)."""
         status, answer = self._check(assumptions)
         if status != "sat" or not objectives:
-            return status, answer
+            return status, answer, status == "sat"
         fixed: list[z3.BoolRef] = []
         for obj in objectives:
-            best, bound = self._value(answer, obj.term), None
-            step, probe = max(1, abs(best) // 16), False
             sign = 1 if obj.sense == "min" else -1
+            best = self._value(answer, obj.term)
+            floor = obj.floor if obj.floor is not None and sign > 0 else None
+            bound = floor - 1 if floor is not None and best == floor else None
+            step, probe = max(1, abs(best) // 16), False
             while bound is None or abs(best - bound) > 1:
                 if bound is None:
                     target = best - sign * step
-                else:  # alternate: is anything better than the incumbent at all? bisect the gap
+                    if floor is not None and target < floor:  # known impossible: bisect down to the floor
+                        bound = floor - 1
+                        continue
+                else:  # alternate: bisect the gap; is anything better than the incumbent at all?
                     target = best - sign if probe else (best + bound) // 2
                     probe = not probe
                 lit = self._fresh("goal")
@@ -266,7 +273,7 @@ class Engine:
                 self.enc.add(z3.Implies(lit, term <= target if sign > 0 else term >= target))
                 status, found = self._check(assumptions + fixed + [lit])
                 if status == "unknown":
-                    return "sat", answer  # the best so far; the caller finds the budget exhausted
+                    return "sat", answer, False  # the best so far; the caller finds the budget exhausted
                 if status == "sat":
                     answer, best, step = found, self._value(found, obj.term), step * 2
                 else:
@@ -274,7 +281,7 @@ class Engine:
             lit = self._fresh("fix")
             self.enc.add(z3.Implies(lit, self.enc.t.lift(obj.term) == best))
             fixed.append(lit)
-        return "sat", answer
+        return "sat", answer, True
 
     # -------------------------------------------------------------- configurations
 
@@ -411,7 +418,7 @@ class Engine:
         seen: set[Config] = set()
         while True:
             assume = list(assumptions) + [scope] + ([guard] if guard is not None else [])
-            status, answer = self._best(objectives, assume)
+            status, answer, proven = self._best(objectives, assume)
             if status == "unknown":
                 return Outcome("unknown", *(best.config, best.evaluation, best.values) if best else (None,) * 3,
                                reason=self.budget.reason)
@@ -431,6 +438,10 @@ class Engine:
             if not objectives:
                 return Outcome("sat", config, ev)
             values = tuple(o.real(config, ev) for o in objectives)
+            if proven and values == tuple(self._value(answer, o.term) for o in objectives):
+                # the encoded optimum, and its true values are the encoded ones: every accepted
+                # configuration lies in the encoding with true values no better than its encoded ones
+                return Outcome("optimal", config, ev, values)
             # (an incumbent always has its values)
             if best is None or lex_better(objectives, values, cast("tuple[int | None, ...]", best.values)):
                 best = Outcome("sat", config, ev, values)
