@@ -243,6 +243,32 @@ def test_unsat_cores_are_minimal(system):
         assert accepted(model), (member, render(system))
 
 
+@settings(max_examples=30, **SETTINGS)
+@given(systems())
+def test_chunked_deletion_finds_the_core_of_one_by_one_deletion(system):
+    """``core._minimise`` drops statements in chunks; the core is the one one-by-one deletion in the
+    same order gives (the reference below), because unsatisfiability is monotone."""
+    from verify.synth.core import _minimise, decide_trial, deletion_order
+    from verify.synth.driver import _inputs
+    from verify.synth.problem import build_problem
+    from verify.synth.solve import Budget
+
+    system.reaction = min(system.reaction or 1000, 25)  # make conflicts likely
+    loaded = load(render(system))
+    model, scope = _inputs(loaded, None, None)
+    problem = build_problem(model, scope, tracked=True)
+    by_key = {st.key: st for st in problem.statements}
+    everything = set(by_key)
+    assume(decide_trial(problem, everything, Budget(None))[0] == "unsat")
+    reference = set(everything)
+    for st in deletion_order(by_key.values()):
+        if decide_trial(problem, reference - {st.key}, Budget(None))[0] == "unsat":
+            reference.discard(st.key)
+    core, witnesses, minimal = _minimise(problem, by_key, set(everything), Budget(None))
+    assert minimal and core == reference
+    assert set(witnesses) == core
+
+
 def _periods(result) -> dict:
     return {t: (c.kind, c.period, c.port, c.prescaler) for t, c in result.choices.items()}
 

@@ -24,6 +24,7 @@ and automotive periods (WATERS 2015 and ROS drivers), ``DEFAULT_PERIODS``.
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import Literal
@@ -73,6 +74,10 @@ class Candidate:
         return (self.kind != "timer", self.port or "", self.speed)
 
     def activation(self) -> Periodic | DataTriggered:
+        return self._activation
+
+    @functools.cached_property
+    def _activation(self) -> Periodic | DataTriggered:  # (built once: pruning asks for it a million times)
         if self.kind == "timer":
             return Periodic(self.period, self.phase)  # type: ignore[arg-type]  # a timer has its period
         return DataTriggered(self.port, self.members, self.mode, self.prescaler)  # type: ignore[arg-type]  # and a trigger its port
@@ -99,6 +104,11 @@ class Choice:
     excluded: tuple[tuple[str, ...], ...]
     hole: Hole | None = None  # the hole; None for a relaxable fixed binding
     slowest: int = field(default=0, compare=False)
+
+    @functools.cached_property
+    def activations(self) -> tuple[Periodic | DataTriggered, ...]:
+        """The activation of every candidate, in order."""
+        return tuple(c.activation() for c in self.candidates)
 
     def allowed(self, off: frozenset[str] = frozenset()) -> tuple[int, ...]:
         """Indices of the candidates no statement (other than those in ``off``) forbids."""

@@ -108,18 +108,27 @@ def deletion_order(statements: Iterable[Statement]) -> list[Statement]:
 
 def _minimise(problem: Problem, by_key: dict[str, Statement], core: set[str], budget: Budget
               ) -> tuple[set[str], dict[str, Config], bool]:
+    """Deletion in ``deletion_order``, in chunks: the next ``size`` statements are dropped together
+    when the rest is still unsatisfiable (``size`` doubles after each such drop); when it is not, the
+    chunk is halved, and a single statement that cannot go stays, with its witness. Unsatisfiability
+    is monotone (more statements in force never make a problem satisfiable), so dropping a chunk
+    drops exactly what one-by-one deletion in the same order would — the same core, in fewer trials."""
     witnesses: dict[str, Config] = {}
     minimal = True
-    for st in deletion_order(by_key[k] for k in core):
-        if st.key not in core:
-            continue
-        trial = core - {st.key}
+    order = [st.key for st in deletion_order(by_key[k] for k in core)]
+    pos, size = 0, 1
+    while pos < len(order):
+        chunk = order[pos:pos + size]
+        trial = core - set(chunk)
         status, witness = decide_trial(problem, trial, budget)
         if status == "unsat":
-            core = set(trial)
+            core, pos, size = set(trial), pos + len(chunk), size * 2
+        elif status == "sat" and len(chunk) > 1:
+            size = len(chunk) // 2
         elif status == "sat":
             assert witness is not None  # (a satisfiable trial comes with its witness)
-            witnesses[st.key] = witness
+            witnesses[chunk[0]] = witness
+            pos += 1
         else:
             minimal = False
             break

@@ -18,6 +18,7 @@ problem must keep every candidate a relaxed statement could allow.
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from fractions import Fraction
 from typing import TypeAlias
@@ -26,6 +27,7 @@ from collections.abc import Callable, Mapping
 from ..activations import Activation, DataTriggered
 from ..model import ChainModel, HopModel, SystemModel, TaskModel
 from ..timing.chains import same_core_reason
+from ..timing.rates import exact_sum
 from .candidates import Candidate, Choice, make_choice
 from .structure import activation_options, member_links
 
@@ -58,17 +60,25 @@ _FIXED_TRIGGER = _Trigger()
 def _hull(items: list[Bounds]) -> Bounds:
     if not items:
         return UNKNOWN
+    if len(items) == 1:
+        return items[0]
     # (the ranges are indexed once none is None)
     fl = None if any(b.fl is None for b in items) else (min(b.fl[0] for b in items), max(b.fl[1] for b in items))  # type: ignore[index]
     fh = None if any(b.fh is None for b in items) else (min(b.fh[0] for b in items), max(b.fh[1] for b in items))  # type: ignore[index]
     return Bounds(fl, fh, min(b.p_min for b in items))
 
 
+@functools.lru_cache(maxsize=4096)
+def _timed_bounds(gaps: tuple[Fraction, Fraction]) -> Bounds:
+    lo, hi = 1 / gaps[1], 1 / gaps[0]
+    return Bounds((lo, lo), (hi, hi), gaps[1])
+
+
 def activation_bounds(model: SystemModel, task: TaskModel, act: Activation, known: Mapping[str, Bounds]) -> Bounds:
     """The bounds of one activation of ``task`` given its writers' bounds (specs/timing.md §5.1)."""
-    if act.gaps is not None:  # released by time
-        lo, hi = 1 / act.gaps[1], 1 / act.gaps[0]
-        return Bounds((lo, lo), (hi, hi), act.gaps[1])
+    gaps = act.gaps
+    if gaps is not None:  # released by time
+        return _timed_bounds(gaps)
     if not isinstance(act, DataTriggered):
         return UNKNOWN
     members = [known.get(link.writer, UNKNOWN) for _, link in member_links(model, task, act) if link is not None]
@@ -250,10 +260,12 @@ class Pruner:
         for t in self.model.tasks:
             by_core.setdefault(t.core, []).append(t)
         for core in sorted(by_core):
-            floor = ZERO
+            demands = []
             for t in by_core[core]:
                 b = tasks.get(t.id, UNKNOWN)
-                floor += t.wcet * (b.fh[0] if b.fh is not None else ZERO)
+                if b.fh is not None:
+                    demands.append(t.wcet * b.fh[0])
+            floor = exact_sum(demands)
             if floor > 1:
                 self._blame(f"core `{core}` is above 100 % utilisation even at the slowest candidates",
                             ((), tuple(t.id for t in by_core[core])))
@@ -263,9 +275,10 @@ class Pruner:
                 if choice is None:
                     continue
                 own = tasks[t.id].fh[0] if tasks[t.id].fh is not None else ZERO  # type: ignore[index]
+                slack = 1 - floor  # (compared, never added to: its denominator is the core's whole lcm)
                 for i in range(len(choice.candidates)):
                     b = per.get((t.id, i), UNKNOWN)
-                    if b.fh is not None and floor - t.wcet * own + t.wcet * b.fh[0] > 1:
+                    if b.fh is not None and t.wcet * (b.fh[0] - own) > slack:
                         dead.add((t.id, i))
         return dead
 

@@ -29,7 +29,7 @@ def activation_options(task: TaskModel, choice: Choice | None) -> list[tuple[int
     """(candidate index or None, activation model) for every activation ``task`` may take."""
     if choice is None:
         return [(None, task.activation)]
-    return [(i, c.activation()) for i, c in enumerate(choice.candidates)]
+    return list(enumerate(choice.activations))
 
 
 def member_links(model: SystemModel, task: TaskModel, act: Activation) -> list[tuple[str, LinkModel | None]]:
