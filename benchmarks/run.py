@@ -84,6 +84,7 @@ from collections.abc import Callable
 
 import verify
 
+from . import startup
 from .generate import generate_chain_system, generate_pipeline_system, generate_system
 
 DEFAULT_OUT = Path(__file__).resolve().parent / "out" / "results.json"
@@ -578,6 +579,7 @@ _register_parsers()
 _register_analyze()
 _register_prove()
 _register_synth()
+startup.register(stage, BenchmarkError)
 
 
 # ------------------------------------------------------------------------------ measuring

@@ -261,9 +261,9 @@ def test_chunked_deletion_finds_the_core_of_one_by_one_deletion(system):
     everything = set(by_key)
     assume(decide_trial(problem, everything, Budget(None))[0] == "unsat")
     reference = set(everything)
-    for st in deletion_order(by_key.values()):
-        if decide_trial(problem, reference - {st.key}, Budget(None))[0] == "unsat":
-            reference.discard(st.key)
+    for statement in deletion_order(by_key.values()):
+        if decide_trial(problem, reference - {statement.key}, Budget(None))[0] == "unsat":
+            reference.discard(statement.key)
     core, witnesses, minimal = _minimise(problem, by_key, set(everything), Budget(None))
     assert minimal and core == reference
     assert set(witnesses) == core

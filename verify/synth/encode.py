@@ -569,6 +569,8 @@ class Encoding:
         """The least ``fh`` of ``task`` under ``act`` given lower bounds ``low`` of its writers' ``fh``."""
         if act.gaps is not None:
             return self.M // self.ticks(act.gaps[0])
+        if not isinstance(act, DataTriggered):
+            return 0
         rates = [low[link.writer] for _, link in member_links(self.model, task, act) if link is not None]
         if not rates:
             return 0
