@@ -53,6 +53,9 @@ LEXICAL_SHAPE = {  # (Lark writes white space into its patterns as the character
     "UNIT": r"(kHz|Hz|ms|us|ns|s)(?![A-Za-z0-9_])",
 }
 UNIT_WORDS = frozenset({"kHz", "Hz", "ms", "us", "ns", "s"})
+#: white space and comments; a word (also used by the error path, ``verify.larkparse``)
+_SKIP = re.compile(r"(?:\s+|//[^\n]*|/\*[\s\S]*?\*/)*")
+_WORD_RE = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 _WORD, _NUMBER, _PUNCT, _STRING = 1, 2, 3, 4
 
 
@@ -84,6 +87,8 @@ _APPEND = 4  # _rule -> _rule x: x appended to the list (left recursion of x* an
 _Picker = Callable[[list[Any]], Sequence[Any]]
 #: a rule: (mode, origin, size, picker, may have empty children)
 _Rule = tuple[int, str, int, _Picker, bool]
+#: what a rule is made of: (mode, origin, size, kept children as (index, spliced), may have empty children)
+_Shape = tuple[int, str, int, tuple[tuple[int, bool], ...], bool]
 
 
 def _picker(include: tuple[tuple[int, bool], ...], size: int, as_list: bool) -> _Picker:
@@ -118,20 +123,63 @@ def _picker(include: tuple[tuple[int, bool], ...], size: int, as_list: bool) -> 
     return pick
 
 
+def _lexeme(punct: Mapping[str, str]) -> re.Pattern[str]:
+    """The one regex of the lexer: ignored text, then a word, a number, a punctuation literal, a string
+    or the end."""
+    # a punctuation literal is matched longest first, as Lark's lexer sorts string literals
+    literals = "|".join(re.escape(p) for p in sorted(punct, key=lambda p: (-len(p), p)))
+    return re.compile(
+        # ignored text (WS, LINE_COMMENT, BLOCK_COMMENT): white space, then comments each followed by
+        # white space; possessive and atomic, so that a failing lexeme after it does not make the
+        # regex engine retry with a shorter line comment or a longer block comment
+        r"[ \t\f\r\n]*+(?>(?:(?://[^\n]*|/\*[\s\S]*?\*/)[ \t\f\r\n]*+)*)"
+        r"(?:([A-Za-z_][A-Za-z0-9_]*+)"  # 1: a word (NAME, keyword or UNIT)
+        r"|([0-9]++(?:\.[0-9]+)?+(?:/[0-9]+)?+)"  # 2: NUMBER
+        rf"|({literals})"  # 3: punctuation
+        r'|("[^"\n]*")'  # 4: STRING
+        r"|\Z)"  # nothing more: the end
+    )
+
+
 class FastParser:
     """Lark's LALR table for one grammar with the lexer above; ``parse`` is reentrant."""
 
-    def __init__(self, rows: list[dict[str, int]], start: int, end: int, rules: list[_Rule],
-                 names: list[str | None], keywords: dict[str, str], punct: dict[str, str],
-                 lexeme: re.Pattern[str]) -> None:
+    def __init__(self, rows: list[dict[str, int]], start: int, end: int, shapes: list[_Shape],
+                 names: list[str | None], keywords: dict[str, str], punct: dict[str, str]) -> None:
         self.rows = rows  # per state: {terminal or rule name: state (shift, goto) or ~rule (reduce)}
         self.start = start
         self.end = end
-        self.rules = rules  # per rule: (mode, origin, size, picker, may have empty children)
+        self.shapes = shapes  # per rule: (mode, origin, size, kept children, may have empty children)
+        self.rules: list[_Rule] = [(mode, origin, size, _picker(include, size, origin.startswith("_")), empty)
+                                   for mode, origin, size, include, empty in shapes]
         self.names = names  # per rule: its callback's name (its alias or its name)
         self.keywords = keywords  # word -> terminal
         self.punct = punct  # literal -> terminal
-        self.lexeme = lexeme
+        self.lexeme = _lexeme(punct)
+
+    def to_data(self) -> dict[str, Any]:
+        """Everything the parser is made of, as JSON data (``from_data`` makes it again, without Lark)."""
+        return {"rows": self.rows, "start": self.start, "end": self.end, "names": self.names,
+                "keywords": self.keywords, "punct": self.punct,
+                "shapes": [[mode, origin, size, [list(k) for k in include], empty]
+                           for mode, origin, size, include, empty in self.shapes]}
+
+    @classmethod
+    def from_data(cls, data: Mapping[str, Any]) -> FastParser:
+        """The parser ``to_data`` describes; ValueError when ``data`` is not such a description."""
+        try:
+            shapes: list[_Shape] = [(int(mode), str(origin), int(size), tuple((int(i), bool(e)) for i, e in include),
+                                     bool(empty)) for mode, origin, size, include, empty in data["shapes"]]
+            rows = [{str(k): int(v) for k, v in row.items()} for row in data["rows"]]
+            names = [None if n is None else str(n) for n in data["names"]]
+            parser = cls(rows, int(data["start"]), int(data["end"]), shapes, names,
+                         {str(k): str(v) for k, v in data["keywords"].items()},
+                         {str(k): str(v) for k, v in data["punct"].items()})
+        except (KeyError, TypeError, ValueError, AttributeError, re.error) as err:
+            raise ValueError(f"not a parser description: {err}") from None
+        if len(names) != len(shapes) or not all(0 <= s < len(rows) for s in (parser.start, parser.end)):
+            raise ValueError("not a parser description: inconsistent sizes")
+        return parser
 
     @classmethod
     def build(cls, lark: Lark) -> FastParser | None:
@@ -159,20 +207,6 @@ class FastParser:
                 return None
         if set(patterns) - set(keywords.values()) - set(punct.values()) != set(LEXICAL_SHAPE):
             return None
-        # a punctuation literal is matched longest first, as Lark's lexer sorts string literals
-        literals = "|".join(re.escape(p) for p in sorted(punct, key=lambda p: (-len(p), p)))
-        lexeme = re.compile(
-            # ignored text (WS, LINE_COMMENT, BLOCK_COMMENT): white space, then comments each followed by
-            # white space; possessive and atomic, so that a failing lexeme after it does not make the
-            # regex engine retry with a shorter line comment or a longer block comment
-            r"[ \t\f\r\n]*+(?>(?:(?://[^\n]*|/\*[\s\S]*?\*/)[ \t\f\r\n]*+)*)"
-            r"(?:([A-Za-z_][A-Za-z0-9_]*+)"  # 1: a word (NAME, keyword or UNIT)
-            r"|([0-9]++(?:\.[0-9]+)?+(?:/[0-9]+)?+)"  # 2: NUMBER
-            rf"|({literals})"  # 3: punctuation
-            r'|("[^"\n]*")'  # 4: STRING
-            r"|\Z)"  # nothing more: the end
-        )
-
         nullable: set[str] = set()  # the rules that can derive nothing
         while True:
             more = {str(r.origin.name) for r in lark.rules
@@ -181,7 +215,7 @@ class FastParser:
                 break
             nullable |= more
         rule_index: dict[Any, int] = {}
-        rules: list[_Rule] = []
+        shapes: list[_Shape] = []
         names: list[str | None] = []
         for rule in lark.rules:
             options = rule.options
@@ -203,8 +237,8 @@ class FastParser:
                 mode = _PASS
             elif mode == _INLINE and size == 2 and include == ((0, True), (1, False)) and not may_be_empty:
                 mode = _APPEND
-            rule_index[rule] = len(rules)
-            rules.append((mode, str(rule.origin.name), size, _picker(include, size, inline), may_be_empty))
+            rule_index[rule] = len(shapes)
+            shapes.append((mode, str(rule.origin.name), size, include, may_be_empty))
             names.append(None if mode in (_INLINE, _PASS, _APPEND) else str(rule.alias or options.template_source
                                                                               or rule.origin.name))
         if sorted(table.states) != list(range(len(table.states))):
@@ -216,8 +250,7 @@ class FastParser:
                 # plain str keys: Lark names rules with Tokens, whose __eq__ is a Python method
                 row[str(symbol)] = arg if action.name == "Shift" else ~rule_index[arg]
             rows.append(row)
-        return cls(rows, table.start_states["start"], table.end_states["start"], rules, names, keywords, punct,
-                   lexeme)
+        return cls(rows, table.start_states["start"], table.end_states["start"], shapes, names, keywords, punct)
 
     def callback_names(self) -> set[str]:
         """The rules whose values ``parse`` builds with a callback."""

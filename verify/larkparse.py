@@ -11,7 +11,6 @@ import copy
 import functools
 import os
 import re
-import stat
 from collections.abc import Iterable, Iterator
 from importlib import resources
 from typing import cast
@@ -22,7 +21,8 @@ from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedTok
 from lark.parsers.lalr_interactive_parser import InteractiveParser
 
 from .diagnostics import DiagnosticSink, Label
-from .lalr import TooManyTokens, position
+from .lalr import _SKIP, _WORD_RE, TooManyTokens, position
+from .parsecache import private_cache_dir
 from .source import Span
 
 MAX_EXPECTED_SHOWN = 4  # (E002: a longer list says little about a stray character)
@@ -97,10 +97,6 @@ def _parser() -> Lark:
                 postlex=_WholeWords(), cache=_cache_file())
 
 
-#: the directory (under ``$XDG_CACHE_HOME``, else ``~/.cache``) that holds the parser's tables
-CACHE_DIR = "verify-timing"
-
-
 def _cache_file() -> str | bool:
     """The file for Lark's cache of the parser tables, or False (no cache) when there is no directory
     that only this user can write: Lark stores the tables with ``pickle``, so a file that another user
@@ -108,16 +104,8 @@ def _cache_file() -> str | bool:
     Python's against the file's and builds the tables afresh on any difference."""
     import lark
 
-    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-    directory = os.path.join(base, CACHE_DIR)
-    try:
-        os.makedirs(directory, mode=0o700, exist_ok=True)
-        info = os.lstat(directory)
-    except (OSError, ValueError):
-        return False
-    getuid = getattr(os, "getuid", None)
-    mine = getuid is None or info.st_uid == getuid()
-    if not stat.S_ISDIR(info.st_mode) or not mine or info.st_mode & 0o022:
+    directory = private_cache_dir()
+    if directory is None:
         return False
     return os.path.join(directory, f"lark-{lark.__version__}-parser.cache")
 
@@ -191,8 +179,6 @@ def _punct_terminals() -> list[tuple[str, str]]:
                   key=lambda p: (-len(p[0]), p[0]))
 
 
-_SKIP = re.compile(r"(?:\s+|//[^\n]*|/\*[\s\S]*?\*/)*")
-_WORD_RE = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 _NUMBER_RE = re.compile(r"[0-9]+(\.[0-9]+)?(/[0-9]+)?")
 _EXPONENT_RE = re.compile(r"[eE][+-]?[0-9]+")
 _UNITS = ("kHz", "Hz", "ms", "us", "ns", "s")

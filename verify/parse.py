@@ -1,7 +1,8 @@
 """Parse one source text into the typed tree of ``verify.syntax``.
 
 Lark LALR with positions; the grammar is data in ``grammar/verify.lark``. Valid input goes through the
-fast path (``verify.lalr``); input it rejects goes through Lark, whose error path (``verify.larkparse``)
+fast path (``verify.lalr``, its tables kept by ``verify.parsecache``: Lark is not even imported); input
+it rejects goes through Lark, whose error path (``verify.larkparse``)
 recovers from syntax errors so that one run reports several of them, each in the language's own words.
 The transformer only builds nodes.
 """
@@ -11,20 +12,19 @@ import functools
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any, Literal, cast
-
-from lark import Token, Tree
-from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken
-from lark.tree import Meta
+from typing import TYPE_CHECKING, Any, Literal, cast
 
 from . import syntax as s
 from .construct import direct_constructor
 from .diagnostics import Diagnostic, DiagnosticSink
-from .lalr import FastParser, TooManyTokens, Unparsable, position
-from .larkparse import (_SKIP, _WORD_RE, _accepted, _glued_keyword, _keyword_terminals, _parser, _placeholder,
-                        _repair, _report_unexpected, _skip_unterminated_string, counting_tokens, token_span)
+from .lalr import _SKIP, _WORD_RE, FastParser, TooManyTokens, Unparsable, position
 from .limits import DEFAULT_LIMITS, Limits
 from .source import Span
+
+if TYPE_CHECKING:  # (Lark is imported where a text takes the error path: valid text never needs it)
+    from lark import Token, Tree
+    from lark.exceptions import UnexpectedInput
+    from lark.tree import Meta
 
 #: the words a model file can start with (``start: item*``, each item opened by one of them)
 _FIRST_WORDS = frozenset({"import", "component", "system"})
@@ -109,6 +109,12 @@ def _lark_parse(text: str, path: str, sink: DiagnosticSink,
     """(the tree, None) of a text without syntax errors; else (None, the partial tree): what error
     recovery made of the text, completed at its end where it stops early (best effort: None when even
     that fails). Syntax errors go to ``sink``."""
+    from lark import Token
+    from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken
+
+    from .larkparse import (_accepted, _glued_keyword, _keyword_terminals, _parser, _repair, _report_unexpected,
+                            _skip_unterminated_string, counting_tokens)
+
     errors: list[UnexpectedInput] = []
     last_line = [-1]
     completed: list[Tree[Token] | None] = [None]
@@ -175,6 +181,11 @@ _COMPLETION_ORDER = ("RBRACE", "NAME", "NUMBER", "UNIT", "STRING")
 def _complete_at_end(err: UnexpectedInput) -> Tree[Token] | None:
     """The tree the parser at ``err`` reaches when the text ends there, after inserting placeholder
     tokens (a missing ``}``, a name, a number ...) until the end is accepted; None if it cannot."""
+    from lark import Token
+    from lark.exceptions import UnexpectedInput, UnexpectedToken
+
+    from .larkparse import _placeholder
+
     parser = getattr(err, "interactive_parser", None)
     if parser is None:
         return None
@@ -210,7 +221,9 @@ def _partial(tree: Tree[Token] | None, path: str, limits: Limits) -> s.Module | 
 
 @functools.lru_cache(maxsize=1)
 def _fast_parser() -> FastParser | None:
-    return FastParser.build(_parser())
+    from .parsecache import load_fast_parser
+
+    return load_fast_parser()
 
 
 #: a 10,000-task file has about 400,000 spans and 150,000 names: they are built directly (``verify.construct``)
@@ -230,6 +243,8 @@ _Children = Sequence[Any]
 
 def parse_number(tok: Token, path: str, sink: DiagnosticSink, limits: Limits = DEFAULT_LIMITS) -> Fraction:
     """The exact value of a NUMBER token (E005 into ``sink`` and ``_NumberError`` if it has none)."""
+    from .larkparse import token_span
+
     return _exact(str(tok), lambda: token_span(path, tok), sink, limits.number_length)
 
 
@@ -312,6 +327,8 @@ class _Builder:
 
     def transform(self, tree: Tree[Token]) -> Any:
         """The value of a Lark tree (built with positions), bottom-up as Lark's Transformer does."""
+        from lark import Tree
+
         tokens = self.tokens()
         children = [self.transform(c) if isinstance(c, Tree) else tokens.get(c.type, _text)(c.value, *_positions(c))
                     for c in tree.children]
