@@ -1,7 +1,7 @@
 """Whole-process stages: what a user waits for when they type a command (issue 19's start-up goals).
 
 Each run starts a fresh interpreter as a user's shell does — the installed ``verify`` script when it
-is on ``PATH`` beside this interpreter, else ``python -m verify`` — and waits for it to exit:
+is beside this interpreter or on ``PATH``, else ``python -m verify`` — and waits for it to exit:
 interpreter start-up, imports, reading the file and the work itself. ``startup-python`` is the
 anchor every Python tool pays (``python -c pass``). Generated inputs are written once, at the first
 run, to ``benchmarks/out/``; the parser's table cache (``~/.cache/verify-timing``) is warm after the

@@ -332,3 +332,13 @@ def test_file_dash_reads_standard_input(monkeypatch, capsys):
     _stdin(monkeypatch, b"\xff\xfe")
     assert main(["check", "-"]) == 2
     assert "error[E003]: <stdin> is not UTF-8 text" in capsys.readouterr().err
+
+
+def test_python_m_verify_is_the_verify_command():
+    """``python -m verify`` runs the same command line (exit codes included) as the ``verify`` script."""
+    nav = EXAMPLES / "navigation" / "navigation.vfy"
+    done = subprocess.run([sys.executable, "-m", "verify", "check", str(nav)], capture_output=True, text=True)
+    assert done.returncode == 0 and "ok (5 components, 1 system)" in done.stdout
+    done = subprocess.run([sys.executable, "-m", "verify", "check", str(nav.parent / "missing.vfy")],
+                          capture_output=True, text=True)
+    assert done.returncode == 2 and "E004" in done.stderr
