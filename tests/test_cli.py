@@ -342,3 +342,6 @@ def test_python_m_verify_is_the_verify_command():
     done = subprocess.run([sys.executable, "-m", "verify", "check", str(nav.parent / "missing.vfy")],
                           capture_output=True, text=True)
     assert done.returncode == 2 and "E004" in done.stderr
+    # importing the module (as the fuzzing harness does with every module of the package) runs nothing
+    done = subprocess.run([sys.executable, "-c", "import verify.__main__"], capture_output=True, text=True)
+    assert (done.returncode, done.stdout, done.stderr) == (0, "", "")
