@@ -270,12 +270,12 @@ class Pruner:
                 self._blame(f"core `{core}` is above 100 % utilisation even at the slowest candidates",
                             ((), tuple(t.id for t in by_core[core])))
                 return dead
+            slack = 1 - floor  # (compared, never added to: its denominator is the core's whole lcm)
             for t in by_core[core]:
                 choice = self.choices.get(t.id)
                 if choice is None:
                     continue
                 own = tasks[t.id].fh[0] if tasks[t.id].fh is not None else ZERO  # type: ignore[index]
-                slack = 1 - floor  # (compared, never added to: its denominator is the core's whole lcm)
                 for i in range(len(choice.candidates)):
                     b = per.get((t.id, i), UNKNOWN)
                     if b.fh is not None and t.wcet * (b.fh[0] - own) > slack:
