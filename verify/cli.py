@@ -41,6 +41,8 @@ def _parser() -> argparse.ArgumentParser:
     for name in COMMANDS:
         module = command(name)
         p = sub.add_parser(name, help=module.HELP, description=getattr(module, "DESCRIPTION", module.HELP))
+        if hasattr(module, "add_leading_arguments"):  # (positionals before FILE: `gen TARGET FILE`)
+            module.add_leading_arguments(p)
         if module.MODEL:
             _model_options(p, module)
         module.add_arguments(p)

@@ -1,6 +1,6 @@
 """The registry of diagnostic codes: one place, stable numbers.
 
-E0xx syntax and files, E1xx names, E2xx structure, E3xx timing, E4xx synthesis, E5xx proof.
+E0xx syntax and files, E1xx names, E2xx structure, E3xx timing, E4xx synthesis, E5xx proof, E6xx code generation.
 Every code has a section ``## <code>`` in ``specs/diagnostics.md`` with a minimal failing example that
 ``tests/test_diagnostic_examples.py`` runs; ``verify explain CODE`` prints that section.
 """
@@ -80,6 +80,8 @@ _ALL = [
     Code("E501", "latency spec violated"),
     Code("E502", "spec undecided within the budget", Severity.WARNING),
     Code("E503", "deadline miss"),
+    # E6xx: code generation
+    Code("E601", "file in the way of generated code"),
 ]
 
 CODES: dict[str, Code] = {c.code: c for c in _ALL}

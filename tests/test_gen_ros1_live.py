@@ -1,0 +1,224 @@
+"""The generated ROS 1 nodes of the navigation example, built and run for real (issue: model to robot).
+
+The project is generated, its skeletons filled with jobs that burn each task's worst-case execution
+time, built with CMake against Debian's ROS 1, and run for about 10 s on a private roscore with a
+recorder beside it. From the recorded job records and messages the tests check the semantics the
+analysis assumed (every k-th arrival, timer rates), that no observed latency exceeds the bound
+`analyze` gives, and that the monitors' summaries agree with what was recorded. A variant whose spec
+is too tight makes the monitor report the violation; it changes only the parameter file, so the
+nodes are not rebuilt.
+"""
+from __future__ import annotations
+
+import json
+import re
+import shutil
+from fractions import Fraction
+from pathlib import Path
+
+import pytest
+
+import verify
+from verify.cli import main
+from verify.gen.ros1 import package_name
+from verify.timing import analyze
+
+from . import rosrun
+from .conftest import EXAMPLES
+
+pytestmark = pytest.mark.slow
+
+NAVIGATION = EXAMPLES / "navigation"
+RUN_SECONDS = 10
+#: what a connection through TCPROS on loopback takes, from the writer's completion to the reader's
+#: release (measured here: at most about 1 ms), for the connections the example gives no delay
+MIDDLEWARE_DELAY = "delay 50 us .. 2 ms"
+#: the share of each task's WCET its functional code burns: the rest is left for the glue's own work
+#: and the middleware's threads, which run above every task (specs/codegen.md, "Execution times")
+BURN_SHARE = Fraction(9, 10)
+
+
+def _deployed(model_dir: Path) -> None:
+    """The example as deployed on ROS 1: every connection without a delay gets the middleware's."""
+    path = model_dir / "navigation.vfy"
+    lines = path.read_text(encoding="utf-8").splitlines(keepends=True)
+    path.write_text("".join(re.sub(r"^(\s*connect [\w.]+ -> [\w.]+)(\s*)$", rf"\1 {MIDDLEWARE_DELAY}\2", line)
+                            for line in lines), encoding="utf-8")
+
+
+def _generate(model_dir: Path, project: Path) -> int:
+    return main(["gen", "ros1", str(model_dir / "navigation.vfy"), "-o", str(project)])
+
+
+def _model(model_dir: Path):
+    return verify.load(str(model_dir / "navigation.vfy")).system(None)
+
+
+@pytest.fixture(scope="module")
+def live(tmp_path_factory):
+    """The navigation example generated, built and run once: (model, project, records, summaries, build log)."""
+    rosrun.require_ros()
+    base = tmp_path_factory.mktemp("ros1")
+    model_dir = base / "model"
+    shutil.copytree(NAVIGATION, model_dir)
+    _deployed(model_dir)
+    project = base / "project"
+    assert _generate(model_dir, project) == 0
+    model = _model(model_dir)
+    wcet = {t.name: int(t.wcet * BURN_SHARE * 1_000_000_000) for t in model.tasks}
+    rosrun.burn_execution_times(project, wcet)
+    build_log = rosrun.build(project)
+    topics = [f"/{model.name}/{p.id.replace('.', '/')}" for p in model.ports if p.direction == "out"]
+    with rosrun.master(project, base / "ros") as env:
+        output = rosrun.run_system(env, package_name(model.name), f"{model.name}.launch", RUN_SECONDS,
+                                   base / "run.jsonl", topics, base / "summary")
+        assert "escalating" not in output, output  # every node stopped on SIGINT
+    records = rosrun.recorded(base / "run.jsonl")
+    summaries = [json.loads(p.read_text()) for p in (base / "summary").glob("*.json")]
+    summaries = {s["node"]: s for s in summaries}
+    return {"model": model, "model_dir": model_dir, "project": project, "records": records,
+            "summaries": summaries, "build_log": build_log, "base": base}
+
+
+def _by_task(jobs: list[dict], node: str, task: str) -> list[dict]:
+    return sorted((j for j in jobs if j["node"] == node and j["task"] == task), key=lambda j: j["seq"])
+
+
+def _node(model, task_id: str) -> tuple[str, str]:
+    instance, task = task_id.split(".")
+    return f"/{model.name}/{instance}", task
+
+
+def test_the_generated_code_compiles_without_warnings(live):
+    assert "warning" not in live["build_log"].lower(), live["build_log"]
+
+
+def test_every_task_ran_and_no_job_was_lost(live):
+    jobs = rosrun.jobs(live["records"])
+    model = live["model"]
+    for task in model.tasks:
+        node, name = _node(model, task.id)
+        ran = _by_task(jobs, node, name)
+        assert len(ran) >= 5, f"{task.id} ran {len(ran)} times"
+        assert [j["seq"] for j in ran] == list(range(1, len(ran) + 1)), f"{task.id}: a job record is missing"
+
+
+def test_a_prescaled_task_runs_on_exactly_every_kth_arrival(live):
+    model, jobs = live["model"], rosrun.jobs(live["records"])
+    checked = 0
+    for task in model.tasks:
+        if task.activation.kind != "trigger":
+            continue
+        k = task.activation.prescaler
+        ran = _by_task(jobs, *_node(model, task.id))
+        assert all(j["event"] % k == 0 for j in ran), task.id
+        gaps = {b["trigger_seq"] - a["trigger_seq"] for a, b in zip(ran, ran[1:])}
+        assert gaps == {k}, f"{task.id}: released after {gaps} arrivals, not every {k}"
+        checked += k > 1
+    assert checked, "the example has a prescaled trigger"
+
+
+def test_the_triggering_arrivals_are_the_writer_messages(live):
+    """The mapper's releases are every 10th scan message the laser published (recorded on the wire)."""
+    model = live["model"]
+    scans = [rosrun.decode_message(str(r["hex"])) for r in live["records"] if r["topic"] == f"/{model.name}/laser/scan"]
+    seqs = [m["seq"] for m in scans]
+    assert seqs == list(range(seqs[0], seqs[0] + len(seqs))), "scan messages were lost on the wire"
+    mapper = _by_task(rosrun.jobs(live["records"]), *_node(model, "mapper.CurMapTask"))
+    assert {j["trigger_seq"] for j in mapper} <= set(seqs)
+
+
+def test_messages_on_the_wire_carry_their_jobs_identity_and_stamps(live):
+    model, jobs = live["model"], rosrun.jobs(live["records"])
+    laser = {j["seq"]: j for j in _by_task(jobs, *_node(model, "laser.LaserTask"))}
+    messages = [rosrun.decode_message(str(r["hex"])) for r in live["records"]
+                if r["topic"] == f"/{model.name}/laser/scan"]
+    assert messages
+    for m in messages:
+        job = laser[m["seq"]]
+        assert (m["release"], m["start"], m["finish"]) == (job["release"], job["start"], job["finish"])
+        assert sorted(list(s) for s in m["stamps"]) == sorted(h[:4] for h in job["held"] if h[4] == "scan")
+
+
+def test_timers_run_at_their_rates_within_two_percent(live):
+    model, jobs = live["model"], rosrun.jobs(live["records"])
+    for task in model.tasks:
+        if task.activation.kind != "timer":
+            continue
+        releases = [j["release"] for j in _by_task(jobs, *_node(model, task.id))]
+        mean = Fraction(releases[-1] - releases[0], len(releases) - 1) / 1_000_000_000
+        assert abs(mean - task.activation.period) <= task.activation.period / 50, (task.id, float(mean))
+
+
+def chain_observations(model, jobs: list[dict], index: int) -> dict[str, list[int]]:
+    """Data ages and reaction times of chain ``index`` from the job records, by specs/timing.md §4:
+    data age f - s per job of the last task holding stamp s; reaction time, per read s_j of the first
+    task, f(first job of the last task holding a stamp >= s_j) - s_(j-1)."""
+    chain = model.chains[index]
+    n = len(chain.tasks)
+    first = _by_task(jobs, *_node(model, chain.tasks[0]))
+    ends = sorted(_by_task(jobs, *_node(model, chain.tasks[-1])), key=lambda j: j["finish"])
+    held = [(j["finish"], h[2], h[3]) for j in ends for h in j["held"] if h[0] == index and h[1] == n - 1]
+    starts = [j["start"] for j in first]
+    assert {origin for _, origin, _ in held} <= set(starts), "a stamp is not the read of a first-task job"
+    assert all(first == starts[0] for _, _, first in held), "a stamp does not carry the first task's first read"
+    reactions = []
+    for before, read in zip(starts, starts[1:]):
+        reached = next((f for f, origin, _ in held if origin >= read), None)
+        if reached is not None:
+            reactions.append(reached - before)
+    return {"data_age": [f - origin for f, origin, _ in held], "reaction_time": reactions}
+
+
+def test_no_observed_latency_exceeds_the_analysis_bound(live):
+    model, jobs = live["model"], rosrun.jobs(live["records"])
+    analysis = analyze(model)
+    for index, chain in enumerate(analysis.chains):
+        seen = chain_observations(model, jobs, index)
+        assert seen["data_age"] and seen["reaction_time"], chain.name
+        for metric, bound in (("reaction_time", chain.reaction_time.worst), ("data_age", chain.data_age_reduced.worst)):
+            worst = Fraction(max(seen[metric]), 1_000_000_000)
+            assert worst <= bound, f"chain {chain.name}: observed {metric} {float(worst)} s, bound {float(bound)} s"
+
+
+def _monitor(live, index: int) -> dict:
+    model = live["model"]
+    node, _ = _node(model, model.chains[index].tasks[-1])
+    return live["summaries"][node]["chains"][model.chains[index].name]
+
+
+def test_the_monitors_agree_with_the_recorded_messages(live):
+    model, jobs = live["model"], rosrun.jobs(live["records"])
+    for index, chain in enumerate(model.chains):
+        seen = chain_observations(model, jobs, index)
+        summary = _monitor(live, index)
+        ages = seen["data_age"]
+        assert summary["data_age"]["count"] == len(ages), chain.name
+        assert (summary["data_age"]["min_ns"], summary["data_age"]["max_ns"]) == (min(ages), max(ages))
+        assert summary["jitter"]["value_ns"] == max(ages) - min(ages)
+        # the monitor keeps one reaction per new origin: the largest of the reactions it stands for
+        assert summary["reaction_time"]["max_ns"] == max(seen["reaction_time"]), chain.name
+        assert summary["data_age"]["violations"] == summary["reaction_time"]["violations"] == 0
+
+
+def test_a_too_tight_spec_is_reported_by_the_monitor(live):
+    """The reactive chain held to 100 ms (it takes about 160 ms): regenerating changes only the
+    parameter file, and the monitor reports every violation on /verify/violations."""
+    model_dir, project, base = live["model_dir"], live["project"], live["base"]
+    before = {p: p.read_bytes() for p in project.rglob("*") if p.is_file() and "build" not in p.parts}
+    text = (model_dir / "navigation.vfy").read_text(encoding="utf-8")
+    (model_dir / "navigation.vfy").write_text(text.replace("reaction_time <= 250 ms", "reaction_time <= 100 ms"),
+                                              encoding="utf-8")
+    assert _generate(model_dir, project) == 0
+    after = {p: p.read_bytes() for p in project.rglob("*") if p.is_file() and "build" not in p.parts}
+    assert {p.relative_to(project).as_posix() for p in after if after[p] != before.get(p)} == {"config/parameters.yaml"}
+    model = _model(model_dir)
+    with rosrun.master(project, base / "ros-tight") as env:
+        rosrun.run_system(env, package_name(model.name), f"{model.name}.launch", 4, base / "tight.jsonl", [],
+                          base / "summary-tight")
+    records = rosrun.recorded(base / "tight.jsonl")
+    violations = [json.loads(str(r["data"])) for r in records if r["topic"] == "/verify/violations"]
+    reactive = [v for v in violations if v["chain"] == "reactive" and v["metric"] == "reaction_time"]
+    assert reactive and all(v["value_ns"] > v["bound_ns"] == 100_000_000 for v in reactive)
+    summary = json.loads((base / "summary-tight" / "Navigation_base.json").read_text())
+    assert summary["chains"]["reactive"]["reaction_time"]["violations"] == len(reactive)

@@ -1,0 +1,69 @@
+"""``verify gen TARGET FILE -o DIR``: the code that runs a configured system (specs/codegen.md).
+
+Glue files (the generator's) are rewritten when their text changes; user files (the functional code's
+skeletons, message types, build additions) are written once and never overwritten. A glue file that was
+edited by hand, or a file in the way that the generator did not write, is never replaced (E601) unless
+``--force`` is given; then nothing at all is written. A system with synthesis holes is refused (E218:
+run ``synth`` first).
+
+Exit codes: 0 generated; 2 invalid input, holes, or a file in the way; 70 internal error.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+
+from ..diagnostics import DiagnosticSink
+from ..outputs import Report, render
+from ..source import Span
+from .common import EXIT_INVALID, EXIT_OK, cannot_write, load_configured, show, show_diagnostics
+
+HELP = "generate the code that runs a configured system (ROS 1 nodes)"
+RESULT = "generation"
+MODEL, SYSTEM = True, True
+
+
+def add_leading_arguments(p: argparse.ArgumentParser) -> None:
+    from ..gen import TARGETS
+
+    p.add_argument("target", metavar="TARGET", choices=TARGETS,
+                   help=f"what to generate: {', '.join(TARGETS)} (specs/codegen.md)")
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("-o", "--output", metavar="DIR", required=True,
+                   help="the directory of the generated project (created if missing)")
+    p.add_argument("--force", action="store_true",
+                   help="replace glue files that were edited by hand or not written by verify gen "
+                        "(user files are never replaced)")
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..gen import target
+    from ..gen.tree import plan, write
+
+    loaded = load_configured(args, "gen")
+    if isinstance(loaded, int):
+        return loaded
+    result, system = loaded
+    directory = args.output
+    if os.path.exists(directory) and not os.path.isdir(directory):
+        return cannot_write(directory, NotADirectoryError(20, "not a directory"))
+    tree = target(args.target).generate(system)
+    outcome = plan(tree, directory, args.force)
+    if outcome.refused:
+        sink = DiagnosticSink()
+        for path, why in outcome.refused:
+            shown = os.path.join(directory, *path.split("/"))
+            sink.emit("E601", f"{shown} {why}; it is not replaced", Span(shown, 1, 1, 1, 1), why,
+                      help="move your changes into the user files (user/), or pass --force to replace it; "
+                           "nothing was written")
+        show_diagnostics(args, sink.items, result.sources)
+        return EXIT_INVALID
+    try:
+        write(tree, directory, outcome)
+    except OSError as err:
+        return cannot_write(getattr(err, "filename", None) or directory, err)
+    show(render(RESULT, args.format, Report(RESULT, args.file, (), result.sources, outcome, system,
+                                            {"directory": directory, "target": args.target})))
+    return EXIT_OK

@@ -1,0 +1,22 @@
+"""Code generators: from a configured system to the code that runs it (specs/codegen.md).
+
+A target is one module here (``ros1.py``) with ``TARGET`` (its name on the command line), ``HELP`` and
+``generate(model) -> Tree``: the files it makes, each owned either by the generator (``glue``: rewritten
+on every run, never to be edited) or by the user (``user``: written once, never overwritten: the
+generation gap). ``verify.gen.tree`` writes a tree into a directory without losing anything a user
+wrote. The registry is the set of target modules; a new target is one module.
+"""
+from __future__ import annotations
+
+import importlib
+from types import ModuleType
+
+#: the targets ``verify gen`` offers (ROS 2 is not among them: specs/codegen.md says why)
+TARGETS = ("ros1",)
+
+
+def target(name: str) -> ModuleType:
+    """The module of target ``name``."""
+    if name not in TARGETS:
+        raise KeyError(name)
+    return importlib.import_module(f"{__name__}.{name}")
