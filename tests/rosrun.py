@@ -106,10 +106,13 @@ def master(project: Path, home: Path) -> Iterator[dict[str, str]]:
 
 
 def run_system(env: dict[str, str], package: str, launch: str, seconds: float, record_to: Path,
-               topics: list[str], summary_dir: Path) -> str:
+               topics: list[str], summary_dir: Path, beside: list[list[str]] | None = None) -> str:
     """Record, launch the system with tracing for ``seconds``, stop it (SIGINT, as roslaunch is
-    stopped), stop the recorder; returns roslaunch's output."""
+    stopped), stop the recorder; returns roslaunch's output. ``beside``: commands that run meanwhile
+    (drivers of sporadic tasks)."""
     summary_dir.mkdir(exist_ok=True)
+    drivers = [subprocess.Popen(["timeout", str(int(seconds) + 120), *command], env=env, stdout=subprocess.DEVNULL,
+                                stderr=subprocess.DEVNULL, start_new_session=True) for command in beside or []]
     recorder = subprocess.Popen(["timeout", str(int(seconds) + 120), SYSTEM_PYTHON, str(RECORDER), str(record_to),
                                  *topics], env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
                                 start_new_session=True)
@@ -125,12 +128,13 @@ def run_system(env: dict[str, str], package: str, launch: str, seconds: float, r
         output, _ = system.communicate(timeout=seconds + 60)
         time.sleep(1.0)  # (the last messages reach the recorder)
     finally:
-        os.killpg(recorder.pid, signal.SIGINT)
-        try:
-            recorder.wait(timeout=15)
-        except subprocess.TimeoutExpired:
-            os.killpg(recorder.pid, signal.SIGKILL)
-            recorder.wait()
+        for process in (recorder, *drivers):
+            os.killpg(process.pid, signal.SIGINT)
+            try:
+                process.wait(timeout=15)
+            except subprocess.TimeoutExpired:
+                os.killpg(process.pid, signal.SIGKILL)
+                process.wait()
     return output
 
 

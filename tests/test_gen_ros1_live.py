@@ -222,3 +222,67 @@ def test_a_too_tight_spec_is_reported_by_the_monitor(live):
     assert reactive and all(v["value_ns"] > v["bound_ns"] == 100_000_000 for v in reactive)
     summary = json.loads((base / "summary-tight" / "Navigation_base.json").read_text())
     assert summary["chains"]["reactive"]["reaction_time"]["violations"] == len(reactive)
+
+
+# ------------------------------------------------------------------ compounds, a sporadic task, odd names
+
+
+@pytest.fixture(scope="module")
+def tricky(tmp_path_factory):
+    """tests/test_gen_ros1.py's system of reserved names, AND/OR compounds, a 30 Hz timer and a sporadic
+    task driven from outside (10 Hz on its release topic), built and run for a few seconds."""
+    from .test_gen_ros1 import _TRICKY
+
+    rosrun.require_ros()
+    base = tmp_path_factory.mktemp("tricky")
+    (base / "main.vfy").write_text(_TRICKY, encoding="utf-8")
+    project = base / "project"
+    assert main(["gen", "ros1", str(base / "main.vfy"), "-o", str(project)]) == 0
+    model = verify.load(str(base / "main.vfy")).system(None)
+    rosrun.burn_execution_times(project, {t.name: int(t.wcet * BURN_SHARE * 1_000_000_000) for t in model.tasks})
+    build_log = rosrun.build(project)
+    kick = ["rostopic", "pub", "-r", "10", "/Tricky/sink/release/Kick", "std_msgs/Empty"]
+    with rosrun.master(project, base / "ros") as env:
+        output = rosrun.run_system(env, package_name(model.name), "Tricky.launch", 5, base / "run.jsonl", [],
+                                   base / "summary", beside=[kick])
+        assert "escalating" not in output, output
+    return {"model": model, "jobs": rosrun.jobs(rosrun.recorded(base / "run.jsonl")), "build_log": build_log}
+
+
+def test_odd_names_compile_without_warnings(tricky):
+    assert "warning" not in tricky["build_log"].lower(), tricky["build_log"]
+
+
+def test_an_and_compound_fires_once_per_fresh_set_of_members(tricky):
+    """`both = x & y`, both fed by one writer: an event per write (its second arrival completes the set),
+    every 2nd releases; each job reads values newer than the job before it on both members."""
+    both = _by_task(tricky["jobs"], "/Tricky/sink", "Both")
+    assert len(both) >= 20
+    assert {b["trigger_seq"] - a["trigger_seq"] for a, b in zip(both, both[1:])} == {2}
+    assert all(b["reads"]["x"] > a["reads"]["x"] and b["reads"]["y"] > a["reads"]["y"] for a, b in zip(both, both[1:]))
+
+
+def test_an_or_compound_fires_on_every_arrival(tricky):
+    anyjobs = _by_task(tricky["jobs"], "/Tricky/sink", "Any")
+    writes = _by_task(tricky["jobs"], "/Tricky/n_src", "new")
+    events = [j["event"] for j in anyjobs]
+    assert events == list(range(events[0], events[0] + len(events)))  # no event without a job
+    assert abs(len(anyjobs) - 2 * len(writes)) <= 4  # two arrivals per write (x and y)
+
+
+def test_cooperative_tasks_of_a_node_never_overlap(tricky):
+    jobs = sorted((j for j in tricky["jobs"] if j["node"] == "/Tricky/sink" and j["task"] in ("Both", "Any")),
+                  key=lambda j: j["start"])
+    assert all(a["finish"] <= b["start"] for a, b in zip(jobs, jobs[1:]))
+
+
+def test_a_rational_period_is_kept_exactly(tricky):
+    releases = [j["release"] for j in _by_task(tricky["jobs"], "/Tricky/n_src", "new")]
+    mean = Fraction(releases[-1] - releases[0], len(releases) - 1) / 1_000_000_000
+    assert abs(mean - Fraction(1, 30)) <= Fraction(1, 30) / 50
+
+
+def test_a_sporadic_task_runs_when_released_from_outside(tricky):
+    kicks = _by_task(tricky["jobs"], "/Tricky/sink", "Kick")
+    assert len(kicks) >= 10
+    assert [j["event"] for j in kicks] == list(range(kicks[0]["event"], kicks[0]["event"] + len(kicks)))

@@ -375,11 +375,11 @@ def _parameters(model: SystemModel) -> str:
                 topics.append(f"      {p.name}: /{ros_name(model.name)}/{ros_name(src_inst)}/{src_port}")
         if topics:
             lines += ["    topics:  # the topic each connected in-port subscribes to", *topics]
-        readers = [f"      {p.name}: {len(model.links_from(f'{inst.name}.{p.name}'))}" for p in comp.out_ports
-                   if model.links_from(f"{inst.name}.{p.name}")]
-        if readers:
-            lines += ["    subscribers:  # the connections out of each out-port (the node starts once all are up)",
-                      *readers]
+        readers = {p.name: len({lk.target.split(".")[0] for lk in model.links_from(f"{inst.name}.{p.name}")})
+                   for p in comp.out_ports}
+        if any(readers.values()):
+            lines += ["    subscribers:  # the nodes each out-port is connected to (the node starts once all are)",
+                      *(f"      {port}: {n}" for port, n in readers.items() if n)]
         lines.append("    tasks:")
         for task_id in inst.tasks:
             task = model.task(task_id)

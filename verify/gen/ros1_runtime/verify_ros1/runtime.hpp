@@ -22,6 +22,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cerrno>
+#include <csignal>
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
@@ -102,6 +103,11 @@ struct Duration {
     return out.den > 0 && out.num >= 0;
   }
 };
+
+// Set by SIGINT and SIGTERM (request_stop, installed by main_of); Component::run then stops.
+inline std::atomic<bool> g_stop_requested{false};  // (constant-initialised: safe in a signal handler)
+inline bool stop_requested() { return g_stop_requested.load(); }
+inline void request_stop(int) { g_stop_requested.store(true); }
 
 // Pins the calling thread to `cpu` (if >= 0) and schedules it SCHED_FIFO at `os_priority` (if > 0).
 // Returns what could not be done ("" when everything was applied).
@@ -727,9 +733,6 @@ inline void Component::run_job(Task* task, const Release& release) {
 }
 
 inline void Component::after_job(const Job& job) {
-  if (ros::isShuttingDown()) {
-    return;  // (a job completing during shutdown is neither monitored nor traced: it could not be published)
-  }
   for (const auto& h : job.held) {
     if (!h.first.empty()) {
       continue;
@@ -833,7 +836,12 @@ inline int Component::run() {
       threads.emplace_back([this, raw] { timer_loop(raw); });
     }
   }
-  ros::waitForShutdown();
+  // A graceful stop (SIGINT or SIGTERM, as roslaunch stops nodes): no new release; the job that runs
+  // completes, and what it publishes (outputs, trace, violations) leaves while ROS is still up; then ROS
+  // shuts down. So every job the monitors count was published.
+  while (!stop_requested() && ros::ok()) {
+    ros::WallDuration(0.02).sleep();
+  }
   {
     std::lock_guard<std::mutex> lock(timers_mutex_);
     stopping_ = true;
@@ -845,6 +853,8 @@ inline int Component::run() {
   for (auto& thread : threads) {
     thread.join();
   }
+  ros::WallDuration(0.25).sleep();  // (roscpp's own threads send what is queued)
+  ros::shutdown();
   std::string directory;
   if (!monitors_.empty() && ros::param::get("/verify/summary_dir", directory) && !directory.empty()) {
     std::string node = name().substr(1);
@@ -867,10 +877,13 @@ inline int Component::run() {
 
 // The main of a generated node: ros::init, the user's component class, run.
 // roscpp's threads, started by ros::init and the first NodeHandle, inherit the middleware priority.
+// SIGINT and SIGTERM request the graceful stop of Component::run.
 template <class UserComponent>
 int main_of(int argc, char** argv, const char* default_name) {
   std::string problems = apply_scheduling(kMiddlewarePriority, -1);
-  ros::init(argc, argv, default_name);
+  ros::init(argc, argv, default_name, ros::init_options::NoSigintHandler);
+  std::signal(SIGINT, request_stop);
+  std::signal(SIGTERM, request_stop);
   if (!problems.empty()) {
     ROS_WARN("%s: middleware threads: %s", ros::this_node::getName().c_str(), problems.c_str());
   }

@@ -1,0 +1,207 @@
+"""`verify gen ros1` without ROS: what it writes, what it leaves alone, what it refuses.
+
+(tests/test_gen_ros1_live.py builds and runs the generated nodes.)
+"""
+from __future__ import annotations
+
+import shutil
+from fractions import Fraction
+from pathlib import Path
+
+import pytest
+
+import verify
+from verify.cli import main
+from verify.gen import ros1
+from verify.gen.tree import intact
+
+from .conftest import EXAMPLES
+
+NAVIGATION = EXAMPLES / "navigation"
+
+
+def _files(project: Path) -> dict[str, bytes]:
+    return {p.relative_to(project).as_posix(): p.read_bytes() for p in sorted(project.rglob("*")) if p.is_file()}
+
+
+@pytest.fixture
+def models(tmp_path):
+    directory = tmp_path / "model"
+    shutil.copytree(NAVIGATION, directory)
+    return directory
+
+
+def test_generates_the_project_layout(models, tmp_path, capsys):
+    project = tmp_path / "out"
+    assert main(["gen", "ros1", str(models / "navigation.vfy"), "-o", str(project)]) == 0
+    files = _files(project)
+    for path in ("CMakeLists.txt", "package.xml", "config/parameters.yaml", "launch/Navigation.launch",
+                 "include/verify_ros1/runtime.hpp", "include/verify_ros1/monitor.hpp",
+                 "include/verify_ros1/envelope.hpp", "glue/ObstacleAvoidance.hpp", "glue/ObstacleAvoidance_main.cpp",
+                 "user/ObstacleAvoidance.hpp", "user/types/LaserScan.hpp", "user/user.cmake"):
+        assert path in files, path
+    out = capsys.readouterr().out
+    assert out.startswith("generated ros1 code for system Navigation in ")
+    assert "written: 28" in out
+
+
+def test_output_is_deterministic(models):
+    model = verify.load(str(models / "navigation.vfy")).system(None)
+    assert ros1.generate(model) == ros1.generate(model)
+
+
+def test_every_glue_file_is_stamped_and_no_user_file_is(models):
+    model = verify.load(str(models / "navigation.vfy")).system(None)
+    for f in ros1.generate(model).files:
+        assert intact(f.text) == (f.owner == "glue"), f.path
+
+
+def test_a_hand_edited_skeleton_survives_regeneration_byte_for_byte(models, tmp_path, capsys):
+    project = tmp_path / "out"
+    assert main(["gen", "ros1", str(models / "navigation.vfy"), "-o", str(project)]) == 0
+    skeleton = project / "user" / "Mapper.hpp"
+    mine = skeleton.read_bytes().replace(b"override {\n  }", b"override {\n    map = scan.value();  // mine\n  }")
+    skeleton.write_bytes(mine)
+    before = _files(project)
+    capsys.readouterr()
+    assert main(["gen", "ros1", str(models / "navigation.vfy"), "-o", str(project)]) == 0
+    assert _files(project) == before
+    out = capsys.readouterr().out
+    assert "unchanged: 17" in out and "left alone (yours): 11" in out and "    user/Mapper.hpp" in out
+    assert "written" not in out
+
+
+def test_regenerating_after_synth_changes_only_the_parameter_file(models, tmp_path):
+    project = tmp_path / "out"
+    holes = str(models / "navigation-holes.vfy")
+    first, second = tmp_path / "first.vfy", tmp_path / "second.vfy"
+    assert main(["synth", holes, "-o", str(first)]) == 0
+    assert main(["synth", holes, "--objective", "latency:reactive", "-o", str(second)]) == 0
+    shutil.copy(models / "components.vfy", tmp_path / "components.vfy")
+    assert main(["gen", "ros1", str(first), "-o", str(project)]) == 0
+    before = _files(project)
+    assert main(["gen", "ros1", str(second), "-o", str(project)]) == 0
+    after = _files(project)
+    assert {p for p in after if after[p] != before.get(p)} == {"config/parameters.yaml"}
+    assert set(after) == set(before)
+
+
+def test_a_system_with_holes_is_refused_with_a_pointer_to_synth(models, tmp_path, capsys):
+    project = tmp_path / "out"
+    assert main(["gen", "ros1", str(models / "navigation-holes.vfy"), "-o", str(project)]) == 2
+    err = capsys.readouterr().err
+    assert "error[E218]: `gen` needs a configured system, but `oa.OATask` has a synthesis hole" in err
+    assert "navigation-holes.vfy:17:" in err and "run `synth`" in err
+    assert not project.exists()
+
+
+def test_an_edited_glue_file_is_never_replaced_and_nothing_is_written(models, tmp_path, capsys):
+    project = tmp_path / "out"
+    assert main(["gen", "ros1", str(models / "navigation.vfy"), "-o", str(project)]) == 0
+    glue = project / "glue" / "Laser.hpp"
+    edited = glue.read_text(encoding="utf-8") + "// my fix\n"
+    glue.write_text(edited, encoding="utf-8")
+    (project / "config" / "parameters.yaml").unlink()
+    capsys.readouterr()
+    assert main(["gen", "ros1", str(models / "navigation.vfy"), "-o", str(project)]) == 2
+    err = capsys.readouterr().err
+    assert "error[E601]:" in err and "glue/Laser.hpp was edited by hand; it is not replaced" in err
+    assert "--force" in err
+    assert glue.read_text(encoding="utf-8") == edited
+    assert not (project / "config" / "parameters.yaml").exists()  # nothing written
+    assert main(["gen", "ros1", str(models / "navigation.vfy"), "-o", str(project), "--force"]) == 0
+    assert intact(glue.read_text(encoding="utf-8"))
+
+
+def test_a_file_in_the_way_that_gen_did_not_write_is_refused(models, tmp_path, capsys):
+    project = tmp_path / "out"
+    project.mkdir()
+    (project / "CMakeLists.txt").write_text("project(mine)\n", encoding="utf-8")
+    assert main(["gen", "ros1", str(models / "navigation.vfy"), "-o", str(project), "--format", "json"]) == 2
+    out = capsys.readouterr().out
+    assert '"code": "E601"' in out and "was not written by verify gen" in out
+    assert (project / "CMakeLists.txt").read_text(encoding="utf-8") == "project(mine)\n"
+
+
+def test_an_output_that_is_a_file_is_refused(models, tmp_path, capsys):
+    target = tmp_path / "out"
+    target.write_text("x", encoding="utf-8")
+    assert main(["gen", "ros1", str(models / "navigation.vfy"), "-o", str(target)]) == 2
+    assert "E004" in capsys.readouterr().err
+
+
+def test_an_unknown_target_is_a_usage_error(models, capsys):
+    assert main(["gen", "ros2", str(models / "navigation.vfy"), "-o", "x"]) == 2
+    assert "invalid choice: 'ros2'" in capsys.readouterr().err
+
+
+def test_parameters_are_exact_and_complete(tmp_path, write):
+    path = write({"main.vfy": _TRICKY})
+    model = verify.load(path).system(None)
+    yaml = next(f.text for f in ros1.generate(model).files if f.path == "config/parameters.yaml")
+    assert 'period_ns: "100000000/3"  # 1/30 s' in yaml  # 30 Hz, exactly
+    assert "trigger: both" in yaml and "prescaler: 2" in yaml
+    assert 'min_ns: "50000000"' in yaml and 'max_ns: "200000000"' in yaml
+    assert "nodes: [n_src, sink]" in yaml
+
+
+def test_os_priorities_keep_the_models_order():
+    tasks = [7, 3, 3, 100, 0]
+    model = type("M", (), {"tasks": [type("T", (), {"priority": p})() for p in tasks]})()
+    got = ros1.os_priorities(model)  # type: ignore[arg-type]
+    levels = sorted(set(tasks))
+    values = [got[p] for p in levels]
+    assert values == sorted(set(values)) and values[0] == ros1.OS_PRIORITY_LOW and values[-1] == ros1.OS_PRIORITY_HIGH
+
+
+def test_names_cpp_or_ros_reserve_are_mangled():
+    assert ros1.cpp("class") == "class_" and ros1.cpp("_x") == "_x_" and ros1.cpp("a__b") == "a__b_"
+    assert ros1.cpp("scan") == "scan"
+    assert ros1.ros_name("_src") == "n_src"
+    assert ros1.package_name("NavigationHoles") == "navigation_holes_nodes"
+    assert ros1.nanoseconds(Fraction(1, 30)) == "100000000/3"
+
+
+#: names C++ and ROS reserve, a message type named like a component, a rational period, compounds, a
+#: sporadic task: the generated code must compile (tests/test_gen_ros1_live.py builds it)
+_TRICKY = """
+component Src {
+  out class : Sink
+  task new {
+    produces class
+    wcet 1 ms
+  }
+}
+component Sink {
+  in x : Sink
+  in y : Sink
+  in both = x & y
+  in any = x | y
+  task Both cooperative {
+    reads x
+    reads y
+    wcet 1 ms
+  }
+  task Any cooperative {
+    reads x optional
+    reads y
+    wcet 1 ms
+  }
+  task Kick {
+    wcet 100 us
+  }
+}
+system Tricky {
+  core cpu0
+  instance _src : Src on cpu0 {
+    task new priority 2 timer 30 Hz
+  }
+  instance sink : Sink on cpu0 {
+    task Both priority 1 trigger both every 2
+    task Any priority 1 trigger any
+    task Kick priority 3 sporadic 50 ms .. 200 ms
+  }
+  connect _src.class -> sink.x
+  connect _src.class -> sink.y
+}
+"""
