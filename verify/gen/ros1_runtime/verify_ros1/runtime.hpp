@@ -627,8 +627,8 @@ inline bool Component::read_task(Task& task) {
 
 inline bool Component::read_roles(Task& task) {
   XmlRpc::XmlRpcValue roles;
-  if (!pnh_.getParam("tasks/" + task.name + "/chains", roles)) {
-    return true;  // on no chain
+  if (!monitor_ || !pnh_.getParam("tasks/" + task.name + "/chains", roles)) {
+    return true;  // on no chain, or monitoring off: no stamps, no monitors
   }
   if (roles.getType() != XmlRpc::XmlRpcValue::TypeArray) {
     ROS_ERROR("%s: parameter tasks/%s/chains is not a list", name().c_str(), task.name.c_str());
@@ -643,7 +643,7 @@ inline bool Component::read_roles(Task& task) {
       role.from = static_cast<std::string>(r["from"]);
       role.to = static_cast<std::string>(r["to"]);
       task.roles.push_back(role);
-      if (role.to.empty() && monitor_) {
+      if (role.to.empty()) {
         auto ns = [&r](const char* field) -> Nanos {
           if (!r.hasMember(field)) {
             return 0;

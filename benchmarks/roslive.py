@@ -1,0 +1,166 @@
+"""Building and running generated ROS 1 projects: the tools, a private master, a recorder.
+
+Used by the live tests (tests/test_gen_ros1_live.py) and the monitor-cost benchmark (benchmarks/ros1.py).
+Everything runs under a timeout on loopback, with ROS's home and logs in a directory of the caller's.
+"""
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import re
+import shutil
+import signal
+import socket
+import struct
+import subprocess
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+SYSTEM_PYTHON = "/usr/bin/python3"  # Debian's, which has rospy
+RECORDER = ROOT / "tests" / "ros" / "record.py"
+
+
+def missing_tools() -> list[str]:
+    """What building and running needs and this machine lacks (scripts/install-debian-packages installs it)."""
+    missing = [tool for tool in ("cmake", "g++", "roscore", "roslaunch") if shutil.which(tool) is None]
+    if not os.path.exists("/usr/include/ros/ros.h"):
+        missing.append("libroscpp-dev")
+    if not os.path.exists(SYSTEM_PYTHON) or subprocess.run([SYSTEM_PYTHON, "-c", "import rospy"],
+                                                           capture_output=True).returncode != 0:
+        missing.append("python3-rospy")
+    return missing
+
+
+def build(project: Path) -> str:
+    """Configure and build the generated project with CMake; returns the compiler's output."""
+    build_dir = project / "build"
+    configure = subprocess.run(["cmake", "-S", str(project), "-B", str(build_dir)], capture_output=True,
+                               text=True, timeout=300)
+    if configure.returncode != 0:
+        raise RuntimeError(configure.stdout + configure.stderr)
+    made = subprocess.run(["cmake", "--build", str(build_dir), "-j2"], capture_output=True, text=True, timeout=900)
+    if made.returncode != 0:
+        raise RuntimeError(made.stdout + made.stderr)
+    return made.stdout + made.stderr
+
+
+def burn_execution_times(project: Path, wcet_ns: dict[str, int]) -> None:
+    """Fill every ``on_TASK`` of the user skeletons with a job that burns its execution time."""
+    for path in (project / "user").glob("*.hpp"):
+        text = path.read_text(encoding="utf-8")
+
+        def body(m: re.Match[str]) -> str:
+            burn = f"verify_ros1::burn_cpu({wcet_ns[m.group(1)]});"
+            return f"void on_{m.group(1)}({m.group(2)}) override {{\n    {burn}\n  }}"
+
+        path.write_text(re.sub(r"void on_(\w+)\((.*?)\) override \{\n  \}", body, text, flags=re.S), encoding="utf-8")
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def ros_environment(project: Path, home: Path, port: int) -> dict[str, str]:
+    env = dict(os.environ)
+    env.update(ROS_MASTER_URI=f"http://127.0.0.1:{port}", ROS_HOSTNAME="127.0.0.1", ROS_HOME=str(home),
+               ROS_LOG_DIR=str(home / "log"), ROS_PACKAGE_PATH=f"{project}:/usr/share", PYTHONPATH="")
+    return env
+
+
+@contextlib.contextmanager
+def master(project: Path, home: Path) -> Iterator[dict[str, str]]:
+    """A roscore on a free loopback port (under a timeout); yields the environment that reaches it."""
+    port = _free_port()
+    env = ros_environment(project, home, port)
+    core = subprocess.Popen(["timeout", "300", "roscore", "-p", str(port)], env=env, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL, start_new_session=True)
+    try:
+        deadline = time.monotonic() + 30
+        while time.monotonic() < deadline:
+            with socket.socket() as s:
+                if s.connect_ex(("127.0.0.1", port)) == 0:
+                    break
+            time.sleep(0.1)
+        else:
+            raise AssertionError("roscore did not come up")
+        time.sleep(1.0)  # (rosout registers)
+        yield env
+    finally:
+        os.killpg(core.pid, signal.SIGINT)
+        try:
+            core.wait(timeout=15)
+        except subprocess.TimeoutExpired:
+            os.killpg(core.pid, signal.SIGKILL)
+            core.wait()
+
+
+def run_system(env: dict[str, str], package: str, launch: str, seconds: float, record_to: Path,
+               topics: list[str], summary_dir: Path, beside: list[list[str]] | None = None,
+               launch_args: list[str] | None = None) -> str:
+    """Record, launch the system with tracing for ``seconds``, stop it (SIGINT, as roslaunch is
+    stopped), stop the recorder; returns roslaunch's output. ``beside``: commands that run meanwhile
+    (drivers of sporadic tasks)."""
+    summary_dir.mkdir(exist_ok=True)
+    drivers = [subprocess.Popen(["timeout", str(int(seconds) + 120), *command], env=env, stdout=subprocess.DEVNULL,
+                                stderr=subprocess.DEVNULL, start_new_session=True) for command in beside or []]
+    recorder = subprocess.Popen(["timeout", str(int(seconds) + 120), SYSTEM_PYTHON, str(RECORDER), str(record_to),
+                                 *topics], env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                                start_new_session=True)
+    try:
+        deadline = time.monotonic() + 30
+        while not (record_to.exists() and "ready" in record_to.read_text(encoding="utf-8")):
+            assert time.monotonic() < deadline and recorder.poll() is None, "the recorder did not start"
+            time.sleep(0.1)
+        time.sleep(0.5)
+        command = ["timeout", "-s", "INT", "-k", "30", str(seconds), "roslaunch", package, launch, "trace:=true",
+                   f"summary_dir:={summary_dir}", *(launch_args or [])]
+        system = subprocess.Popen(command, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                                  start_new_session=True)
+        output, _ = system.communicate(timeout=seconds + 60)
+        time.sleep(1.0)  # (the last messages reach the recorder)
+    finally:
+        for process in (recorder, *drivers):
+            os.killpg(process.pid, signal.SIGINT)
+            try:
+                process.wait(timeout=15)
+            except subprocess.TimeoutExpired:
+                os.killpg(process.pid, signal.SIGKILL)
+                process.wait()
+    return output
+
+
+# ------------------------------------------------------------------ what was recorded
+
+
+def recorded(path: Path) -> list[dict[str, object]]:
+    return [json.loads(line) for line in path.read_text(encoding="utf-8").splitlines() if line.strip()]
+
+
+def jobs(records: list[dict[str, object]]) -> list[dict[str, object]]:
+    return [json.loads(str(r["data"])) for r in records if r["topic"] == "/verify/jobs"]
+
+
+def decode_message(hex_bytes: str) -> dict[str, object]:
+    """A data message as recorded: an std_msgs/UInt8MultiArray (an empty layout) holding an envelope
+    (specs/codegen.md, "The envelope")."""
+    raw = bytes.fromhex(hex_bytes)
+    (dims,) = struct.unpack_from("<I", raw, 0)
+    assert dims == 0
+    (_offset, length) = struct.unpack_from("<II", raw, 4)
+    data = raw[12:12 + length]
+    assert len(data) == length and data[:4] == b"VFY1"
+    seq, release, start, finish, event, n = struct.unpack_from("<QqqqQH", data, 4)
+    at = 4 + 42
+    stamps = []
+    for _ in range(n):
+        stamps.append(struct.unpack_from("<HHqq", data, at))
+        at += 20
+    (m,) = struct.unpack_from("<I", data, at)
+    assert at + 4 + m == len(data)
+    return {"seq": seq, "release": release, "start": start, "finish": finish, "event": event,
+            "stamps": stamps, "payload": data[at + 4:]}
