@@ -52,13 +52,13 @@ class Section:
 
     @property
     def command(self) -> str:
-        for command in ("synth", "prove", "analyze"):
+        for command in ("synth", "prove", "analyze", "gen"):
             if any(b.command == command for b in self.blocks):
                 return command
         return "check"
 
 
-_FENCE = re.compile(r"^```(?:vfy|toml)([^\n]*)\n(.*?)^```[ \t]*$", re.MULTILINE | re.DOTALL)
+_FENCE = re.compile(r"^```(?:vfy|toml|text)([^\n]*)\n(.*?)^```[ \t]*$", re.MULTILINE | re.DOTALL)
 
 
 def _blocks(body: str) -> tuple[Block, ...]:
@@ -92,6 +92,7 @@ def _params() -> list:
 def run_example(section: Section, directory: Path):
     """Write the example into ``directory`` and run its command: (diagnostics, sources)."""
     for block in section.blocks:
+        (directory / block.name).parent.mkdir(parents=True, exist_ok=True)
         (directory / block.name).write_bytes(block.text.encode(block.encoding))
     limits = Limits()
     for block in section.blocks:
@@ -110,11 +111,25 @@ def run_example(section: Section, directory: Path):
     holes = require_configured(model, section.command)
     if holes:
         return holes, result.sources
+    if section.command == "gen":
+        diagnostics, files = gen_diagnostics(model, directory)
+        return diagnostics, {**result.sources, **files}
     if section.command == "prove":
         from verify.prove import prove
 
         return list(prove(model).diagnostics), result.sources
     return list(timing.diagnostics_of(timing.analyze(model))), result.sources
+
+
+def gen_diagnostics(model, directory: Path):
+    """What `verify gen ros1 main.vfy -o out` reports for the example (its other blocks may lie in out/):
+    (diagnostics, the files they show)."""
+    from verify.commands.gen import refusals
+    from verify.gen import ros1
+    from verify.gen.tree import plan
+
+    out = str(directory / "out")
+    return refusals(plan(ros1.generate(model), out, force=False), out)
 
 
 def synth_diagnostics(section: Section, result, model) -> list:

@@ -13,10 +13,15 @@ from __future__ import annotations
 import argparse
 import os
 
-from ..diagnostics import DiagnosticSink
+from typing import TYPE_CHECKING
+
+from ..diagnostics import Diagnostic, DiagnosticSink
 from ..outputs import Report, render
-from ..source import Span
+from ..source import SourceFile, Span
 from .common import EXIT_INVALID, EXIT_OK, cannot_write, load_configured, show, show_diagnostics
+
+if TYPE_CHECKING:
+    from ..gen.tree import Outcome
 
 HELP = "generate the code that runs a configured system (ROS 1 nodes)"
 RESULT = "generation"
@@ -38,6 +43,27 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "(user files are never replaced)")
 
 
+def refusals(outcome: Outcome, directory: str) -> tuple[list[Diagnostic], dict[str, SourceFile]]:
+    """E601 for every file in the way (a glue file edited by hand, or a file gen did not write), and the
+    files for their snippets (only their first line is shown)."""
+    sink = DiagnosticSink()
+    sources: dict[str, SourceFile] = {}
+    for path, why in outcome.refused:
+        shown = os.path.join(directory, *path.split("/"))
+        try:
+            with open(shown, encoding="utf-8", errors="replace", newline="") as fh:
+                first = fh.readline(200).rstrip("\r\n")
+        except OSError:
+            first = ""
+        span = Span(shown, 1, 1, 1, len(first) + 1)
+        if first:
+            sources[shown] = SourceFile(shown, first + "\n", only=span)
+        sink.emit("E601", f"{shown} {why}; it is not replaced", span, why,
+                  help="move your changes into the user files (user/), or pass --force to replace it; "
+                       "nothing was written")
+    return sink.items, sources
+
+
 def run(args: argparse.Namespace) -> int:
     from ..gen import target
     from ..gen.tree import plan, write
@@ -52,13 +78,8 @@ def run(args: argparse.Namespace) -> int:
     tree = target(args.target).generate(system)
     outcome = plan(tree, directory, args.force)
     if outcome.refused:
-        sink = DiagnosticSink()
-        for path, why in outcome.refused:
-            shown = os.path.join(directory, *path.split("/"))
-            sink.emit("E601", f"{shown} {why}; it is not replaced", Span(shown, 1, 1, 1, 1), why,
-                      help="move your changes into the user files (user/), or pass --force to replace it; "
-                           "nothing was written")
-        show_diagnostics(args, sink.items, result.sources)
+        diagnostics, files = refusals(outcome, directory)
+        show_diagnostics(args, diagnostics, {**result.sources, **files})
         return EXIT_INVALID
     try:
         write(tree, directory, outcome)
