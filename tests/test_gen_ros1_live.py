@@ -35,7 +35,7 @@ RUN_SECONDS = 10
 MIDDLEWARE_DELAY = "delay 50 us .. 2 ms"
 #: the share of each task's WCET its functional code burns: the rest is left for the glue's own work
 #: and the middleware's threads, which run above every task (specs/codegen.md, "Execution times")
-BURN_SHARE = Fraction(9, 10)
+BURN_SHARE = Fraction(4, 5)
 
 
 def _deployed(model_dir: Path) -> None:
