@@ -75,3 +75,15 @@ def test_the_quick_loop_is_documented_and_leaves_out_the_slow_tests():
               test_synth_properties.test_synth_agrees_with_brute_force]
     assert all(any(m.name == "slow" for m in getattr(f, "pytestmark", [])) for f in marked)
     assert all(m.name == "slow" for m in (test_fuzz.pytestmark, test_static.pytestmark))
+
+
+def test_every_data_file_of_a_package_is_installed():
+    """Files a package reads at run time (the C++ runtime `verify gen ros1` copies) are package data."""
+    from fnmatch import fnmatch
+
+    data = _config()["tool"]["setuptools"]["package-data"]
+    runtime = ROOT / "verify" / "gen" / "ros1_runtime"
+    files = [p.relative_to(ROOT / "verify" / "gen").as_posix() for p in runtime.rglob("*") if p.is_file()]
+    assert files
+    unlisted = [f for f in files if not any(fnmatch(f, pattern) for pattern in data.get("verify.gen", []))]
+    assert not unlisted, f"missing from [tool.setuptools.package-data] verify.gen: {unlisted}"
