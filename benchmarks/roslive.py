@@ -91,12 +91,19 @@ def master(project: Path, home: Path) -> Iterator[dict[str, str]]:
         time.sleep(1.0)  # (rosout registers)
         yield env
     finally:
-        os.killpg(core.pid, signal.SIGINT)
-        try:
-            core.wait(timeout=15)
-        except subprocess.TimeoutExpired:
-            os.killpg(core.pid, signal.SIGKILL)
-            core.wait()
+        _stop(core)
+
+
+def _stop(process: subprocess.Popen[str] | subprocess.Popen[bytes]) -> None:
+    """SIGINT to the process's group, SIGKILL after 15 s."""
+    if process.poll() is not None:
+        return
+    os.killpg(process.pid, signal.SIGINT)
+    try:
+        process.wait(timeout=15)
+    except subprocess.TimeoutExpired:
+        os.killpg(process.pid, signal.SIGKILL)
+        process.wait()
 
 
 def run_system(env: dict[str, str], package: str, launch: str, seconds: float, record_to: Path,
@@ -109,8 +116,9 @@ def run_system(env: dict[str, str], package: str, launch: str, seconds: float, r
     drivers = [subprocess.Popen(["timeout", str(int(seconds) + 120), *command], env=env, stdout=subprocess.DEVNULL,
                                 stderr=subprocess.DEVNULL, start_new_session=True) for command in beside or []]
     recorder = subprocess.Popen(["timeout", str(int(seconds) + 120), SYSTEM_PYTHON, str(RECORDER), str(record_to),
-                                 *topics], env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                                 *topics], env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                                 start_new_session=True)
+    system = None
     try:
         deadline = time.monotonic() + 30
         while not (record_to.exists() and "ready" in record_to.read_text(encoding="utf-8")):
@@ -124,13 +132,9 @@ def run_system(env: dict[str, str], package: str, launch: str, seconds: float, r
         output, _ = system.communicate(timeout=seconds + 60)
         time.sleep(1.0)  # (the last messages reach the recorder)
     finally:
-        for process in (recorder, *drivers):
-            os.killpg(process.pid, signal.SIGINT)
-            try:
-                process.wait(timeout=15)
-            except subprocess.TimeoutExpired:
-                os.killpg(process.pid, signal.SIGKILL)
-                process.wait()
+        for process in (system, recorder, *drivers):
+            if process is not None:
+                _stop(process)
     return output
 
 

@@ -228,3 +228,19 @@ def test_the_monitor_library_works_from_hand_written_code(tmp_path):
     assert built.returncode == 0, built.stderr
     ran = subprocess.run([str(binary)], capture_output=True, text=True, timeout=60)
     assert ran.returncode == 0, ran.stdout
+
+
+def test_a_fifo_or_junk_in_the_way_is_refused_without_blocking(models, tmp_path, capsys):
+    import os
+
+    project = tmp_path / "out"
+    (project / "config").mkdir(parents=True)
+    os.mkfifo(project / "config" / "parameters.yaml")
+    (project / "user").mkdir()
+    os.mkfifo(project / "user" / "Base.hpp")
+    (project / "CMakeLists.txt").write_bytes(b"\x1b[31mred\x00\xff\n")
+    assert main(["gen", "ros1", str(models / "navigation.vfy"), "-o", str(project)]) == 2
+    err = capsys.readouterr().err
+    assert "config/parameters.yaml was not written by verify gen" in err
+    assert "user/Base.hpp is not a regular file" in err
+    assert "\x1b" not in err and "\\x1b[31mred" in err

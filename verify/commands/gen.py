@@ -16,6 +16,7 @@ import os
 from typing import TYPE_CHECKING
 
 from ..diagnostics import Diagnostic, DiagnosticSink
+from ..loader import _shown as printable
 from ..outputs import Report, render
 from ..source import SourceFile, Span
 from .common import EXIT_INVALID, EXIT_OK, cannot_write, load_configured, show, show_diagnostics
@@ -49,12 +50,15 @@ def refusals(outcome: Outcome, directory: str) -> tuple[list[Diagnostic], dict[s
     sink = DiagnosticSink()
     sources: dict[str, SourceFile] = {}
     for path, why in outcome.refused:
-        shown = os.path.join(directory, *path.split("/"))
-        try:
-            with open(shown, encoding="utf-8", errors="replace", newline="") as fh:
-                first = fh.readline(200).rstrip("\r\n")
-        except OSError:
-            first = ""
+        full = os.path.join(directory, *path.split("/"))
+        shown = printable(full)
+        first = ""
+        if os.path.isfile(full):  # (never a FIFO or a device: opening one could block)
+            try:
+                with open(full, encoding="utf-8", errors="replace", newline="") as fh:
+                    first = printable(fh.readline(200).rstrip("\r\n"))
+            except OSError:
+                pass
         span = Span(shown, 1, 1, 1, len(first) + 1)
         if first:
             sources[shown] = SourceFile(shown, first + "\n", only=span)

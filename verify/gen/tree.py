@@ -12,6 +12,7 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import os
+import stat
 import tempfile
 from dataclasses import dataclass, field
 from typing import Literal
@@ -64,13 +65,21 @@ def intact(text: str) -> bool:
 
 
 def _existing(path: str) -> str | None:
+    """The text at ``path``: None if nothing is there, "" if it is not a readable text file (not ours:
+    a FIFO or a device is never opened, so reading cannot block)."""
+    try:
+        info = os.stat(path)
+    except FileNotFoundError:
+        return None
+    except OSError:
+        return ""
+    if not stat.S_ISREG(info.st_mode):
+        return ""
     try:
         with open(path, encoding="utf-8", newline="") as fh:
             return fh.read()
-    except FileNotFoundError:
-        return None
     except (OSError, UnicodeDecodeError):
-        return ""  # (unreadable or not text: not ours)
+        return ""
 
 
 def plan(tree: Tree, directory: str, force: bool) -> Outcome:
@@ -81,6 +90,8 @@ def plan(tree: Tree, directory: str, force: bool) -> Outcome:
         old = _existing(path)
         if os.path.isdir(path):
             outcome.refused.append((f.path, "is a directory"))
+        elif f.owner == "user" and os.path.lexists(path) and not os.path.isfile(path):
+            outcome.refused.append((f.path, "is not a regular file"))
         elif f.owner == "user":
             (outcome.kept if old is not None else outcome.written).append(f.path)
         elif old == f.text:
