@@ -23,8 +23,10 @@ def _model_options(p: argparse.ArgumentParser, module: ModuleType) -> None:
     from .outputs import formats
 
     p.add_argument("file", metavar="FILE", help="the .vfy file (imports are followed); `-`: standard input")
-    p.add_argument("--format", choices=formats(module.RESULT), default="text",
+    choices = getattr(module, "FORMATS", None) or formats(module.RESULT)
+    p.add_argument("--format", choices=choices, default=choices[0], action=_FormatGiven,
                    help=getattr(module, "FORMAT_HELP", "output format"))
+    p.set_defaults(format_given=False)
     p.add_argument("--root", metavar="DIR", help="the project root: imports must stay inside it (default: "
                    "the `root` of [tool.verify] in pyproject.toml, else the directory of FILE)")
     p.add_argument("--include", metavar="DIR", action="append", default=[],
@@ -48,6 +50,15 @@ def _parser() -> argparse.ArgumentParser:
         module.add_arguments(p)
         p.set_defaults(run=name)
     return parser
+
+
+class _FormatGiven(argparse.Action):
+    """``--format`` that records it was given (``graph -o OUT`` otherwise takes OUT's extension)."""
+
+    def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace, values: object,
+                 option_string: str | None = None) -> None:
+        setattr(namespace, self.dest, values)
+        namespace.format_given = True
 
 
 def _runner(name: str) -> Callable[[argparse.Namespace], int]:

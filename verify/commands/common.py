@@ -80,7 +80,11 @@ def to_stderr(text: str, end: str = "\n") -> None:
 def show_diagnostics(args: argparse.Namespace, diagnostics: Sequence[Diagnostic],
                      sources: Mapping[str, SourceFile]) -> None:
     """Diagnostics of a model that does not load, in the command's ``--format``."""
+    from ..outputs import formats
+
     fmt = getattr(args, "format", "text")
+    if fmt not in formats("diagnostics"):  # (a picture's format: diagnostics are text)
+        fmt = "text"
     show(render("diagnostics", fmt, Report("diagnostics", args.file, tuple(diagnostics), sources)))
 
 

@@ -1,0 +1,83 @@
+"""``verify graph FILE``: the system as a picture (specs/codegen.md is not involved: ``verify.diagram``).
+
+    verify graph FILE [--format dot|svg|png] [-o OUT [--force]]
+
+DOT (the default) needs nothing; SVG and PNG are laid out by Graphviz's ``dot``
+(``scripts/install-debian-packages`` installs it). A configured system is drawn with its analysis
+(rates, response times, chain bounds against their specs, over/undersampling); one with synthesis
+holes is drawn without it. Without ``--format``, ``-o OUT`` takes the format from OUT's extension
+(``.svg``, ``.png``; else DOT). Without ``-o`` the picture goes to standard output (PNG only to a file
+or a pipe, never to a terminal). ``-o`` writes a new file (``--force`` replaces one).
+
+Exit codes: 0 drawn; 2 invalid input or usage (Graphviz missing for SVG/PNG); 70 internal error.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+from typing import TYPE_CHECKING
+
+from .common import EXIT_INVALID, EXIT_OK, cannot_write, fail, load_or_fail, select
+
+if TYPE_CHECKING:
+    from ..model import SystemModel
+
+HELP = "draw the system: instances, ports, data flow, activations, chains (DOT, SVG, PNG)"
+RESULT = None
+FORMATS = ("dot", "svg", "png")
+FORMAT_HELP = "dot (Graphviz's text, the default), svg or png (laid out by Graphviz)"
+MODEL, SYSTEM = True, True
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("-o", "--output", metavar="OUT", help="write the picture to a new file OUT")
+    p.add_argument("--force", action="store_true", help="with -o: replace OUT if it exists")
+
+
+def picture(system: SystemModel, fmt: str) -> bytes:
+    """The picture of a loaded system in ``fmt`` (raises ``diagram.GraphvizMissing`` for SVG/PNG
+    without Graphviz, ``diagram.GraphvizFailed`` when it fails)."""
+    from .. import diagram
+    from ..timing import analyze
+
+    analysis = analyze(system) if system.is_configured else None
+    text = diagram.to_dot(system, analysis)
+    return text.encode("utf-8") if fmt == "dot" else diagram.layout(text, fmt)
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..diagram import GraphvizFailed, GraphvizMissing
+
+    if not args.format_given and args.output:  # (the format from OUT's extension: nav.svg, nav.png)
+        ext = os.path.splitext(args.output)[1].lower().lstrip(".")
+        args.format = ext if ext in FORMATS else "dot"
+
+    if args.format == "png" and not args.output and sys.stdout.isatty():
+        return fail("a PNG is not shown on a terminal: write it with `-o FILE.png` (or pipe it)")
+    if args.output and os.path.exists(args.output) and not args.force:
+        return fail(f"{args.output} exists; refusing to overwrite it (pass --force to replace it)")
+    loaded = load_or_fail(args)
+    if isinstance(loaded, int):
+        return loaded
+    system = select(loaded, args)
+    if system is None:
+        return EXIT_INVALID
+    try:
+        data = picture(system, args.format)
+    except GraphvizMissing:
+        return fail(f"--format {args.format} needs Graphviz's `dot`: install graphviz "
+                    "(scripts/install-debian-packages), or use --format dot")
+    except GraphvizFailed as err:
+        return fail(f"{err}; `--format dot` gives the text, for another Graphviz")
+    if not args.output:
+        sys.stdout.flush()
+        sys.stdout.buffer.write(data)
+        sys.stdout.buffer.flush()
+        return EXIT_OK
+    try:
+        with open(args.output, "wb") as fh:
+            fh.write(data)
+    except OSError as err:
+        return cannot_write(args.output, err)
+    return EXIT_OK
