@@ -105,5 +105,5 @@ def test_without_graphviz_the_page_holds_the_dot_text(tmp_path, monkeypatch):
     out = tmp_path / "r.html"
     assert main(["report", VIOLATED, "-o", str(out)]) == 0
     page = out.read_text(encoding="utf-8")
-    assert "Graphviz&#x27;s `dot` is not installed: the diagram&#x27;s DOT text instead" in page
+    assert "Graphviz&#x27;s `dot` is not installed: the diagram's DOT text instead" in page
     assert "digraph &quot;Navigation&quot;" in page and page.count("<svg") == 1
