@@ -17,7 +17,7 @@ from typing import cast
 
 from lark import Lark, Token
 from lark.lark import PostLex
-from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken
+from lark.exceptions import LarkError, UnexpectedCharacters, UnexpectedInput, UnexpectedToken
 from lark.parsers.lalr_interactive_parser import InteractiveParser
 
 from .diagnostics import DiagnosticSink, Label
@@ -599,3 +599,16 @@ def _end_span(path: str, text: str) -> Span:
     line = len(lines)
     col = len(lines[-1]) + 1
     return Span(path, line, col, line, col + 1)
+
+
+def expected_keywords(text: str) -> list[str]:
+    """The keywords the grammar accepts right after ``text`` (an editor's completion), sorted; every
+    keyword when ``text`` does not parse up to its end."""
+    try:
+        interactive = _parser().parse_interactive(text)
+        interactive.exhaust_lexer()
+        accepted = interactive.accepts()  # type: ignore[no-untyped-call]  # (Lark leaves it unannotated)
+    except (UnexpectedInput, LarkError):
+        return sorted(_keyword_terminals())
+    words = {terminal: word for word, terminal in _keyword_terminals().items()}
+    return sorted(words[t] for t in accepted if t in words)

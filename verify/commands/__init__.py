@@ -12,7 +12,7 @@ import importlib
 from types import ModuleType
 
 #: the commands, in the order ``verify --help`` lists them
-COMMANDS = ("check", "analyze", "synth", "prove", "gen", "graph", "report", "fmt", "explain")
+COMMANDS = ("check", "analyze", "synth", "prove", "gen", "graph", "report", "lsp", "fmt", "explain")
 
 
 def command(name: str) -> ModuleType:
