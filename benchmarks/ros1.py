@@ -92,7 +92,7 @@ def register(stage: Callable[..., Callable], error: type[Exception], unavailable
 
     missing = roslive.missing_tools()
     if missing:
-        unavailable["ros1-monitor"] = f"ROS 1 tools missing: {', '.join(missing)} (scripts/install-debian-packages)"
+        unavailable["ros1-monitor"] = f"ROS 1 tools missing: {', '.join(missing)} (scripts/install-tools)"
         return
     built: dict[str, Path] = {}
 

@@ -24,7 +24,7 @@ RECORDER = ROOT / "tests" / "ros" / "record.py"
 
 
 def missing_tools() -> list[str]:
-    """What building and running needs and this machine lacks (scripts/install-debian-packages installs it)."""
+    """What building and running needs and this machine lacks (scripts/install-tools installs it)."""
     missing = [tool for tool in ("cmake", "g++", "roscore", "roslaunch") if shutil.which(tool) is None]
     if not os.path.exists("/usr/include/ros/ros.h"):
         missing.append("libroscpp-dev")

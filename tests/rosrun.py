@@ -1,6 +1,6 @@
 """The live tests' access to ROS 1 (benchmarks/roslive.py), and what they do when it is missing: skip on
 a developer's machine, fail under CI (``CI=true``): the project's set-up
-(``scripts/install-debian-packages``) installs it.
+(``scripts/install-tools``) installs it.
 """
 from __future__ import annotations
 
@@ -20,7 +20,7 @@ def require_ros() -> None:
 
     missing = missing_tools()
     if missing:
-        message = f"ROS 1 tools missing: {', '.join(missing)} (scripts/install-debian-packages installs them)"
+        message = f"ROS 1 tools missing: {', '.join(missing)} (scripts/install-tools installs them)"
         if in_ci():
             pytest.fail(message)
         pytest.skip(message)

@@ -218,7 +218,7 @@ def test_the_monitor_library_works_from_hand_written_code(tmp_path):
     compiler = shutil.which("g++")
     if compiler is None:
         if in_ci():
-            pytest.fail("g++ missing (scripts/install-debian-packages installs it)")
+            pytest.fail("g++ missing (scripts/install-tools installs it)")
         pytest.skip("g++ missing")
     binary = tmp_path / "monitor_check"
     include = ROOT / "verify" / "gen" / "ros1_runtime"

@@ -22,7 +22,7 @@ def _dot(capsysbinary, *args: str) -> str:
 def require_graphviz() -> None:
     if shutil.which("dot") is None:
         if in_ci():
-            pytest.fail("Graphviz missing (scripts/install-debian-packages installs it)")
+            pytest.fail("Graphviz missing (scripts/install-tools installs it)")
         pytest.skip("Graphviz missing")
 
 

@@ -22,7 +22,7 @@ def chromium(tmp_path, page, *args: str) -> subprocess.CompletedProcess[str]:
     browser = shutil.which("chromium")
     if browser is None:
         if in_ci():
-            pytest.fail("Chromium missing (scripts/install-debian-packages installs it)")
+            pytest.fail("Chromium missing (scripts/install-tools installs it)")
         pytest.skip("Chromium missing")
     profile = tmp_path / f"profile-{len(list(tmp_path.glob('profile-*')))}"
     return subprocess.run(["timeout", "120", browser, *CHROMIUM_FLAGS, f"--user-data-dir={profile}", *args,

@@ -3,7 +3,7 @@
     verify graph FILE [--format dot|svg|png] [-o OUT [--force]]
 
 DOT (the default) needs nothing; SVG and PNG are laid out by Graphviz's ``dot``
-(``scripts/install-debian-packages`` installs it). A configured system is drawn with its analysis
+(``scripts/install-tools`` installs it). A configured system is drawn with its analysis
 (rates, response times, chain bounds against their specs, over/undersampling); one with synthesis
 holes is drawn without it. Without ``--format``, ``-o OUT`` takes the format from OUT's extension
 (``.svg``, ``.png``; else DOT). Without ``-o`` the picture goes to standard output (PNG only to a file
@@ -67,7 +67,7 @@ def run(args: argparse.Namespace) -> int:
         data = picture(system, args.format)
     except GraphvizMissing:
         return fail(f"--format {args.format} needs Graphviz's `dot`: install graphviz "
-                    "(scripts/install-debian-packages), or use --format dot")
+                    "(scripts/install-tools), or use --format dot")
     except GraphvizFailed as err:
         return fail(f"{err}; `--format dot` gives the text, for another Graphviz")
     if not args.output:
