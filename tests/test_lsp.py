@@ -242,3 +242,19 @@ async def test_a_cancelled_request_leaves_the_server_serving(client: LanguageCli
         await task
     symbols = await _outline(client, uri)
     assert symbols and symbols[0].name == "Navigation"
+
+
+async def test_an_internal_failure_of_a_request_is_logged_and_answered_empty():
+    """(No client needed: the wrapper every handler has.)"""
+    logged = []
+
+    class Server:
+        def log_error(self, what: str, trace: str) -> None:
+            logged.append((what, trace))
+
+    @lsp_server.guarded(list)
+    def broken(ls, params):
+        raise ZeroDivisionError("a bug")
+
+    assert broken(Server(), None) == []
+    assert logged[0][0] == "broken" and "ZeroDivisionError: a bug" in logged[0][1]
