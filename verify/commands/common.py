@@ -108,14 +108,22 @@ def select(result: api.LoadResult, args: argparse.Namespace) -> SystemModel | No
         return None
 
 
-def load_configured(args: argparse.Namespace, command: str) -> tuple[api.LoadResult, SystemModel] | int:
-    """The loaded model and its configured system (no synthesis holes), or EXIT_INVALID."""
+def load_system(args: argparse.Namespace) -> tuple[api.LoadResult, SystemModel] | int:
+    """The loaded model and the system ``--system`` names (or its only one), or EXIT_INVALID after
+    showing why there is none."""
     result = load_or_fail(args)
     if isinstance(result, int):
         return result
     system = select(result, args)
-    if system is None:
-        return EXIT_INVALID
+    return EXIT_INVALID if system is None else (result, system)
+
+
+def load_configured(args: argparse.Namespace, command: str) -> tuple[api.LoadResult, SystemModel] | int:
+    """The loaded model and its configured system (no synthesis holes), or EXIT_INVALID."""
+    loaded = load_system(args)
+    if isinstance(loaded, int):
+        return loaded
+    result, system = loaded
     from .. import api
 
     holes = api.require_configured(system, command)

@@ -18,7 +18,7 @@ import os
 import sys
 from typing import TYPE_CHECKING
 
-from .common import EXIT_INVALID, EXIT_OK, cannot_write, fail, load_or_fail, select
+from .common import EXIT_OK, cannot_write, fail, load_system
 
 if TYPE_CHECKING:
     from ..model import SystemModel
@@ -57,12 +57,10 @@ def run(args: argparse.Namespace) -> int:
         return fail("a PNG is not shown on a terminal: write it with `-o FILE.png` (or pipe it)")
     if args.output and os.path.exists(args.output) and not args.force:
         return fail(f"{args.output} exists; refusing to overwrite it (pass --force to replace it)")
-    loaded = load_or_fail(args)
+    loaded = load_system(args)
     if isinstance(loaded, int):
         return loaded
-    system = select(loaded, args)
-    if system is None:
-        return EXIT_INVALID
+    _, system = loaded
     try:
         data = picture(system, args.format)
     except GraphvizMissing:

@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING
 
 from ..diagnostics import Diagnostic, DiagnosticSink
 from ..outputs import Report, render
-from .common import (EXIT_INVALID, EXIT_OK, EXIT_UNDECIDED, EXIT_VIOLATED, load_or_fail, replace_file, select, show,
+from .common import (EXIT_INVALID, EXIT_OK, EXIT_UNDECIDED, EXIT_VIOLATED, load_system, replace_file, show,
                      show_diagnostics, to_stderr, write_new_file)
 
 if TYPE_CHECKING:
@@ -73,12 +73,10 @@ def run(args: argparse.Namespace) -> int:
     if args.file == "-" and args.in_place:
         to_stderr("error: --in-place needs a file, not standard input (`-`)")
         return EXIT_INVALID
-    loaded = load_or_fail(args)
-    if isinstance(loaded, int):
-        return loaded
-    system = select(loaded, args)
-    if system is None:
-        return EXIT_INVALID
+    found = load_system(args)
+    if isinstance(found, int):
+        return found
+    loaded, system = found
     try:
         goals = parse_objective(args.objective, system)
     except ObjectiveError as err:

@@ -23,6 +23,7 @@ from pygls.lsp.server import LanguageServer
 from pygls.uris import to_fs_path
 
 from .. import __version__, api
+from ..symbols import Symbol
 from ..timing import AnalysisResult
 from . import features as f
 
@@ -187,12 +188,17 @@ def did_close(ls: VerifyServer, params: lsp.DidCloseTextDocumentParams) -> None:
 # ------------------------------------------------------------------ requests
 
 
-def _symbol_at(doc: Document, position: lsp.Position) -> Any:
+def _symbol_at(ls: VerifyServer, uri: str, position: lsp.Position) -> tuple[Document, Symbol, api.LoadResult] | None:
+    """The open document, the symbol named at ``position`` in it and the load that resolved it."""
+    doc = ls.document(uri)
+    if doc is None:
+        return None
     result = doc.result if doc.result is not None and doc.result.resolution is not None else doc.good
     if result is None:
-        return None, None
+        return None
     line, column = f.from_position(position, f.Lines(doc.text))
-    return result.symbols.at(doc.path, line, column), result
+    symbol = result.symbols.at(doc.path, line, column)
+    return None if symbol is None else (doc, symbol, result)
 
 
 @server.feature(lsp.TEXT_DOCUMENT_DOCUMENT_SYMBOL)
@@ -211,12 +217,10 @@ def document_symbol(ls: VerifyServer, params: lsp.DocumentSymbolParams) -> list[
 @server.feature(lsp.TEXT_DOCUMENT_HOVER)
 @guarded(lambda: None)
 def hover(ls: VerifyServer, params: lsp.HoverParams) -> lsp.Hover | None:
-    doc = ls.document(params.text_document.uri)
-    if doc is None:
+    found = _symbol_at(ls, params.text_document.uri, params.position)
+    if found is None:
         return None
-    symbol, result = _symbol_at(doc, params.position)
-    if symbol is None:
-        return None
+    doc, symbol, result = found
     text = f.hover_text(symbol, result, doc.analyses)
     return lsp.Hover(lsp.MarkupContent(lsp.MarkupKind.Markdown, text))
 
@@ -224,13 +228,8 @@ def hover(ls: VerifyServer, params: lsp.HoverParams) -> lsp.Hover | None:
 @server.feature(lsp.TEXT_DOCUMENT_DEFINITION)
 @guarded(lambda: None)
 def definition(ls: VerifyServer, params: lsp.DefinitionParams) -> lsp.Location | None:
-    doc = ls.document(params.text_document.uri)
-    if doc is None:
-        return None
-    symbol, result = _symbol_at(doc, params.position)
-    if symbol is None:
-        return None
-    return _location(ls, symbol.span, result)
+    found = _symbol_at(ls, params.text_document.uri, params.position)
+    return None if found is None else _location(ls, found[1].span, found[2])
 
 
 def _location(ls: VerifyServer, span: Any, result: api.LoadResult) -> lsp.Location:
@@ -245,12 +244,10 @@ def _location(ls: VerifyServer, span: Any, result: api.LoadResult) -> lsp.Locati
 @server.feature(lsp.TEXT_DOCUMENT_REFERENCES)
 @guarded(list)
 def references(ls: VerifyServer, params: lsp.ReferenceParams) -> list[lsp.Location]:
-    doc = ls.document(params.text_document.uri)
-    if doc is None:
+    found = _symbol_at(ls, params.text_document.uri, params.position)
+    if found is None:
         return []
-    symbol, result = _symbol_at(doc, params.position)
-    if symbol is None:
-        return []
+    _, symbol, result = found
     spans = ([symbol.span] if params.context.include_declaration else []) + result.symbols.references_to(symbol)
     return [_location(ls, span, result) for span in spans]
 
@@ -258,12 +255,10 @@ def references(ls: VerifyServer, params: lsp.ReferenceParams) -> list[lsp.Locati
 @server.feature(lsp.TEXT_DOCUMENT_RENAME)
 @guarded(lambda: None)
 def rename(ls: VerifyServer, params: lsp.RenameParams) -> lsp.WorkspaceEdit | None:
-    doc = ls.document(params.text_document.uri)
-    if doc is None:
+    found = _symbol_at(ls, params.text_document.uri, params.position)
+    if found is None:
         return None
-    symbol, result = _symbol_at(doc, params.position)
-    if symbol is None:
-        return None
+    _, symbol, result = found
     return f.rename_edits(symbol, result, params.new_name, ls.uris(), ls.buffers())
 
 
