@@ -43,7 +43,7 @@ from ..construct import direct_constructor
 from ..model import SystemModel
 from ..timebase import TimeBase
 from .rates import EventModel
-from .rta import (MAX_JOBS, MAX_STEPS, ZERO, TaskResponse, bcrt, deadline_of, ratio)
+from .rta import (MAX_JOBS, MAX_STEPS, ZERO, TaskResponse, bcrt, causes, deadline_of, ratio)
 
 _new_response = direct_constructor(TaskResponse)  # (``verify.construct``: one per task)
 
@@ -87,12 +87,10 @@ class Static:
         self.siblings: list[tuple[int, ...]] = [
             tuple(m for m in cooperative[t.instance] if m != n) if t.kind == "cooperative" else ()
             for n, t in enumerate(tasks)]
-        #: the single-port data trigger of each task: (prescaler, d⁺ of the link, writer) or None
-        self.trigger: list[tuple[int, Fraction, int] | None] = []
-        for t in tasks:
-            act = t.activation
-            link = system.link_into(f"{t.instance}.{act.single_port}") if act.single_port is not None else None
-            self.trigger.append(None if link is None else (act.release_every, link.delay_max, self.index[link.writer]))
+        #: ``rta.causes`` of each task: (prescaler, events without a new arrival, d⁺ of the link, writer)
+        self.causes: list[list[tuple[int, int, Fraction, int]]] = [
+            [(k, extra, link.delay_max, self.index[link.writer]) for k, extra, link in causes(system, t)]
+            for t in tasks]
 
 
 @dataclass
@@ -221,7 +219,7 @@ class Round:
         if previous is None:  # what no round changes: execution times and the delays of trigger links
             dens.update(t.wcet.denominator for t in self.tasks)
             dens.update(t.bcet.denominator for t in self.tasks)
-            dens.update(trigger[1].denominator for trigger in self.static.trigger if trigger is not None)
+            dens.update(cause[2].denominator for causes in self.static.causes for cause in causes)
         for n, e in enumerate(self.events):
             if not kept[n]:
                 for v in (e.period_min, e.jitter_min, self.deadlines[n][0]):
@@ -259,37 +257,41 @@ class Round:
         load = 0 if events.silent else None if period is None else cost * (self.unit // period)
         return _Stream(n, cost, period, self.ticks(jitter), events.silent, load)
 
-    def _causal_paths(self) -> dict[int, list[tuple[int, int, int]]]:
-        """target -> [(source, Π prescalers, L⁺ in ticks)] for every ``rta.causal_path(source, target)``
-        that ``_capped_into`` can use: source on target's core at no lower priority. The prescalers
-        enter only as nested ceiling divisions (``rta.Interferer.causal_cap``), and ⌈⌈n/a⌉/b⌉ = ⌈n/(ab)⌉
-        for positive integers, so their product stands for them (a long trigger chain would
-        otherwise hold a tuple per pair of its tasks). L⁺ is a sum of delays and WCRT estimates, all
-        multiples of the tick (``_time_base``), so it is summed in ticks: a trigger chain of n tasks
-        has n²/2 paths, each sum a Python int addition rather than a ``Fraction`` one."""
-        capped: dict[int, list[tuple[int, int, int]]] = {}
+    def _causal_paths(self) -> dict[int, list[tuple[int, int, int, int]]]:
+        """target -> [(source, Π prescalers, L⁺ in ticks, E)] for every ``rta.causal_path(source,
+        target)`` that ``_capped_into`` can use (source on target's core at no lower priority): one
+        walk per source, in ``rta.causal_path``'s order (depth first, members in order, each task
+        entered once), keeps the first path to each task it meets. The nested ceilings of the cap,
+        ⌈(n + e)/k⌉ at each hop from the target, are one: ⌈(n + E)/Π⌉, where walking out from the
+        source each hop makes Π ← Π·k and E ← e + E·k (⌈(⌈x/a⌉ + e)/b⌉ = ⌈(x + e·a)/(ab)⌉ for
+        integers), so a path is a few integers, not a tuple per hop (a trigger chain of n tasks has
+        n²/2 paths). L⁺ is a sum of delays and WCRT estimates, all multiples of the tick
+        (``_time_base``), so it is summed in ticks."""
+        capped: dict[int, list[tuple[int, int, int, int]]] = {}
         tasks = self.tasks
-        trigger = [None if t is None else (t[0], self.ticks(t[1]), t[2]) for t in self.static.trigger]
+        causes = [[(k, extra, self.ticks(delay), writer) for k, extra, delay, writer in c]
+                  for c in self.static.causes]
         estimates = [self.ticks(e) for e in self.estimates]
-        seen = [-1] * len(tasks)  # seen[x] == source: x is on the path walked from source
         for source in range(len(tasks)):
-            product, latency, current = 1, 0, source
-            seen[source] = source
             core, priority = tasks[source].core, tasks[source].priority
-            while (step := trigger[current]) is not None:
-                k, delay, writer = step
-                product *= k
-                latency += delay
-                if seen[writer] == source:  # a trigger cycle: the path ends (the writer has its tuple)
-                    break
-                if tasks[writer].core == core and priority >= tasks[writer].priority:
-                    capped.setdefault(writer, []).append((source, product, latency))
+            visited, found = {source}, set()
+            stack = [(iter(causes[source]), 1, 0, 0)]  # (causes not yet tried, Π, E, L⁺) per task on the path
+            while stack:
+                pending, product, extras, latency = stack[-1]
+                step = next(pending, None)
+                if step is None:
+                    stack.pop()
+                    continue
+                k, extra, delay, writer = step
+                here = (product * k, extra + extras * k, latency + delay)
+                if writer not in found and tasks[writer].core == core and priority >= tasks[writer].priority:
+                    found.add(writer)
+                    capped.setdefault(writer, []).append((source, here[0], here[2], here[1]))
                 estimate = estimates[writer]
-                if estimate is None:
-                    break
-                seen[writer] = source
-                latency += estimate
-                current = writer
+                if writer in visited or estimate is None:
+                    continue
+                visited.add(writer)
+                stack.append((iter(causes[writer]), here[0], here[1], here[2] + estimate))
         return capped
 
     # ------------------------------------------------------------------ the sweep
@@ -467,8 +469,9 @@ class Round:
             if reach is not None:
                 base, period = reach
                 streams = self.streams
-                capped = [(streams[source], product, 0 if period is None else (latency + base) // period + 1)
-                          for source, product, latency in paths]
+                capped = [(streams[source], product,
+                           extra + (0 if period is None else (latency + base) // period + 1))
+                          for source, product, latency, extra in paths]
         return self._wcrt(n, core, with_self, blocking, capped, remote) + (blocking, remote)
 
     def _carry_reach(self, n: int) -> tuple[int, int | None] | None:
@@ -483,7 +486,7 @@ class Round:
         return (self.ticks(events.jitter_min) + self.ticks(response) - self.ticks(bcrt(self.tasks[n])),
                 self.ticks(events.period_min))
 
-    def _capped_into(self, n: int) -> list[tuple[int, int, int]]:
+    def _capped_into(self, n: int) -> list[tuple[int, int, int, int]]:
         """The causal paths into n from streams of hp(n) (``_causal_paths`` keeps no others)."""
         return self.capped.get(n, [])
 

@@ -22,7 +22,7 @@ from fractions import Fraction
 from collections.abc import Mapping
 
 from ..diagnostics import DiagnosticSink, Label, name_list
-from ..model import SystemModel, TaskModel
+from ..model import LinkModel, SystemModel, TaskModel
 from ..units import fmt_number, fmt_time
 from .rates import ActivationInfo, EventModel, ratio_sum
 
@@ -154,6 +154,7 @@ class Interferer:
     silent: bool = False
     prescalers: tuple[int, ...] | None = None  # causal path back to the analysed task, nearest last
     carry: int | None = None
+    extras: tuple[int, ...] = ()  # per hop of the path: events without a new arrival (AND: 1)
 
     def demand(self, window: Fraction, q: int = 1) -> Fraction | None:
         if self.silent or window <= 0:
@@ -167,12 +168,14 @@ class Interferer:
 
     def causal_cap(self, q: int) -> int | None:
         """At most ``q − 1 + carry`` completions of the analysed task can cause releases in its
-        q-job busy window; every prescaler on the way divides them (rounded up)."""
+        q-job busy window; at each hop an AND compound adds the one event a value waiting since
+        before the window may complete, and the prescaler divides (rounded up)."""
         if self.prescalers is None or self.carry is None:
             return None
         n = q - 1 + self.carry
-        for k in reversed(self.prescalers):
-            n = -((-n) // k)
+        extras = self.extras or (0,) * len(self.prescalers)
+        for k, extra in zip(reversed(self.prescalers), reversed(extras)):
+            n = -((-(n + extra)) // k)
         return n
 
     def rate(self) -> Fraction | None:
@@ -184,28 +187,51 @@ class Interferer:
 
 
 def causal_path(system: SystemModel, source: TaskModel, target: TaskModel,
-                estimates: Mapping[str, Fraction | None]) -> tuple[tuple[int, ...], Fraction] | None:
-    """If every activation of ``source`` is caused by a completion of ``target`` through single-port
-    data triggers: the prescalers on the way (from ``source`` back) and the largest latency L⁺ from
-    a completion of ``target`` to the release it causes (Σ d⁺ + Σ R of the tasks in between)."""
-    prescalers: list[int] = []
-    latency, seen, current = ZERO, {source.id}, source
-    while True:
-        act = current.activation
-        if act.single_port is None:
-            return None
-        link = system.link_into(f"{current.instance}.{act.single_port}")
-        if link is None:
-            return None
-        prescalers.append(act.release_every)
-        latency += link.delay_max
+                estimates: Mapping[str, Fraction | None]
+                ) -> tuple[tuple[int, ...], Fraction, tuple[int, ...]] | None:
+    """If every activation of ``source`` is caused by completions of ``target`` through data
+    triggers: the prescalers on the way (from ``source`` back), the largest latency L⁺ from a
+    completion of ``target`` to the release it causes (Σ d⁺ + Σ R of the tasks in between), and per
+    hop the events that need no new arrival (``causes``: 1 at an AND compound). None if there is no
+    such path. A single-port trigger is caused by its writer; an AND compound by the writer of any of
+    its members, whose arrivals it consumes one per event (specs/timing.md §6.2). The walk is depth
+    first, members in order, each task entered once; the first path found counts."""
+    visited = {source.id}
+    # (task, its causes not yet tried, prescalers, L⁺, extras): the path so far, innermost last
+    path: tuple[int, ...] = ()
+    stack = [(source, iter(causes(system, source)), path, ZERO, path)]
+    while stack:
+        current, pending, prescalers, latency, extras = stack[-1]
+        step = next(pending, None)
+        if step is None:
+            stack.pop()
+            continue
+        k, extra, link = step
+        here = (prescalers + (k,), latency + link.delay_max, extras + (extra,))
         if link.writer == target.id:
-            return tuple(prescalers), latency
-        if link.writer in seen or estimates.get(link.writer) is None:
-            return None
-        seen.add(link.writer)
-        latency += estimates[link.writer]  # type: ignore[operator]  # not None (checked above)
-        current = system.task(link.writer)
+            return here
+        estimate = estimates.get(link.writer)
+        if link.writer in visited or estimate is None:
+            continue
+        visited.add(link.writer)
+        writer = system.task(link.writer)
+        stack.append((writer, iter(causes(system, writer)), here[0], here[1] + estimate, here[2]))
+    return None
+
+
+def causes(system: SystemModel, task: TaskModel) -> list[tuple[int, int, LinkModel]]:
+    """The connections whose arrivals cause ``task``'s releases, each with (prescaler, events without
+    a new arrival on it, connection): the one of a single-port trigger (0), or one per connected member
+    of an AND compound (1: a fresh value may be waiting when the window opens). None for a timer, a
+    sporadic source or an OR compound (any member alone may cause an event)."""
+    act = task.activation
+    if act.single_port is not None:
+        link = system.link_into(f"{task.instance}.{act.single_port}")
+        return [] if link is None else [(act.release_every, 0, link)]
+    if act.all_members:
+        links = [system.link_into(f"{task.instance}.{m}") for m in act.trigger_members]
+        return [(act.release_every, 1, link) for link in links if link is not None]
+    return []
 
 
 def carry_in(task: TaskModel, events: EventModel, response: Fraction | None, latency: Fraction) -> int | None:
@@ -384,7 +410,7 @@ def causally_capped(system: SystemModel, task: TaskModel, j: TaskModel, events: 
     if path is None:
         return stream
     carry = carry_in(task, events[task.id], estimates.get(task.id), path[1])
-    return Interferer(stream.task, stream.cost, stream.period, stream.jitter, stream.silent, path[0], carry)
+    return Interferer(stream.task, stream.cost, stream.period, stream.jitter, stream.silent, path[0], carry, path[2])
 
 
 def cooperative_blocking(system: SystemModel, task: TaskModel, events: Mapping[str, EventModel],
