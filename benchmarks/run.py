@@ -84,7 +84,7 @@ from collections.abc import Callable
 
 import verify
 
-from . import lsp, ros1, startup
+from . import lsp, ros1, startup, tightness
 from .generate import generate_chain_system, generate_pipeline_system, generate_system
 
 DEFAULT_OUT = Path(__file__).resolve().parent / "out" / "results.json"
@@ -582,6 +582,7 @@ _register_synth()
 startup.register(stage, BenchmarkError)
 ros1.register(stage, BenchmarkError, UNAVAILABLE)
 lsp.register(stage, BenchmarkError, UNAVAILABLE)
+tightness.register(stage, BenchmarkError, UNAVAILABLE)
 
 
 # ------------------------------------------------------------------------------ measuring

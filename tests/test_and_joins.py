@@ -47,6 +47,9 @@ system S {{
   connect t2.o -> t3.i
   connect t3.o -> t4.i
   connect t5.o -> t6.i
+  chain join: t0.o -> t2.o -> t3.o -> t4.o
+  chain other: t1.o -> t2.o -> t3.o
+  chain sporadic: t5.o -> t6.T
 }}
 """
 
