@@ -17,7 +17,7 @@ iterations (so with the same step budget, the same failures and the same message
   priority (subtracted), the streams with a causal cap on i's busy window (§6.2: what a stream demands
   beyond its cap, ``max(0, count − cap)·C``, subtracted; one term per causal path, its cap computed in
   the same loop), the remote siblings' token streams (§6.3). The causal paths and their carry-ins
-  are sums and quotients of ticks too (``_causal_paths``, ``_carry_reach``): a trigger pipeline of n
+  are sums and quotients of ticks too (``_causal_paths``, ``_carry``): a trigger pipeline of n
   tasks at one priority has n²/2 of them.
 * **Hold time = first busy window.** ``hold_time`` is the busy window of one job without blocking; for a
   task with no causal caps, no blocking and no remote siblings that is the ``q = 1`` step of its WCRT,
@@ -465,26 +465,28 @@ class Round:
         capped: list[_Capped] = []
         paths = self._capped_into(n)
         if paths:
-            reach = self._carry_reach(n)
-            if reach is not None:
-                base, period = reach
+            carry = self._carry(n)
+            if carry is not None:
                 streams = self.streams
-                capped = [(streams[source], product,
-                           extra + (0 if period is None else (latency + base) // period + 1))
+                capped = [(streams[source], product, extra + carry(latency))
                           for source, product, latency, extra in paths]
         return self._wcrt(n, core, with_self, blocking, capped, remote) + (blocking, remote)
 
-    def _carry_reach(self, n: int) -> tuple[int, int | None] | None:
-        """``rta.carry_in`` of task n in ticks, less the path latency: (J⁻ + R − B, P⁻), so that the
-        carry-in over a path of latency L⁺ is ``(L⁺ + J⁻ + R − B) // P⁻ + 1``; (0, None) for a silent
-        task (carry-in 0); None where ``carry_in`` is None (no cap)."""
+    def _carry(self, n: int) -> Callable[[int], int] | None:
+        """``rta.carry_in`` of task n as a function of the path latency L⁺ in ticks: the least of
+        ``(L⁺ + J⁻ + R − B) // P⁻ + 1`` (where the event model and R are bounded) and ``L⁺ // C⁻ + 1``
+        (where C⁻ > 0); 0 for a silent task; None where both are unknown (no cap)."""
         events, response = self.events[n], self.estimates[n]
         if events.silent:
-            return 0, None
+            return lambda latency: 0
+        gap = self.ticks(self.tasks[n].bcet)
         if events.period_min is None or events.jitter_min is None or response is None:
-            return None
-        return (self.ticks(events.jitter_min) + self.ticks(response) - self.ticks(bcrt(self.tasks[n])),
-                self.ticks(events.period_min))
+            return None if gap == 0 else (lambda latency: latency // gap + 1)
+        base = self.ticks(events.jitter_min) + self.ticks(response) - self.ticks(bcrt(self.tasks[n]))
+        period = self.ticks(events.period_min)
+        if gap == 0:
+            return lambda latency: (latency + base) // period + 1
+        return lambda latency: min((latency + base) // period, latency // gap) + 1
 
     def _capped_into(self, n: int) -> list[tuple[int, int, int, int]]:
         """The causal paths into n from streams of hp(n) (``_causal_paths`` keeps no others)."""

@@ -235,13 +235,17 @@ def causes(system: SystemModel, task: TaskModel) -> list[tuple[int, int, LinkMod
 
 
 def carry_in(task: TaskModel, events: EventModel, response: Fraction | None, latency: Fraction) -> int | None:
-    """Completions of ``task`` in a closed interval of length L⁺ before its busy window:
-    ``⌊(L⁺ + J⁻ + R − B)/P⁻⌋ + 1`` (completions lie in ``[r + B, r + R]``)."""
+    """Completions of ``task`` in a closed interval of length L⁺ before its busy window, the least of
+    ``⌊(L⁺ + J⁻ + R − B)/P⁻⌋ + 1`` (completions lie in ``[r + B, r + R]``) and, where ``C⁻ > 0``,
+    ``⌊L⁺/C⁻⌋ + 1`` (the jobs of a task run one after another, each for at least C⁻, so its
+    completions are at least C⁻ apart); None when neither is known."""
     if events.silent:
         return 0
+    by_gap = int(latency // task.bcet) + 1 if task.bcet > 0 else None
     if events.period_min is None or events.jitter_min is None or response is None:
-        return None
-    return int((latency + events.jitter_min + response - bcrt(task)) // events.period_min) + 1
+        return by_gap
+    by_rate = int((latency + events.jitter_min + response - bcrt(task)) // events.period_min) + 1
+    return by_rate if by_gap is None else min(by_rate, by_gap)
 
 
 def siblings(system: SystemModel, task: TaskModel) -> tuple[TaskModel, ...]:
