@@ -5,9 +5,10 @@ sources, data triggers with prescalers, AND and OR compounds, cooperative siblin
 equal and distinct priorities, connection delays, deadlines, user bounds
 (``tests/test_bounds_vs_simulation.systems``, derandomized: the same systems on every run) — and the
 AND-join shape of ``tests/test_and_joins`` (one core, an AND of two equal-period timers, a trigger
-chain behind it with a prescaler, a sporadic source, priorities from a small set, seeded). Each is
-analysed and simulated (four scenarios of 2 s, one of them every job at its wcet and every message at
-its largest delay). It reports, per latency metric: the share of chains with a bound, and over the
+chain behind it with a prescaler, a sporadic source, priorities from a small set, seeded), and the
+Autoware reference-system example (examples/autoware-reference; N/2 scenarios). Each is analysed and
+simulated (four scenarios of 2 s, one of them every job at its wcet and every message at its largest
+delay). It reports, per latency metric: the share of chains with a bound, and over the
 bounded ones the mean and the minimum of simulated worst / bound; and the share of systems with E312
 (some task without a response-time bound within its deadline: the drawn systems have explicit
 deadlines, which a run may really miss, besides the implicit ones, A⁺).
@@ -18,8 +19,10 @@ import random
 import statistics
 from collections.abc import Callable
 from fractions import Fraction
+from pathlib import Path
 
 METRICS = ("reaction_time", "data_age")
+AUTOWARE = Path(__file__).resolve().parent.parent / "examples" / "autoware-reference" / "autoware.vfy"
 
 
 def _random_systems(count: int) -> list[str]:
@@ -51,8 +54,13 @@ def _and_systems(count: int) -> list[str]:
     return texts
 
 
-def measure(texts: list[str]) -> dict[str, object]:
+def _models(texts: list[str]) -> list[object]:
     import verify
+
+    return [verify.load_text(text, "tight.vfy").system() for text in texts]
+
+
+def measure(models: list, runs: int = 4) -> dict[str, object]:
     from verify.sim import Scenario, chain_latencies, random_scenario, simulate
     from verify.timing import analyze, diagnostics_of
 
@@ -60,13 +68,12 @@ def measure(texts: list[str]) -> dict[str, object]:
     chains = {m: 0 for m in METRICS}
     bounded = {m: 0 for m in METRICS}
     e312 = 0
-    for n, text in enumerate(texts):
-        model = verify.load_text(text, "tight.vfy").system()
+    for n, model in enumerate(models):
         analysis = analyze(model)
         if any(d.code == "E312" for d in diagnostics_of(analysis)):
             e312 += 1
         worst: dict[tuple[str, str], Fraction] = {}
-        for run in range(4):
+        for run in range(runs):
             scenario = random_scenario(model, random.Random(f"{n}/{run}"), Fraction(2))
             if run == 0:  # every job at its wcet, every message at its largest delay
                 delays = {(lk.source, lk.target): lk.delay_max for lk in model.links}
@@ -89,7 +96,7 @@ def measure(texts: list[str]) -> dict[str, object]:
                     bounded[metric] += 1
                     if bound > 0 and (chain.name, metric) in worst:
                         ratios[metric].append(worst[(chain.name, metric)] / bound)
-    result: dict[str, object] = {"systems": len(texts), "with E312": f"{e312} ({e312 / len(texts):.0%})"}
+    result: dict[str, object] = {"systems": len(models), "with E312": f"{e312} ({e312 / len(models):.0%})"}
     for metric in METRICS:
         r = ratios[metric]
         result[metric] = (f"bounded {bounded[metric]}/{chains[metric]}, simulated/bound mean "
@@ -114,7 +121,13 @@ def register(stage: Callable[..., Callable], error: type[Exception], unavailable
            "systems of each kind)", sizes=(60,), quick_sizes=(4,), generator=generated)
     def tightness(inst) -> dict:
         count = inst.n_tasks
-        random_result = measure(_random_systems(count))
-        and_result = measure(_and_systems(count))
+        import verify
+
+        random_result = measure(_models(_random_systems(count)))
+        and_result = measure(_models(_and_systems(count)))
+        autoware = verify.load(str(AUTOWARE)).system()
+        autoware_result = measure([autoware], runs=max(4, count // 2))
+        del autoware_result["systems"]
         return {**{f"random {k}": v for k, v in random_result.items()},
-                **{f"AND {k}": v for k, v in and_result.items()}}
+                **{f"AND {k}": v for k, v in and_result.items()},
+                **{f"Autoware {k}": v for k, v in autoware_result.items()}}
