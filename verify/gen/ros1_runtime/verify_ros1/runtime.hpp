@@ -23,6 +23,7 @@
 #include <atomic>
 #include <cerrno>
 #include <csignal>
+#include <exception>
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
@@ -725,7 +726,13 @@ inline void Component::run_job(Task* task, const Release& release) {
   job.release = release.time;
   job.event = release.event;
   job.trigger_seq = release.trigger_seq;
-  task->body(job);
+  try {
+    task->body(job);
+  } catch (const std::exception& err) {  // (the functional code's: the job writes nothing, the node goes on)
+    ROS_ERROR_THROTTLE(1.0, "%s: %s failed: %s; its outputs were not written", name().c_str(), task->name.c_str(),
+                       err.what());
+    return;
+  }
   if (task->first_start == 0) {
     task->first_start = job.start;
   }
