@@ -258,3 +258,17 @@ async def test_an_internal_failure_of_a_request_is_logged_and_answered_empty():
 
     assert broken(Server(), None) == []
     assert logged[0][0] == "broken" and "ZeroDivisionError: a bug" in logged[0][1]
+
+
+async def test_an_incremental_change_is_applied_at_its_utf16_range(client: LanguageClient):
+    text = NAVIGATION.replace("instance laser : Laser on cpu0", "/* 😀 */ instance laser : Laser on cpu0")
+    uri = _open(client, "incremental.vfy", text)
+    assert await _diagnostics(client, uri, 1) == []
+    start = _position(text, "instance laser : Laser", len("instance laser : "))
+    end = lsp.Position(start.line, start.character + len("Laser"))
+    client.text_document_did_change(lsp.DidChangeTextDocumentParams(
+        lsp.VersionedTextDocumentIdentifier(2, uri),
+        [lsp.TextDocumentContentChangePartial(range=lsp.Range(start, end), text="Lazer")]))
+    found = await _diagnostics(client, uri, 2)
+    unknown = next(d for d in found if d.code == "E101")
+    assert unknown.range.start == start and "unknown component `Lazer`" in unknown.message
