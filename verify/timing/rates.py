@@ -433,20 +433,26 @@ def combine_or(members: list[EventModel]) -> EventModel:
 
 def combine_and(members: list[EventModel]) -> EventModel:
     """An event needs a fresh value on every member (§3). n events span at least n−1 arrivals of each
-    member, so ``δ⁻(n) ≥ δ⁻ₘ(n−1)``: period Pₘ, jitter Jₘ + Pₘ of the slowest member; after an event
-    the next comes once every member has a new arrival: ``δ⁺(n) ≤ (n−1)·maxₘ A⁺ₘ`` (§5.2)."""
+    member, so ``δ⁻(n) ≥ δ⁻ₘ(n−1)``: period Pₘ, jitter Jₘ + Pₘ of the slowest member. They also span
+    n arrivals of the member whose arrival completed the first of them, so ``δ⁻(n) ≥ minₘ δ⁻ₘ(n)``:
+    period minₘ Pₘ, jitter maxₘ Jₘ; where every member has the slowest one's period, that model is
+    used if its jitter is the smaller. After an event the next comes once every member has a new
+    arrival: ``δ⁺(n) ≤ (n−1)·maxₘ A⁺ₘ`` (§5.2)."""
     if not members or any(m.silent for m in members):
         return SILENT
     known = [m for m in members if m.period_min is not None and m.jitter_min is not None]
     # (the known members have period_min and jitter_min; gap and first: no None, checked)
     slowest = max(known, key=lambda m: (m.period_min, -m.jitter_min)) if known else None  # type: ignore[operator]
+    period = slowest.period_min if slowest else None
+    jitter = slowest.jitter_min + slowest.period_min if slowest else None  # type: ignore[operator]
+    if slowest is not None and len(known) == len(members) and all(m.period_min == period for m in known):
+        widest = max(m.jitter_min for m in known)  # type: ignore[type-var]
+        jitter = min(jitter, widest)  # type: ignore[type-var]
     gaps = [m.a_max for m in members]
     gap = None if any(g is None for g in gaps) else max(gaps)  # type: ignore[type-var]
     firsts = [m.first_max for m in members]
     first = None if any(f is None for f in firsts) else max(firsts)  # type: ignore[type-var]
-    return _new_event_model(slowest.period_min if slowest else None,
-                            slowest.jitter_min + slowest.period_min if slowest else None,  # type: ignore[operator]
-                            gap, ZERO if gap is not None else None, first)
+    return _new_event_model(period, jitter, gap, ZERO if gap is not None else None, first)
 
 
 def first_of_k(stream: EventModel, members: list[EventModel], mode: str, k: int) -> Fraction | None:
