@@ -16,10 +16,11 @@ import subprocess
 from collections.abc import Iterable
 from fractions import Fraction
 
-from .activations import DataTriggered, Periodic, SporadicSource
+from .activations import DataTriggered
 from .model import CompoundDecl, SystemModel, TaskModel
 from .timing import AnalysisResult
 from .timing.rates import LinkSampling
+from .timing.report import sampling_marks
 from .units import fmt_number, fmt_time
 
 #: one colour per chain, in source order (ColorBrewer Dark2, then repeated)
@@ -44,15 +45,7 @@ def chain_colour(index: int) -> str:
 
 
 def _activation_text(task: TaskModel, analysis: AnalysisResult | None) -> str:
-    act = task.activation
-    if isinstance(act, Periodic):
-        how = f"timer {fmt_time(act.period)}"
-    elif isinstance(act, DataTriggered):
-        how = f"trigger {act.port}" + (f" every {act.prescaler}" if act.prescaler != 1 else "")
-    elif isinstance(act, SporadicSource):
-        how = f"sporadic {fmt_time(act.min_interarrival)} .. {fmt_time(act.max_interarrival)}"
-    else:
-        how = "synthesis hole"
+    how = task.activation.describe()
     if analysis is not None:
         rate = analysis.task(task.id).rate
         how += f" · {rate if rate is not None else 'rate unbounded'}"
@@ -101,12 +94,7 @@ def _compounds(compounds: Iterable[CompoundDecl]) -> str:
 
 
 def _sampling_text(s: LinkSampling) -> str | None:
-    parts = []
-    if s.oversampled:
-        parts.append(f"oversampled ×{'∞' if s.oversampling is None else fmt_number(s.oversampling)}")
-    if s.undersampled and not s.by_trigger:
-        parts.append(f"undersampled ×{'∞' if s.undersampling is None else fmt_number(s.undersampling)}")
-    return " / ".join(parts) or None
+    return " / ".join(sampling_marks(s, prescaled=False)) or None
 
 
 def _edges(model: SystemModel, analysis: AnalysisResult | None) -> list[str]:

@@ -17,8 +17,9 @@ from collections.abc import Iterable
 from . import __version__, diagram
 from .model import SystemModel
 from .prove.verdict import ProofResult, Verdict
-from .timing import AnalysisResult, TaskTiming
+from .timing import AnalysisResult
 from .timing.rates import LinkSampling
+from .timing.report import sampling_marks
 from .units import fmt_number, fmt_time
 
 STYLE = """
@@ -76,40 +77,23 @@ def _diagram(model: SystemModel, analysis: AnalysisResult) -> str:
     return f'<div class="figure" id="diagram">{picture}</div>'
 
 
-def _activation(t: TaskTiming) -> str:
-    a = t.activation
-    if a.kind == "timer":
-        how = f"timer {fmt_time(a.period)}"
-    elif a.kind == "trigger":
-        how = f"trigger {a.trigger_port}" + (f" every {a.prescaler}" if a.prescaler != 1 else "")
-    elif a.kind == "sporadic" and a.interarrival is not None:
-        how = f"sporadic {fmt_time(a.interarrival[0])} .. {fmt_time(a.interarrival[1])}"
-    else:
-        how = a.kind
-    return _e(how)
-
-
 def _sampling(s: LinkSampling) -> str:
     if s.relation == "matched":
         return "matched" + (" (its trigger)" if s.by_trigger else "")
     if s.relation == "unknown":
         return "rates not bounded"
-    marks = []
-    if s.oversampled:
-        marks.append(f"oversampled ×{'∞' if s.oversampling is None else fmt_number(s.oversampling)}")
-    if s.undersampled:
-        marks.append(f"undersampled ×{'∞' if s.undersampling is None else fmt_number(s.undersampling)}")
-    return f'<span class="mark">{_e(" or ".join(marks))}</span>'
+    return f'<span class="mark">{_e(" or ".join(sampling_marks(s)))}</span>'
 
 
-def _outline(analysis: AnalysisResult) -> str:
+def _outline(model: SystemModel, analysis: AnalysisResult) -> str:
     reads: dict[str, list[LinkSampling]] = {}
     for s in analysis.links:
         reads.setdefault(s.reader, []).append(s)
     rows = []
     for t in analysis.tasks:
         sampling = "<br>".join(f"{_e(s.target.split('.', 1)[1])}: {_sampling(s)}" for s in reads.get(t.id, ())) or "–"
-        rows.append([f"<b>{_e(t.id)}</b>", _e(t.core), str(t.priority), _e(t.kind), _activation(t),
+        rows.append([f"<b>{_e(t.id)}</b>", _e(t.core), str(t.priority), _e(t.kind),
+                     _e(model.task(t.id).activation.describe()),
                      _e(t.rate if t.rate is not None else "unbounded"),
                      f"{_e(fmt_time(t.bcet))} .. {_e(fmt_time(t.wcet))}",
                      f"{_e(fmt_time(t.bcrt))} .. {_e(fmt_time(t.wcrt))}", sampling])
@@ -167,7 +151,7 @@ def to_html(model: SystemModel, analysis: AnalysisResult, proof: ProofResult, so
     """The report of ``model`` (analysed and proved) as one HTML document."""
     body = [f"<h1>{_e(model.name)}: timing report</h1>",
             f'<p class="meta">{_e(source)} · verify {_e(__version__)} · data age {_e(analysis.data_age_variant)}</p>',
-            _summary(proof), "<h2>System</h2>", _diagram(model, analysis), "<h2>Tasks</h2>", _outline(analysis),
+            _summary(proof), "<h2>System</h2>", _diagram(model, analysis), "<h2>Tasks</h2>", _outline(model, analysis),
             "<h2>Chains and deadlines</h2>", f'<div id="chains">{_chains(analysis, proof)}</div>',
             "<h2>Counterexamples</h2>", _counterexamples(model, proof)]
     return "\n".join(["<!DOCTYPE html>", '<html lang="en">', "<head>", '<meta charset="utf-8">',

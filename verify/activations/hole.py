@@ -54,6 +54,9 @@ class Hole(Activation):
         """The hole that the activation ``node`` (with a ``?``) leaves open."""
         return cls(**_hole_fields(node))
 
+    def describe(self) -> str:
+        return "synthesis hole"
+
     @property
     def unknown(self) -> bool:
         return True

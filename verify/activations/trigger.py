@@ -44,3 +44,6 @@ class DataTriggered(Activation):
     @property
     def single_port(self) -> str | None:
         return self.port if self.mode == "single" else None
+
+    def describe(self) -> str:
+        return f"trigger {self.port}" + (f" every {self.prescaler}" if self.prescaler != 1 else "")

@@ -20,7 +20,8 @@ from ..model import SystemModel
 from ..source import Span
 from ..symbols import Symbol
 from ..timing import AnalysisResult
-from ..units import fmt_number, fmt_time
+from ..timing.report import sampling_marks
+from ..units import fmt_time
 
 NAME_RE = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 _SEVERITY = {Severity.ERROR: lsp.DiagnosticSeverity.Error, Severity.WARNING: lsp.DiagnosticSeverity.Warning,
@@ -132,12 +133,9 @@ def task_summary(analysis: AnalysisResult | None, task_id: str) -> str:
         return ""
     parts = [str(t.rate) if t.rate is not None else "rate unbounded", f"R ≤ {fmt_time(t.wcrt)}"]
     for link in analysis.links:
-        if link.reader == task_id and (link.oversampled or link.undersampled):
+        if link.reader == task_id:
             port = link.target.split(".", 1)[1]
-            for flag, factor, word in ((link.oversampled, link.oversampling, "oversampled"),
-                                       (link.undersampled, link.undersampling, "undersampled")):
-                if flag:
-                    parts.append(f"{port} {word} ×{'∞' if factor is None else fmt_number(factor)}")
+            parts += [f"{port} {mark}" for mark in sampling_marks(link)]
     return " · ".join(parts)
 
 
@@ -197,7 +195,7 @@ def hover_text(symbol: Symbol, result: LoadResult, analyses: Mapping[str, Analys
         if symbol.kind == "task":
             for t in model.tasks:
                 if t.name == symbol.name and t.component == symbol.container:
-                    lines.append(f"- `{t.id}` ({t.core}, priority {t.priority}): {_activation(t.activation)}"
+                    lines.append(f"- `{t.id}` ({t.core}, priority {t.priority}): {t.activation.describe()}"
                                  + (f" · {task_summary(analysis, t.id)}" if analysis else ""))
         elif symbol.kind == "chain" and symbol.container == name:
             chain = next((c for c in model.chains if c.name == symbol.name), None)
@@ -219,14 +217,9 @@ def hover_text(symbol: Symbol, result: LoadResult, analyses: Mapping[str, Analys
         elif symbol.kind == "instance" and symbol.container == name:
             for t in model.tasks:
                 if t.instance == symbol.name:
-                    lines.append(f"- `{t.name}`: {_activation(t.activation)}"
+                    lines.append(f"- `{t.name}`: {t.activation.describe()}"
                                  + (f" · {task_summary(analysis, t.id)}" if analysis else ""))
     return "\n".join(lines)
-
-
-def _activation(act: object) -> str:
-    describe = getattr(act, "describe", None)
-    return str(describe()) if callable(describe) else getattr(act, "kind", "")
 
 
 # ------------------------------------------------------------------ rename

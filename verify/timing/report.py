@@ -287,18 +287,25 @@ def _task_line(t: TaskTiming) -> str:
     return line
 
 
+def sampling_marks(s: LinkSampling, prescaled: bool = True) -> list[str]:
+    """``oversampled ×F`` and ``undersampled ×F`` (∞: unbounded) as far as they apply, for every
+    renderer (the report, the diagram, the HTML page, the editor); without ``prescaled``, an
+    undersampling that is only a trigger's prescaler is left out."""
+    marks = []
+    if s.oversampled:
+        marks.append(f"oversampled ×{'∞' if s.oversampling is None else fmt_number(s.oversampling)}")
+    if s.undersampled and (prescaled or not s.by_trigger):
+        marks.append(f"undersampled ×{'∞' if s.undersampling is None else fmt_number(s.undersampling)}")
+    return marks
+
+
 def _link_line(s: LinkSampling) -> str:
     if s.relation == "matched":
         what = "matched" + (" (triggered by this port)" if s.by_trigger else "")
     elif s.relation == "unknown":
         what = "rates not bounded"
     else:
-        parts = []
-        if s.oversampled:
-            parts.append(f"oversampled ×{'∞' if s.oversampling is None else fmt_number(s.oversampling)}")
-        if s.undersampled:
-            parts.append(f"undersampled ×{'∞' if s.undersampling is None else fmt_number(s.undersampling)}")
-        what = " or ".join(parts)
+        what = " or ".join(sampling_marks(s))
         if s.by_trigger:
             what += " (trigger prescaler)"
         elif not (s.writer_rate and s.reader_rate and s.writer_rate.is_point and s.reader_rate.is_point):
