@@ -52,13 +52,13 @@ class Section:
 
     @property
     def command(self) -> str:
-        for command in ("synth", "prove", "analyze", "gen"):
+        for command in ("synth", "prove", "analyze", "gen", "import", "export"):
             if any(b.command == command for b in self.blocks):
                 return command
         return "check"
 
 
-_FENCE = re.compile(r"^```(?:vfy|toml|text)([^\n]*)\n(.*?)^```[ \t]*$", re.MULTILINE | re.DOTALL)
+_FENCE = re.compile(r"^```(?:vfy|toml|text|smartmdsd)([^\n]*)\n(.*?)^```[ \t]*$", re.MULTILINE | re.DOTALL)
 
 
 def _blocks(body: str) -> tuple[Block, ...]:
@@ -94,6 +94,8 @@ def run_example(section: Section, directory: Path):
     for block in section.blocks:
         (directory / block.name).parent.mkdir(parents=True, exist_ok=True)
         (directory / block.name).write_bytes(block.text.encode(block.encoding))
+    if section.command == "import":
+        return import_diagnostics(directory)
     limits = Limits()
     for block in section.blocks:
         if block.limit:
@@ -111,6 +113,8 @@ def run_example(section: Section, directory: Path):
     holes = require_configured(model, section.command)
     if holes:
         return holes, result.sources
+    if section.command == "export":
+        return export_diagnostics(model), result.sources
     if section.command == "gen":
         diagnostics, files = gen_diagnostics(model, directory)
         return diagnostics, {**result.sources, **files}
@@ -130,6 +134,26 @@ def gen_diagnostics(model, directory: Path):
 
     out = str(directory / "out")
     return refusals(plan(ros1.generate(model), out, force=False), out)
+
+
+def import_diagnostics(directory: Path):
+    """What `verify import smartmdsd DIR` reports for the example's SmartMDSD files: (diagnostics, sources)."""
+    from verify.diagnostics import DiagnosticSink
+    from verify.interop.smartmdsd import import_dirs
+
+    sink = DiagnosticSink()
+    _, sources = import_dirs([str(directory)], None, sink)
+    return sink.items, sources
+
+
+def export_diagnostics(model):
+    """What `verify export smartmdsd main.vfy -o out` reports."""
+    from verify.diagnostics import DiagnosticSink
+    from verify.interop.smartmdsd.export import export_system
+
+    sink = DiagnosticSink()
+    export_system(model, None, {}, sink)
+    return sink.items
 
 
 def synth_diagnostics(section: Section, result, model) -> list:

@@ -1,6 +1,7 @@
 """The registry of diagnostic codes: one place, stable numbers.
 
-E0xx syntax and files, E1xx names, E2xx structure, E3xx timing, E4xx synthesis, E5xx proof, E6xx code generation.
+E0xx syntax and files, E1xx names, E2xx structure, E3xx timing, E4xx synthesis, E5xx proof, E6xx code generation,
+E7xx import and export.
 Every code has a section ``## <code>`` in ``specs/diagnostics.md`` with a minimal failing example that
 ``tests/test_diagnostic_examples.py`` runs; ``verify explain CODE`` prints that section.
 """
@@ -82,6 +83,14 @@ _ALL = [
     Code("E503", "deadline miss"),
     # E6xx: code generation
     Code("E601", "file in the way of generated code"),
+    # E7xx: import and export of other tools' models
+    Code("E701", "syntax error in an imported model"),
+    Code("E702", "unresolved reference in an imported model", Severity.WARNING),
+    Code("E703", "construct has no counterpart", Severity.WARNING),
+    Code("E704", "imported model lacks what the timing model needs", Severity.WARNING),
+    Code("E705", "inconsistent imported model"),
+    Code("E706", "construct cannot be exported"),
+    Code("E707", "export approximates the model", Severity.WARNING),
 ]
 
 CODES: dict[str, Code] = {c.code: c for c in _ALL}

@@ -147,6 +147,13 @@ def _read(path: str, sink: DiagnosticSink, at: Span | None,
     return decode(data, path, sink, sources)
 
 
+def read_text(path: str, sink: DiagnosticSink, sources: dict[str, SourceFile] | None = None,
+              limits: Limits = DEFAULT_LIMITS) -> str | None:
+    """The text of file ``path`` (any format: importers read theirs with it), or None after reporting why
+    not (E003, E004, E008), under the same guards as a model file."""
+    return _read(path, sink, None, sources, limits)
+
+
 def _file_too_large(path: str, limits: Limits, at: Span | None, sink: DiagnosticSink) -> None:
     sink.emit("E008", f"{_shown(path)} is larger than {_size(limits.file_bytes)}, the limit for one file",
               at or Span(path, 1, 1, 1, 1), "too large", help="split the model into several files joined by `import`")

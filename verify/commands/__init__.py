@@ -12,9 +12,12 @@ import importlib
 from types import ModuleType
 
 #: the commands, in the order ``verify --help`` lists them
-COMMANDS = ("check", "analyze", "synth", "prove", "gen", "graph", "report", "lsp", "fmt", "explain")
+COMMANDS = ("check", "analyze", "synth", "prove", "gen", "graph", "report", "import", "export", "lsp", "fmt",
+            "explain")
+#: a command whose name is a Python keyword lives in ``NAME_``
+_MODULES = {"import": "import_"}
 
 
 def command(name: str) -> ModuleType:
     """The module of command ``name``."""
-    return importlib.import_module(f"{__name__}.{name}")
+    return importlib.import_module(f"{__name__}.{_MODULES.get(name, name)}")
