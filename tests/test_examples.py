@@ -8,7 +8,9 @@ from verify.cli import main
 
 from .conftest import EXAMPLES
 
-EXAMPLE_FILES = sorted(EXAMPLES.rglob("*.vfy"))
+#: examples that show an import's output as written, before it is completed (what `verify check` lists)
+INCOMPLETE = {EXAMPLES / "smartmdsd-gazebo" / "imported.vfy": ["E207"] + ["E217"] * 10}
+EXAMPLE_FILES = sorted(p for p in EXAMPLES.rglob("*.vfy") if p not in INCOMPLETE)
 
 
 def test_examples_exist():
@@ -20,6 +22,12 @@ def test_example_checks_clean(path, capsys):
     result = verify.load(str(path))
     assert result.ok, [d.message for d in result.diagnostics]
     assert main(["check", str(path)]) == 0
+
+
+@pytest.mark.parametrize("path", sorted(INCOMPLETE), ids=lambda p: p.name)
+def test_an_incomplete_example_lists_what_is_left_to_complete(path):
+    result = verify.load(str(path))
+    assert sorted(d.code for d in result.diagnostics if d.severity == "error") == INCOMPLETE[path]
 
 
 def test_navigation_model_shape():
