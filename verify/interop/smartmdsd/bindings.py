@@ -4,7 +4,6 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from ...source import Span
 from ...units import fmt_time
 from .read import Activity, Chain, Component, Instance, Name, Node, Port
 
@@ -200,4 +199,4 @@ def chain_text(b: _Builder, chain: Chain, links: list[Link]) -> str | None:
     return f"  chain {b.name(chain.name)}: {' -> '.join(elems)}{body}"
 
 
-__all__ = ["Span", "binding", "chain_text"]
+__all__ = ["binding", "chain_text"]

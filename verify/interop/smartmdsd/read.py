@@ -266,7 +266,7 @@ class _Reader:
             if direction == "out":
                 cur.expect("realizedBy")
                 realized = _name(cur.fqn("an activity"))
-            self.extensions(f"{pname.text}'s")
+            self.elements({})  # its extensions (SupportedMiddleware): reported, none has a counterpart
             ports.append(Port(pname, direction, service, realized))
 
         def activity() -> None:
@@ -285,9 +285,6 @@ class _Reader:
         self.elements({"InputPort": lambda: port("in"), "OutputPort": lambda: port("out"),
                        "Activity": activity, "InputHandler": handler})
         self.files.components.append(Component(name, tuple(ports), tuple(activities)))
-
-    def extensions(self, whose: str) -> None:
-        self.elements({})
 
     def activity(self, name: Name, handler_of: Name | None) -> Activity:
         cur = self.cur
