@@ -46,6 +46,28 @@ def seeds() -> dict[str, bytes]:
     out.update(_spec_examples())
     for path in sorted((ROOT / "tests" / "golden" / "diagnostics").rglob("*.txt")):
         out[f"golden-{path.stem}"] = path.read_bytes()
+    out.update(_smartmdsd())
+    return out
+
+
+def _smartmdsd() -> dict[str, bytes]:
+    """SmartMDSD inputs for the ``smartmdsd`` target: each system of ../shared/smartmdsd with every
+    component (files after ``// file NAME`` lines), and the SmartMDSD examples of specs/diagnostics.md."""
+    from .targets import SMARTMDSD_FILE
+
+    out: dict[str, bytes] = {}
+    shared = ROOT.parent / "shared" / "smartmdsd"
+    components = sorted((shared / "components").glob("*.component"))
+    for arch in sorted((shared / "systems").glob("*.componentArch")):
+        files = components + sorted(p for p in (shared / "systems").glob(arch.stem + ".*"))
+        out[f"smartmdsd-{arch.stem}"] = "".join(f"{SMARTMDSD_FILE}{p.name}\n{p.read_text(encoding='utf-8')}\n"
+                                                for p in files).encode("utf-8")
+    text = (ROOT / "specs" / "diagnostics.md").read_text(encoding="utf-8")
+    for part in re.split(r"^## ", text, flags=re.MULTILINE)[1:]:
+        blocks = re.findall(r"^```smartmdsd[^\n]*file=(\S+)[^\n]*\n(.*?)^```[ \t]*$", part, re.MULTILINE | re.DOTALL)
+        if blocks:
+            out[f"smartmdsd-spec-{part.split(None, 1)[0]}"] = "".join(
+                f"{SMARTMDSD_FILE}{name}\n{body}" for name, body in blocks).encode("utf-8")
     return out
 
 

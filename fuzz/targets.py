@@ -13,12 +13,15 @@ and every regression input through them), so this module never imports atheris.
 | ``synth`` | ``synthesize`` and its reports | a configuration found passes the independent re-check |
 | ``prove`` | ``prove`` and its text, JSON and SARIF reports | the exit code follows the verdicts |
 | ``fmt`` | ``format_text`` twice | ``fmt(fmt(x)) == fmt(x)``, and ``fmt(x)`` has the tree and the models of ``x`` |
+| ``smartmdsd`` | the SmartMDSD reader and import (``interop.smartmdsd``) | located diagnostics; its output parses |
 
 In detail: ``parse`` checks that a tree prints (``fmt``) to text that parses to the same tree;
 ``validate`` runs resolve, validate, models, chains and rates; ``analyze`` takes every configured
 system, both data-age variants; ``synth`` every system with holes (at most ``SMALL`` tasks, a small
 solver budget); ``prove`` every configured system (at most ``SMALL`` tasks, budget ``PROVE_BUDGET``,
-one process).
+one process). ``smartmdsd`` takes the input as SmartMDSD files, each after a line ``// file NAME.EXT``
+(without one, the kind follows the first keyword), and checks that the model it writes has no syntax
+error: names are names, numbers exact.
 """
 from __future__ import annotations
 
@@ -183,8 +186,41 @@ def fmt(data: bytes) -> None:
     _check([d.code for d in before.diagnostics] == [d.code for d in after.diagnostics], "fmt changed the diagnostics")
 
 
+#: SmartMDSD files in one input: each after a line ``// file NAME``
+SMARTMDSD_FILE = "// file "
+_KIND_BY_KEYWORD = {"ComponentDefinition": ".component", "SystemComponentArchitecture": ".componentArch",
+                    "CuaseEffectChainModel": ".causeEffectChain"}
+
+
+def smartmdsd(data: bytes) -> None:
+    import verify
+    from verify.diagnostics import DiagnosticSink
+    from verify.interop.smartmdsd.read import KINDS, Files, read_text
+    from verify.interop.smartmdsd.to_vfy import import_system
+
+    text = _text(data)
+    parts = text.split("\n" + SMARTMDSD_FILE) if SMARTMDSD_FILE in text else [text]
+    files, sink = Files(), DiagnosticSink()
+    for n, part in enumerate(parts):
+        head, _, body = part.removeprefix(SMARTMDSD_FILE).partition("\n") if SMARTMDSD_FILE in text else ("", "", part)
+        name = head.strip()
+        if not name.endswith(KINDS):
+            first = body.split(None, 1)[0] if body.split() else ""
+            name = f"f{n}" + _KIND_BY_KEYWORD.get(first, ".activityArch")
+        read_text(body, name, files, sink)
+    if not sink.has_errors:
+        result = import_system(files, None, sink)
+        if result is not None:
+            written = verify.load_text(result.text, "imported.vfy")
+            syntax = [d for d in written.diagnostics if d.code.startswith("E0")]
+            _check(not syntax, f"the import wrote text with a syntax error: {syntax[:1]}")
+    _located(sink.items, text)
+    _render(sink.items, {})
+
+
 TARGETS: dict[str, Callable[[bytes], None]] = {
     "parse": parse, "validate": validate, "analyze": analyze, "synth": synth, "prove": prove, "fmt": fmt,
+    "smartmdsd": smartmdsd,
 }
 
 
