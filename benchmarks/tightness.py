@@ -8,10 +8,15 @@ AND-join shape of ``tests/test_and_joins`` (one core, an AND of two equal-period
 chain behind it with a prescaler, a sporadic source, priorities from a small set, seeded), and the
 Autoware reference-system example (examples/autoware-reference; N/2 scenarios). Each is analysed and
 simulated (four scenarios of 2 s, one of them every job at its wcet and every message at its largest
-delay). It reports, per latency metric: the share of chains with a bound, and over the
-bounded ones the mean and the minimum of simulated worst / bound; and the share of systems with E312
+delay), and measured by ``prove``'s own methods (``_found_by_prove``: the exact enumeration where the
+system is in its exact class, else its falsifying search with every goal at the bound, 200 scenarios
+per system and 1,000 for the Autoware example, seeded per system): the worst run of a chain is the
+larger of the two (issue 16 measures against "worst simulated or found by prove"). It reports, per
+latency metric: the share of chains with a bound, and over the bounded ones the mean and the minimum
+of worst run / bound (and of the simulated worst alone / bound); and the share of systems with E312
 (some task without a response-time bound within its deadline: the drawn systems have explicit
-deadlines, which a run may really miss, besides the implicit ones, A⁺).
+deadlines, which a run may really miss, besides the implicit ones, A⁺). A run above its bound is a
+soundness bug: the stage stops with an error row (``AboveBound``) instead of a ratio above 1.
 """
 from __future__ import annotations
 
@@ -60,11 +65,76 @@ def _models(texts: list[str]) -> list[object]:
     return [verify.load_text(text, "tight.vfy").system() for text in texts]
 
 
-def measure(models: list, runs: int = 4) -> dict[str, object]:
+#: scenarios of prove's falsifying search per system (``verify.prove.exact.search``), and for the Autoware example
+SEARCH_BUDGET = 200
+AUTOWARE_SEARCH_BUDGET = 1000
+
+
+class AboveBound(AssertionError):
+    """A run above an analytic bound: a soundness bug of the analysis (or of the simulator)."""
+
+
+def _simulated(model, n: int, runs: int) -> dict[tuple[str, str], Fraction]:
+    """The worst sample per (chain, metric) over ``runs`` random scenarios of 2 s, the first with every job
+    at its wcet and every message at its largest delay."""
     from verify.sim import Scenario, chain_latencies, random_scenario, simulate
+
+    worst: dict[tuple[str, str], Fraction] = {}
+    for run in range(runs):
+        scenario = random_scenario(model, random.Random(f"{n}/{run}"), Fraction(2))
+        if run == 0:  # every job at its wcet, every message at its largest delay
+            delays = {(lk.source, lk.target): lk.delay_max for lk in model.links}
+            scenario = Scenario(scenario.horizon, scenario.phases, None,
+                                lambda src, dst, _i, d=delays: d[(src, dst)], None, scenario.counter_phase)
+        trace = simulate(model, scenario)
+        for chain in model.chains:
+            observed = chain_latencies(trace, chain)
+            for metric in METRICS:
+                sample = observed.worst(metric)
+                if sample is not None:
+                    key = (chain.name, metric)
+                    worst[key] = max(worst.get(key, Fraction(0)), sample.value)
+    return worst
+
+
+def _found_by_prove(model, bounds: dict[tuple[str, str], Fraction], n: int, budget: int
+                    ) -> dict[tuple[str, str], Fraction]:
+    """The worst sample per (chain, metric) that ``prove``'s own methods find: the exact supremum where the
+    system is in the exact class and its representatives fit in ``budget`` (specs/proof.md §4), else the
+    falsifying search (§6) with ``budget`` scenarios, each goal set at the bound (so it never stops early
+    unless it refutes a bound), seeded per system."""
+    from verify.prove.exact import Budget, Goal, enumerate_exact, search, search_horizon
+    from verify.prove.scenario import Target
+
+    targets = {Target(metric, chain): (chain, metric) for (chain, metric) in bounds}
+    if not targets:
+        return {}
+    found: dict[tuple[str, str], Fraction] = {}
+    exact = enumerate_exact(model, sorted(targets), Budget(budget), jobs=1)
+    if exact is not None and exact.complete:
+        for target, key in targets.items():
+            value = exact.worst[target].value
+            if value is not None:
+                found[key] = value
+        return found
+    goals = [Goal(target, above=bounds[key]) for target, key in sorted(targets.items())]
+    result = search(model, goals, Budget(budget), search_horizon(model, None), seed=f"tightness/{n}")
+    for target, key in targets.items():
+        measured = result.worst.get(target)
+        sample = None if measured is None else measured.values[target].worst
+        if sample is not None:
+            found[key] = sample.value
+    return found
+
+
+def measure(models: list, runs: int = 4, budget: int = SEARCH_BUDGET) -> dict[str, object]:
+    """Per metric: chains bounded, and the mean and minimum of (worst run) / bound, the worst run being the
+    larger of the simulated worst and the worst that ``prove`` finds (``_found_by_prove``); the simulation
+    alone is reported beside it. Raises ``AboveBound`` on a run above its bound."""
     from verify.timing import analyze, diagnostics_of
 
     ratios: dict[str, list[Fraction]] = {m: [] for m in METRICS}
+    simulated: dict[str, list[Fraction]] = {m: [] for m in METRICS}
     chains = {m: 0 for m in METRICS}
     bounded = {m: 0 for m in METRICS}
     e312 = 0
@@ -72,35 +142,32 @@ def measure(models: list, runs: int = 4) -> dict[str, object]:
         analysis = analyze(model)
         if any(d.code == "E312" for d in diagnostics_of(analysis)):
             e312 += 1
-        worst: dict[tuple[str, str], Fraction] = {}
-        for run in range(runs):
-            scenario = random_scenario(model, random.Random(f"{n}/{run}"), Fraction(2))
-            if run == 0:  # every job at its wcet, every message at its largest delay
-                delays = {(lk.source, lk.target): lk.delay_max for lk in model.links}
-                scenario = Scenario(scenario.horizon, scenario.phases, None,
-                                    lambda src, dst, _i, d=delays: d[(src, dst)], None, scenario.counter_phase)
-            trace = simulate(model, scenario)
-            for chain in model.chains:
-                observed = chain_latencies(trace, chain)
-                for metric in METRICS:
-                    sample = observed.worst(metric)
-                    if sample is not None:
-                        key = (chain.name, metric)
-                        worst[key] = max(worst.get(key, Fraction(0)), sample.value)
+        bounds: dict[tuple[str, str], Fraction] = {}
         for chain in model.chains:
-            bounds = analysis.chain(chain.name)
             for metric in METRICS:
                 chains[metric] += 1
-                bound = bounds.bound(metric).worst
+                bound = analysis.chain(chain.name).bound(metric).worst
                 if bound is not None:
                     bounded[metric] += 1
-                    if bound > 0 and (chain.name, metric) in worst:
-                        ratios[metric].append(worst[(chain.name, metric)] / bound)
+                    bounds[(chain.name, metric)] = bound
+        sim = _simulated(model, n, runs)
+        found = _found_by_prove(model, bounds, n, budget) if budget else {}
+        for key, bound in bounds.items():
+            worst = max([x for x in (sim.get(key), found.get(key)) if x is not None], default=None)
+            if worst is not None and worst > bound:
+                raise AboveBound(f"system {n}, chain {key[0]}: a run reaches {key[1]} {worst} above the bound {bound} "
+                                 f"(simulated {sim.get(key)}, found by prove {found.get(key)})")
+            if bound > 0 and worst is not None:
+                ratios[key[1]].append(worst / bound)
+                if key in sim:
+                    simulated[key[1]].append(sim[key] / bound)
     result: dict[str, object] = {"systems": len(models), "with E312": f"{e312} ({e312 / len(models):.0%})"}
     for metric in METRICS:
-        r = ratios[metric]
-        result[metric] = (f"bounded {bounded[metric]}/{chains[metric]}, simulated/bound mean "
-                          f"{float(statistics.fmean(r)):.3f} min {float(min(r)):.3f}" if r else "no sample")
+        r, s = ratios[metric], simulated[metric]
+        result[metric] = (f"bounded {bounded[metric]}/{chains[metric]}, worst run / bound mean "
+                          f"{float(statistics.fmean(r)):.3f} min {float(min(r)):.3f}"
+                          + (f" (simulated alone: mean {float(statistics.fmean(s)):.3f} min {float(min(s)):.3f})"
+                             if s else "") if r else "no sample")
     return result
 
 
@@ -123,10 +190,13 @@ def register(stage: Callable[..., Callable], error: type[Exception], unavailable
         count = inst.n_tasks
         import verify
 
-        random_result = measure(_models(_random_systems(count)))
-        and_result = measure(_models(_and_systems(count)))
-        autoware = verify.load(str(AUTOWARE)).system()
-        autoware_result = measure([autoware], runs=max(4, count // 2))
+        try:
+            random_result = measure(_models(_random_systems(count)))
+            and_result = measure(_models(_and_systems(count)))
+            autoware = verify.load(str(AUTOWARE)).system()
+            autoware_result = measure([autoware], runs=max(4, count // 2), budget=AUTOWARE_SEARCH_BUDGET)
+        except AboveBound as err:  # a soundness bug: an error row, never a ratio above 1
+            raise error(f"a run above its analytic bound: {err}") from err
         del autoware_result["systems"]
         return {**{f"random {k}": v for k, v in random_result.items()},
                 **{f"AND {k}": v for k, v in and_result.items()},
