@@ -200,7 +200,6 @@ class Round:
             else self._stream(n) for n in range(len(tasks))]
         self.capped = self._causal_paths()
         self._hold_run: list[_Run | None] = [None] * len(tasks)  # (ticks or None, failure, steps left)
-        self._hold_limit: list[int | None] = [None] * len(tasks)  # the deadline in ticks
         self.result: list[_Result | None] = [None] * len(tasks)  # (computed, q, critical, failure, blocking, remote)
         # last round, if its ticks are these (then a stream of the same object is the same stream)
         self.previous = previous if previous is not None and previous.scale == self.scale and \
@@ -326,7 +325,7 @@ class Round:
                 self.result[n] = self._response(n, core, with_self)
             return
         if previous is not None and self._unchanged(n, previous):
-            self._hold_run[n], self._hold_limit[n] = previous._hold_run[n], previous._hold_limit[n]
+            self._hold_run[n] = previous._hold_run[n]
             self.result[n] = previous.result[n]
             return
         self._hold(n, core, with_self)
@@ -405,10 +404,10 @@ class Round:
         return core.groups, extra_at, first_bad, None if unrated else load
 
     def _lfp(self, base: int, start: int, groups: list[_Period], extra: Callable[[int], int] | None,
-             first_bad: int | None, load: int | None, limit: int | None, left: int) -> _Run:
+             first_bad: int | None, load: int | None, left: int) -> _Run:
         """``rta.least_fixed_point`` in ticks (``load`` in units of 1/U) for the streams that
         ``_interference`` describes; ``left`` is the step budget, returned as used."""
-        if limit is None and load is None:
+        if load is None:
             return None, "the interference is not bounded", left
         if load is not None and load >= self.unit and base > 0:
             return None, f"the interfering utilisation is {ratio(Fraction(load, self.unit))} (at least 1)", left
@@ -417,8 +416,6 @@ class Round:
             left -= 1
             if left < 0:
                 return None, f"no fixed point within {MAX_STEPS} iteration steps", left
-            if limit is not None and w > limit:
-                return None, "it exceeds the deadline", left
             if w > 0:
                 if first_bad is not None:
                     return None, f"the activations of `{self.tasks[first_bad].id}` are not bounded", left
@@ -444,9 +441,8 @@ class Round:
     def _hold(self, n: int, core: _Core, with_self: bool) -> None:
         """``rta.hold_time``: the busy window of one job of n, no blocking, no caps (§6.3)."""
         cost = self.streams[n].cost
-        limit = self._hold_limit[n] = self.ticks(self.deadlines[n][0])
         groups, extra_at, first_bad, load = self._interference(n, core, with_self)
-        self._hold_run[n] = self._lfp(cost, cost, groups, extra_at and extra_at(1), first_bad, load, limit,
+        self._hold_run[n] = self._lfp(cost, cost, groups, extra_at and extra_at(1), first_bad, load,
                                       MAX_STEPS)
 
     def hold(self, n: int) -> Fraction | None:
@@ -529,17 +525,14 @@ class Round:
         period = 1 if own.silent else stream.period
         jitter = 0 if own.silent else self.ticks(own.jitter_min) if self.static.siblings[n] else stream.jitter
         assert period is not None and jitter is not None, "bounded (checked above)"
-        deadline = self.deadlines[n][0]
-        if deadline is None:
-            total = self._all_loads(n, core, with_self, remote)
-            if total is not None and not own.silent:
-                total += (stream.cost + self.ticks(blocking)) * (self.unit // period)
-            if total is not None and total >= self.unit:
-                return None, None, None, "the utilisation of its level is 1 or more and it has no deadline"
+        total = self._all_loads(n, core, with_self, remote)  # (whether the busy window closes: §6.2)
+        if total is not None and not own.silent:
+            total += (stream.cost + self.ticks(blocking)) * (self.unit // period)
+        if total is not None and total >= self.unit:
+            return None, None, None, "the utilisation of its level is 1 or more"
         blocking_ticks = self.ticks(blocking) if blocking else 0
         cost = stream.cost + blocking_ticks
         reuse = not capped and not remote and not blocking_ticks
-        limit_base = self._hold_limit[n]
         best: int | None = None
         best_q: int | None = None
         w: int | None = 0
@@ -547,7 +540,6 @@ class Round:
         groups, extra_at, first_bad, load = self._interference(n, core, with_self, capped, remote)
         for q in range(1, MAX_JOBS + 1):
             offset = 0 if q == 1 else max(0, (q - 1) * period - jitter)
-            limit = None if limit_base is None else limit_base + offset
             if q == 1 and reuse:  # the same iteration as the hold time's
                 run = self._hold_run[n]
                 assert run is not None, "n's hold time is run before its WCRT"
@@ -555,7 +547,7 @@ class Round:
             else:
                 assert w is not None, "(a failed iteration returns)"
                 w, why, left = self._lfp(q * cost, w + cost, groups, extra_at and extra_at(q), first_bad, load,
-                                         limit, left)
+                                         left)
             if w is None:
                 return None, q, None, why
             if best is None or w - offset > best:
