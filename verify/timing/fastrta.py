@@ -455,8 +455,8 @@ class Round:
     def _response(self, n: int, core: _Core, with_self: bool) -> _Result:
         """``rta.response_time`` less what ``responses`` assembles: (R, Q, critical q, failure,
         blocking, remote sibling streams)."""
-        blocking, remote = self._blocking(n)
-        if blocking is None:
+        blocking, once, remote = self._blocking(n)
+        if blocking is None or once is None:
             return None, None, None, "a cooperative sibling's hold time is not bounded", None, remote
         capped: list[_Capped] = []
         paths = self._capped_into(n)
@@ -466,7 +466,7 @@ class Round:
                 streams = self.streams
                 capped = [(streams[source], product, extra + carry(latency))
                           for source, product, latency, extra in paths]
-        return self._wcrt(n, core, with_self, blocking, capped, remote) + (blocking, remote)
+        return self._wcrt(n, core, with_self, blocking, once, capped, remote) + (max(blocking, once), remote)
 
     def _carry(self, n: int) -> Callable[[int], int] | None:
         """``rta.carry_in`` of task n as a function of the path latency L⁺ in ticks: the least of
@@ -488,16 +488,21 @@ class Round:
         """The causal paths into n from streams of hp(n) (``_causal_paths`` keeps no others)."""
         return self.capped.get(n, [])
 
-    def _blocking(self, n: int) -> tuple[Fraction | None, list[_Stream]]:
-        """``rta.cooperative_blocking``: β (seconds) and the remote siblings' token streams."""
+    def _blocking(self, n: int) -> tuple[Fraction | None, Fraction | None, list[_Stream]]:
+        """``rta.cooperative_blocking``: β per job and β once per window (seconds), and the remote
+        siblings' token streams."""
         sibs = self.static.siblings[n]
         if not sibs:
-            return ZERO, []
+            return ZERO, ZERO, []
         task = self.tasks[n]
-        values = [self.hold(s) for s in sibs
-                  if self.tasks[s].core != task.core or self.tasks[s].priority < task.priority]
-        known = [v for v in values if v is not None]
-        blocking = max(known, default=ZERO) if len(known) == len(values) else None
+
+        def most(values: list[Fraction | None]) -> Fraction | None:
+            known = [v for v in values if v is not None]
+            return max(known, default=ZERO) if len(known) == len(values) else None
+
+        blocking = most([self.hold(s) for s in sibs if self.tasks[s].core != task.core])
+        once = most([self.hold(s) for s in sibs
+                     if self.tasks[s].core == task.core and self.tasks[s].priority < task.priority])
         remote = []
         for s in sibs:
             if self.tasks[s].core == task.core:
@@ -510,10 +515,10 @@ class Round:
             cost, period = (0, None) if run[0] is None else (run[0], self.ticks(events.period_min))
             load = 0 if events.silent else None if period is None else cost * (self.unit // period)
             remote.append(_Stream(s, cost, period, self.ticks(jitter), events.silent, load))
-        return blocking, remote
+        return blocking, once, remote
 
-    def _wcrt(self, n: int, core: _Core, with_self: bool, blocking: Fraction, capped: Sequence[_Capped],
-              remote: Sequence[_Stream]) -> _Wcrt:
+    def _wcrt(self, n: int, core: _Core, with_self: bool, blocking: Fraction, once: Fraction,
+              capped: Sequence[_Capped], remote: Sequence[_Stream]) -> _Wcrt:
         """``rta.wcrt`` in ticks: (R, Q, critical q, failure)."""
         own = self.events[n]
         if not own.silent and (own.period_min is None or own.jitter_min is None):
@@ -526,13 +531,14 @@ class Round:
         jitter = 0 if own.silent else self.ticks(own.jitter_min) if self.static.siblings[n] else stream.jitter
         assert period is not None and jitter is not None, "bounded (checked above)"
         total = self._all_loads(n, core, with_self, remote)  # (whether the busy window closes: §6.2)
-        if total is not None and not own.silent:
-            total += (stream.cost + self.ticks(blocking)) * (self.unit // period)
+        if total is not None and not own.silent:  # (blocking is left out: it may come once per window)
+            total += stream.cost * (self.unit // period)
         if total is not None and total >= self.unit:
             return None, None, None, "the utilisation of its level is 1 or more"
         blocking_ticks = self.ticks(blocking) if blocking else 0
+        once_ticks = self.ticks(once) if once else 0
         cost = stream.cost + blocking_ticks
-        reuse = not capped and not remote and not blocking_ticks
+        reuse = not capped and not remote and not blocking_ticks and not once_ticks
         best: int | None = None
         best_q: int | None = None
         w: int | None = 0
@@ -546,8 +552,8 @@ class Round:
                 w, why, left = run
             else:
                 assert w is not None, "(a failed iteration returns)"
-                w, why, left = self._lfp(q * cost, w + cost, groups, extra_at and extra_at(q), first_bad, load,
-                                         left)
+                w, why, left = self._lfp(q * cost + once_ticks, w + cost, groups, extra_at and extra_at(q),
+                                         first_bad, load, left)
             if w is None:
                 return None, q, None, why
             if best is None or w - offset > best:

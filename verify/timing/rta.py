@@ -333,9 +333,10 @@ class Demand:
     """Everything the busy window of one task needs."""
 
     cost: Fraction
-    blocking: Fraction
+    blocking: Fraction  # per job (a sibling on another core may hold the token at every release)
     streams: list[Interferer]
     own: EventModel
+    once: Fraction = ZERO  # once per busy window (a lower-priority sibling of the same core)
 
 
 def wcrt(d: Demand) -> tuple[Fraction | None, int | None, int | None, str | None]:
@@ -344,16 +345,17 @@ def wcrt(d: Demand) -> tuple[Fraction | None, int | None, int | None, str | None
     if not d.own.silent and (d.own.period_min is None or d.own.jitter_min is None):
         return None, None, None, ("its activations are not bounded" if d.own.period_min is None else
                                   "its activation jitter is not bounded (a writer upstream has no WCRT bound)")
-    own = Interferer("", d.cost + d.blocking, d.own.period_min, ZERO, d.own.silent)
-    load = _load(d.streams + [own])
-    if load is not None and load >= 1:  # (else the busy window closes: §6.2)
+    # the load without the blocking, which may come once per busy window: at 1 or more the window never
+    # closes; below 1 it does (the per-job blocking term is only a bound, and the job budget guards it)
+    load = _load(d.streams + [Interferer("", d.cost, d.own.period_min, ZERO, d.own.silent)])
+    if load is not None and load >= 1:
         return None, None, None, "the utilisation of its level is 1 or more"
     best: tuple[Fraction, int] | None = None
     w, budget = ZERO, Budget()
     for q in range(1, MAX_JOBS + 1):
         # δ⁻(q) is None only for a silent task and q > 1, and a silent task's window closes at q = 1
         offset: Fraction = d.own.delta_min(q)  # type: ignore[assignment]
-        found, why = least_fixed_point(q * (d.cost + d.blocking), w + d.cost + d.blocking, d.streams, q,
+        found, why = least_fixed_point(q * (d.cost + d.blocking) + d.once, w + d.cost + d.blocking, d.streams, q,
                                        budget)
         if found is None:
             return None, q, None, why
@@ -381,16 +383,17 @@ def response_time(system: SystemModel, task: TaskModel, events: Mapping[str, Eve
     hp = higher_priority(system, task)
     streams = [causally_capped(system, task, j, events, estimates) for j in hp]
     hold = hold_time(system, task, events, estimates)
-    blocking, remote = cooperative_blocking(system, task, events, estimates)
+    blocking, once, remote = cooperative_blocking(system, task, events, estimates)
     names = tuple(j.id for j in hp) + tuple(s.task for s in remote)
     computed: Fraction | None
     failure: str | None
     used: Fraction | None
-    if blocking is None:
+    if blocking is None or once is None:
         computed, q, crit, failure = None, None, None, "a cooperative sibling's hold time is not bounded"
+        blocking = None
     else:
-        computed, q, crit, failure = wcrt(Demand(task.wcet, blocking, streams + remote,
-                                                        events[task.id]))
+        computed, q, crit, failure = wcrt(Demand(task.wcet, blocking, streams + remote, events[task.id], once))
+        blocking = max(blocking, once)  # (reported: the longest wait for the token)
     if task.activation.unknown:
         failure = "its activation is an unresolved synthesis hole (run `synth` first)"
     if task.wcrt_bound is not None:
@@ -414,20 +417,27 @@ def causally_capped(system: SystemModel, task: TaskModel, j: TaskModel, events: 
 
 
 def cooperative_blocking(system: SystemModel, task: TaskModel, events: Mapping[str, EventModel],
-                         estimates: Mapping[str, Fraction | None]) -> tuple[Fraction | None, list[Interferer]]:
-    """(βᵢ, remote sibling streams). βᵢ = max Eₛ over siblings that may hold the token when a job of i
-    is released: every remote sibling and every local one of lower priority (a local sibling of
-    higher or equal priority is already in hp(i)). Remote siblings can also take the token while
-    i's core is busy, once per activation: demand ``η⁺ₛ(w)·Eₛ`` (§6.3)."""
+                         estimates: Mapping[str, Fraction | None]
+                         ) -> tuple[Fraction | None, Fraction | None, list[Interferer]]:
+    """(βᵢ per job, βᵢ once per busy window, remote sibling streams). A sibling on another core may hold
+    the token at the release of every job of i: the most of their hold times ``Eₛ``, per job. A sibling
+    of i's core with lower priority can start only while i has no pending job, so it holds the token at
+    most once per level-i busy window: the most of their ``Eₛ``, once (a local sibling of higher or
+    equal priority is already in hp(i)). Remote siblings can also take the token while i's core is
+    busy, once per activation: demand ``η⁺ₛ(w)·Eₛ`` (§6.3)."""
     sibs = siblings(system, task)
     if not sibs:
-        return ZERO, []
+        return ZERO, ZERO, []
     holds = {s.id: hold_time(system, s, events, estimates) for s in sibs}
-    blockers = [s for s in sibs if s.core != task.core or s.priority < task.priority]
-    values = [holds[s.id] for s in blockers]
-    blocking = None if any(v is None for v in values) else max(values, default=ZERO)  # type: ignore[type-var]
+
+    def most(blockers: list[TaskModel]) -> Fraction | None:
+        values = [holds[s.id] for s in blockers]
+        return None if any(v is None for v in values) else max(values, default=ZERO)  # type: ignore[type-var]
+
+    per_job = most([s for s in sibs if s.core != task.core])
+    once = most([s for s in sibs if s.core == task.core and s.priority < task.priority])
     remote = [token_stream(s, events[s.id], estimates.get(s.id), holds[s.id]) for s in sibs if s.core != task.core]
-    return blocking, remote
+    return per_job, once, remote
 
 
 def token_stream(sibling: TaskModel, events: EventModel, response: Fraction | None,
@@ -464,7 +474,7 @@ def check_response_times(system: SystemModel, responses: Mapping[str, TaskRespon
         notes = [f"higher-or-equal-priority tasks on `{r.core}`: "
                  + (name_list(r.interferers) or "none")]
         if r.blocking:
-            notes.append(f"cooperative blocking per job: {fmt_time(r.blocking)}")
+            notes.append(f"cooperative blocking (the longest wait for the token): {fmt_time(r.blocking)}")
         interferers = tuple(Label(system.task(t).span, "interferes") for t in r.interferers)[:3]
         if r.wcrt is None:
             sink.emit("E312", f"no response-time bound for `{task.id}` on core `{r.core}`: "
