@@ -105,8 +105,8 @@ async def test_the_analysis_follows_and_its_diagnostics_arrive_after_a_pause(cli
     uri = _open(client, "late.vfy", NAVIGATION.replace("timer 50 ms", "timer 50 ms deadline 5 ms"))
     assert await _diagnostics(client, uri, 1) == []  # valid: syntax, names, structure
     found = await _diagnostics(client, uri, 1, analysed=True)
-    late = next(d for d in found if d.code == "E312" and "`oa.OATask`" in d.message)
-    assert "within its deadline 5 ms" in late.message
+    late = next(d for d in found if d.code == "E316" and "`oa.OATask`" in d.message)
+    assert "above its deadline 5 ms" in late.message
 
 
 async def test_completion_offers_the_keywords_the_parser_expects(client: LanguageClient):

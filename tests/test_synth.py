@@ -313,7 +313,7 @@ def test_a_rate_hint_whose_budget_runs_out_is_left_out(write, capsys):
     path = write({"components.vfy": components.replace("activation max 50 Hz", "activation max 0.5 Hz", 1),
                   "holes.vfy": holes})
     path = str(Path(path).parent / "holes.vfy")
-    assert main(["synth", path, "--rlimit", "200000"]) == 1
+    assert main(["synth", path, "--rlimit", "100000"]) == 1
     small = capsys.readouterr().err
     assert "error[E401]: no configuration of `NavigationHoles` satisfies this statement" in small
     assert "this statement cannot hold" in small and "would need to run" not in small

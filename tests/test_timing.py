@@ -397,11 +397,22 @@ def test_a_crowded_core_is_named_in_a_readable_list():
     assert notes and all(n.count(".T`") <= 12 and "more" in n for n in notes)
 
 
-def test_deadline_miss_is_e312_naming_core_and_task():
+def test_a_bound_above_the_deadline_is_e316_naming_core_and_task():
+    """A bound above the deadline proves nothing either way (E316, a warning; prove decides); the bound is
+    still computed and used by everything after it."""
     result = analyze(system([task("m.T", timer(100), wcet=20 * MS, deadline=10 * MS)]))
     (d,) = diagnostics_of(result)
-    assert d.code == "E312" and "`m.T`" in d.message and "`c0`" in d.message
-    assert result.task("m.T").wcrt is None and not result.task("m.T").response.schedulable
+    assert d.code == "E316" and "`m.T`" in d.message and "`c0`" in d.message and d.severity == "warning"
+    assert result.task("m.T").wcrt == 20 * MS and not result.task("m.T").response.schedulable
+
+
+def test_no_bound_is_e312_only_where_the_backlog_can_grow():
+    """E312 where the level's utilisation is 1 or more (a backlog without end); a response time above the
+    period with a utilisation below 1 is a bound (the jobs queue, and the busy window closes)."""
+    full = analyze(system([task("a.T", timer(8), wcet=4 * MS, prio=2), task("b.T", timer(8), wcet=4 * MS, prio=1)]))
+    assert [d.code for d in diagnostics_of(full)] == ["E312"] and full.task("b.T").wcrt is None
+    queued = analyze(system([task("a.T", timer(5), wcet=3 * MS, prio=2), task("b.T", timer(8), wcet=3 * MS, prio=1)]))
+    assert [d.code for d in diagnostics_of(queued)] == ["E316"] and queued.task("b.T").wcrt == 9 * MS
 
 
 def test_analyze_never_raises_on_odd_systems():
@@ -528,7 +539,11 @@ def test_json_report_shape_and_exact_numbers():
     assert (trig["kind"], trig["prescaler"], trig["trigger_port"]) == ("trigger", 10, "scan")
     doc_bad = to_json(analyze(system([task("m.T", timer(100), wcet=20 * MS, deadline=10 * MS)])))
     jsonschema.validate(doc_bad, JSON_SCHEMA)
-    assert doc_bad["tasks"][0]["wcrt"] is None
+    assert doc_bad["tasks"][0]["wcrt"] == {"exact": "1/50", "decimal": "0.02"}  # above its deadline: E316
+    assert doc_bad["tasks"][0]["schedulable"] is False
+    doc_none = to_json(analyze(system([task("m.T", timer(10), wcet=10 * MS)])))  # a level utilisation of 1
+    jsonschema.validate(doc_none, JSON_SCHEMA)
+    assert doc_none["tasks"][0]["wcrt"] is None
 
 
 def test_text_report_outline():

@@ -69,10 +69,11 @@ _ALL = [
     Code("E309", "priority is not a non-negative integer"),
     Code("E310", "sampling tolerance violated"),
     Code("E311", "core utilisation above 1"),
-    Code("E312", "no response-time bound within the deadline"),
+    Code("E312", "no response-time bound"),
     Code("E313", "synthesis hole has no candidate values"),
     Code("E314", "compound in-port activated outside its activation constraint"),
     Code("E315", "response-time bound below the worst-case execution time"),
+    Code("E316", "response-time bound above the deadline", Severity.WARNING),
     # E4xx: synthesis
     Code("E401", "synthesis is unsatisfiable"),
     Code("E402", "synthesis is undecided"),

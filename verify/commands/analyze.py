@@ -1,8 +1,8 @@
 """``verify analyze FILE``: rates, sampling, response times and chain latencies (specs/timing.md).
 
-Exit codes: 0 every latency spec proved by the analysis' bounds; 3 a spec not proved by its bound (an
-upper bound above the spec proves nothing either way: ``prove`` decides it); 1 the system misses its
-timing (``TIMING_FAILURES``); 2 invalid input; 70 internal error.
+Exit codes: 0 every latency spec and deadline proved by the analysis' bounds; 3 a spec or deadline not
+proved by its bound (an upper bound above it proves nothing either way: ``prove`` decides it, E316 for a
+deadline); 1 the system misses its timing (``TIMING_FAILURES``); 2 invalid input; 70 internal error.
 """
 from __future__ import annotations
 
@@ -18,7 +18,7 @@ RESULT = "analysis"
 MODEL, SYSTEM = True, True
 
 #: analysis errors that say the configured system misses its timing (overload, a response time with
-#: no bound within the deadline): exit 1, as `prove` exits 1 on a missed deadline (E503); every other
+#: no bound at all): exit 1, as `prove` exits 1 on a missed deadline (E503); every other
 #: analysis error (a rate outside a constraint or tolerance) says the configuration is invalid: exit 2
 TIMING_FAILURES = frozenset({"E311", "E312"})
 
@@ -39,8 +39,9 @@ def run(args: argparse.Namespace) -> int:
     problems = diagnostics_of(analysis)
     show(render(RESULT, args.format, Report(RESULT, args.file, tuple(problems), result.sources, analysis, system)))
     code = analysis_exit_code(problems)
-    if code == EXIT_OK and any(not s.ok for c in analysis.chains for s in c.specs):
-        return EXIT_UNDECIDED  # (a spec the bound does not prove: as `prove` before it decides)
+    if code == EXIT_OK and (any(not s.ok for c in analysis.chains for s in c.specs)
+                            or any(d.code == "E316" for d in problems)):
+        return EXIT_UNDECIDED  # (a spec or deadline the bound does not prove: as `prove` before it decides)
     return code
 
 

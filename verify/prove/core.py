@@ -417,7 +417,7 @@ def diagnostics(model: SystemModel, verdicts: Sequence[Verdict]) -> list[Diagnos
         if v.bound is not None:
             notes.append(f"the compositional bound is {fmt_time(v.bound)}")
         elif v.subject == "task":
-            notes.append("the response-time analysis finds no bound within the deadline (E312)")
+            notes.append("the response-time analysis finds no bound (E312)")
         else:
             notes.append("the compositional analysis gives no bound")
         if v.status == "violated":

@@ -387,12 +387,12 @@ class Engine:
         return added
 
     def _lower_bound(self, response: TaskResponse) -> int | None:
-        """The analysed WCRT in ticks; for a task without a bound within its deadline (its busy window
-        exceeded it, or the interfering load reached 1) one tick more than the deadline."""
+        """The analysed WCRT in ticks; for a task without a bound (the load of its level reached 1) one tick
+        more than the deadline."""
         if response.wcrt is not None:
             return self.enc.ticks(response.wcrt)
         why = response.failure or ""
-        if response.deadline is not None and ("exceeds the deadline" in why or "utilisation" in why):
+        if response.deadline is not None and "utilisation" in why:
             return self.enc.ticks(response.deadline) + 1
         return None
 

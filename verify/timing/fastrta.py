@@ -200,7 +200,6 @@ class Round:
             else self._stream(n) for n in range(len(tasks))]
         self.capped = self._causal_paths()
         self._hold_run: list[_Run | None] = [None] * len(tasks)  # (ticks or None, failure, steps left)
-        self._hold_limit: list[int | None] = [None] * len(tasks)  # the deadline in ticks
         self.result: list[_Result | None] = [None] * len(tasks)  # (computed, q, critical, failure, blocking, remote)
         # last round, if its ticks are these (then a stream of the same object is the same stream)
         self.previous = previous if previous is not None and previous.scale == self.scale and \
@@ -326,7 +325,7 @@ class Round:
                 self.result[n] = self._response(n, core, with_self)
             return
         if previous is not None and self._unchanged(n, previous):
-            self._hold_run[n], self._hold_limit[n] = previous._hold_run[n], previous._hold_limit[n]
+            self._hold_run[n] = previous._hold_run[n]
             self.result[n] = previous.result[n]
             return
         self._hold(n, core, with_self)
@@ -405,10 +404,10 @@ class Round:
         return core.groups, extra_at, first_bad, None if unrated else load
 
     def _lfp(self, base: int, start: int, groups: list[_Period], extra: Callable[[int], int] | None,
-             first_bad: int | None, load: int | None, limit: int | None, left: int) -> _Run:
+             first_bad: int | None, load: int | None, left: int) -> _Run:
         """``rta.least_fixed_point`` in ticks (``load`` in units of 1/U) for the streams that
         ``_interference`` describes; ``left`` is the step budget, returned as used."""
-        if limit is None and load is None:
+        if load is None:
             return None, "the interference is not bounded", left
         if load is not None and load >= self.unit and base > 0:
             return None, f"the interfering utilisation is {ratio(Fraction(load, self.unit))} (at least 1)", left
@@ -417,8 +416,6 @@ class Round:
             left -= 1
             if left < 0:
                 return None, f"no fixed point within {MAX_STEPS} iteration steps", left
-            if limit is not None and w > limit:
-                return None, "it exceeds the deadline", left
             if w > 0:
                 if first_bad is not None:
                     return None, f"the activations of `{self.tasks[first_bad].id}` are not bounded", left
@@ -444,9 +441,8 @@ class Round:
     def _hold(self, n: int, core: _Core, with_self: bool) -> None:
         """``rta.hold_time``: the busy window of one job of n, no blocking, no caps (§6.3)."""
         cost = self.streams[n].cost
-        limit = self._hold_limit[n] = self.ticks(self.deadlines[n][0])
         groups, extra_at, first_bad, load = self._interference(n, core, with_self)
-        self._hold_run[n] = self._lfp(cost, cost, groups, extra_at and extra_at(1), first_bad, load, limit,
+        self._hold_run[n] = self._lfp(cost, cost, groups, extra_at and extra_at(1), first_bad, load,
                                       MAX_STEPS)
 
     def hold(self, n: int) -> Fraction | None:
@@ -459,8 +455,8 @@ class Round:
     def _response(self, n: int, core: _Core, with_self: bool) -> _Result:
         """``rta.response_time`` less what ``responses`` assembles: (R, Q, critical q, failure,
         blocking, remote sibling streams)."""
-        blocking, remote = self._blocking(n)
-        if blocking is None:
+        blocking, once, remote = self._blocking(n)
+        if blocking is None or once is None:
             return None, None, None, "a cooperative sibling's hold time is not bounded", None, remote
         capped: list[_Capped] = []
         paths = self._capped_into(n)
@@ -470,7 +466,7 @@ class Round:
                 streams = self.streams
                 capped = [(streams[source], product, extra + carry(latency))
                           for source, product, latency, extra in paths]
-        return self._wcrt(n, core, with_self, blocking, capped, remote) + (blocking, remote)
+        return self._wcrt(n, core, with_self, blocking, once, capped, remote) + (max(blocking, once), remote)
 
     def _carry(self, n: int) -> Callable[[int], int] | None:
         """``rta.carry_in`` of task n as a function of the path latency L⁺ in ticks: the least of
@@ -492,16 +488,21 @@ class Round:
         """The causal paths into n from streams of hp(n) (``_causal_paths`` keeps no others)."""
         return self.capped.get(n, [])
 
-    def _blocking(self, n: int) -> tuple[Fraction | None, list[_Stream]]:
-        """``rta.cooperative_blocking``: β (seconds) and the remote siblings' token streams."""
+    def _blocking(self, n: int) -> tuple[Fraction | None, Fraction | None, list[_Stream]]:
+        """``rta.cooperative_blocking``: β per job and β once per window (seconds), and the remote
+        siblings' token streams."""
         sibs = self.static.siblings[n]
         if not sibs:
-            return ZERO, []
+            return ZERO, ZERO, []
         task = self.tasks[n]
-        values = [self.hold(s) for s in sibs
-                  if self.tasks[s].core != task.core or self.tasks[s].priority < task.priority]
-        known = [v for v in values if v is not None]
-        blocking = max(known, default=ZERO) if len(known) == len(values) else None
+
+        def most(values: list[Fraction | None]) -> Fraction | None:
+            known = [v for v in values if v is not None]
+            return max(known, default=ZERO) if len(known) == len(values) else None
+
+        blocking = most([self.hold(s) for s in sibs if self.tasks[s].core != task.core])
+        once = most([self.hold(s) for s in sibs
+                     if self.tasks[s].core == task.core and self.tasks[s].priority < task.priority])
         remote = []
         for s in sibs:
             if self.tasks[s].core == task.core:
@@ -514,10 +515,10 @@ class Round:
             cost, period = (0, None) if run[0] is None else (run[0], self.ticks(events.period_min))
             load = 0 if events.silent else None if period is None else cost * (self.unit // period)
             remote.append(_Stream(s, cost, period, self.ticks(jitter), events.silent, load))
-        return blocking, remote
+        return blocking, once, remote
 
-    def _wcrt(self, n: int, core: _Core, with_self: bool, blocking: Fraction, capped: Sequence[_Capped],
-              remote: Sequence[_Stream]) -> _Wcrt:
+    def _wcrt(self, n: int, core: _Core, with_self: bool, blocking: Fraction, once: Fraction,
+              capped: Sequence[_Capped], remote: Sequence[_Stream]) -> _Wcrt:
         """``rta.wcrt`` in ticks: (R, Q, critical q, failure)."""
         own = self.events[n]
         if not own.silent and (own.period_min is None or own.jitter_min is None):
@@ -529,17 +530,15 @@ class Round:
         period = 1 if own.silent else stream.period
         jitter = 0 if own.silent else self.ticks(own.jitter_min) if self.static.siblings[n] else stream.jitter
         assert period is not None and jitter is not None, "bounded (checked above)"
-        deadline = self.deadlines[n][0]
-        if deadline is None:
-            total = self._all_loads(n, core, with_self, remote)
-            if total is not None and not own.silent:
-                total += (stream.cost + self.ticks(blocking)) * (self.unit // period)
-            if total is not None and total >= self.unit:
-                return None, None, None, "the utilisation of its level is 1 or more and it has no deadline"
+        total = self._all_loads(n, core, with_self, remote)  # (whether the busy window closes: §6.2)
+        if total is not None and not own.silent:  # (blocking is left out: it may come once per window)
+            total += stream.cost * (self.unit // period)
+        if total is not None and total >= self.unit:
+            return None, None, None, "the utilisation of its level is 1 or more"
         blocking_ticks = self.ticks(blocking) if blocking else 0
+        once_ticks = self.ticks(once) if once else 0
         cost = stream.cost + blocking_ticks
-        reuse = not capped and not remote and not blocking_ticks
-        limit_base = self._hold_limit[n]
+        reuse = not capped and not remote and not blocking_ticks and not once_ticks
         best: int | None = None
         best_q: int | None = None
         w: int | None = 0
@@ -547,15 +546,14 @@ class Round:
         groups, extra_at, first_bad, load = self._interference(n, core, with_self, capped, remote)
         for q in range(1, MAX_JOBS + 1):
             offset = 0 if q == 1 else max(0, (q - 1) * period - jitter)
-            limit = None if limit_base is None else limit_base + offset
             if q == 1 and reuse:  # the same iteration as the hold time's
                 run = self._hold_run[n]
                 assert run is not None, "n's hold time is run before its WCRT"
                 w, why, left = run
             else:
                 assert w is not None, "(a failed iteration returns)"
-                w, why, left = self._lfp(q * cost, w + cost, groups, extra_at and extra_at(q), first_bad, load,
-                                         limit, left)
+                w, why, left = self._lfp(q * cost + once_ticks, w + cost, groups, extra_at and extra_at(q),
+                                         first_bad, load, left)
             if w is None:
                 return None, q, None, why
             if best is None or w - offset > best:

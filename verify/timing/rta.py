@@ -53,7 +53,7 @@ class TaskResponse:
     """Response-time bounds of one task, measured from its release (§6).
 
     ``wcrt`` is the bound every later step uses: the user's ``wcrt`` bound if given (rule "user
-    bound"), else ``wcrt_computed``; None when no bound was found within the deadline (``failure``
+    bound"), else ``wcrt_computed``; None when no bound was found (``failure``
     says why). ``blocking`` is the per-job cooperative blocking ``βᵢ``; ``busy_jobs`` the number of
     jobs Q in the longest busy window; ``critical_job`` the q that gave the maximum.
     """
@@ -290,22 +290,19 @@ class Budget:
         return self.left >= 0
 
 
-def least_fixed_point(base: Fraction, start: Fraction, streams: list[Interferer],
-                      limit: Fraction | None, q: int = 1,
+def least_fixed_point(base: Fraction, start: Fraction, streams: list[Interferer], q: int = 1,
                       budget: Budget | None = None) -> tuple[Fraction | None, str | None]:
     """The least w ≥ start with ``w = base + Σ demand(w)`` (iterated from ``start``, which must not
-    exceed it), or None with a reason: the demand is unbounded, w exceeds ``limit``, the streams'
-    utilisation is at least 1 (no fixed point), or the step budget runs out."""
+    exceed it), or None with a reason: the demand is unbounded, the streams' utilisation is at least 1
+    (no fixed point), or the step budget runs out."""
     load = _load([s for s in streams if s.prescalers is None or s.carry is None])
-    if limit is None and load is None:
+    if load is None:
         return None, "the interference is not bounded"
     if load is not None and load >= 1 and base > 0:
         # w ↦ base + Σ⌈(w + J)/P⌉·C ≥ base + U·w > w: no fixed point exists
         return None, f"the interfering utilisation is {ratio(load)} (at least 1)"
     w, budget = start, budget or Budget()
     while budget.take():
-        if limit is not None and w > limit:
-            return None, "it exceeds the deadline"
         demand = [s.demand(w, q) for s in streams]
         if any(d is None for d in demand):
             bad = next(s.task for s, d in zip(streams, demand) if d is None)
@@ -323,11 +320,11 @@ def _load(streams: list[Interferer]) -> Fraction | None:
 
 
 def hold_time(system: SystemModel, task: TaskModel, events: Mapping[str, EventModel],
-              estimates: Mapping[str, Fraction | None], deadline: Fraction | None) -> Fraction | None:
+              estimates: Mapping[str, Fraction | None]) -> Fraction | None:
     """Eᵢ: from the start of a job to its completion, ``w = Cᵢ + Σ_{hp(i)} η⁺ⱼ(w)·Cⱼ`` (no own backlog,
     no token wait): how long a cooperative job holds its instance's token."""
     streams = [interferer(system, j, events[j.id], estimates.get(j.id), j.wcet) for j in higher_priority(system, task)]
-    value, _ = least_fixed_point(task.wcet, task.wcet, streams, deadline)
+    value, _ = least_fixed_point(task.wcet, task.wcet, streams)
     return value
 
 
@@ -336,28 +333,29 @@ class Demand:
     """Everything the busy window of one task needs."""
 
     cost: Fraction
-    blocking: Fraction
+    blocking: Fraction  # per job (a sibling on another core may hold the token at every release)
     streams: list[Interferer]
     own: EventModel
+    once: Fraction = ZERO  # once per busy window (a lower-priority sibling of the same core)
 
 
-def wcrt(d: Demand, deadline: Fraction | None) -> tuple[Fraction | None, int | None, int | None, str | None]:
+def wcrt(d: Demand) -> tuple[Fraction | None, int | None, int | None, str | None]:
     """The WCRT ``Rᵢ = max_{q ≤ Q} (w(q) − δ⁻ᵢ(q))`` over the level-i busy window of §6.2 (Joseph &
     Pandya 1986; Lehoczky 1990; Tindell et al. 1994): returns (R, Q, critical q, failure)."""
     if not d.own.silent and (d.own.period_min is None or d.own.jitter_min is None):
         return None, None, None, ("its activations are not bounded" if d.own.period_min is None else
                                   "its activation jitter is not bounded (a writer upstream has no WCRT bound)")
-    own = Interferer("", d.cost + d.blocking, d.own.period_min, ZERO, d.own.silent)
-    if (deadline is None and _load(d.streams + [own]) is not None
-            and _load(d.streams + [own]) >= 1):  # type: ignore[operator]  # not None (the same load, checked)
-        return None, None, None, "the utilisation of its level is 1 or more and it has no deadline"
+    # the load without the blocking, which may come once per busy window: at 1 or more the window never
+    # closes; below 1 it does (the per-job blocking term is only a bound, and the job budget guards it)
+    load = _load(d.streams + [Interferer("", d.cost, d.own.period_min, ZERO, d.own.silent)])
+    if load is not None and load >= 1:
+        return None, None, None, "the utilisation of its level is 1 or more"
     best: tuple[Fraction, int] | None = None
     w, budget = ZERO, Budget()
     for q in range(1, MAX_JOBS + 1):
         # δ⁻(q) is None only for a silent task and q > 1, and a silent task's window closes at q = 1
         offset: Fraction = d.own.delta_min(q)  # type: ignore[assignment]
-        limit = None if deadline is None else deadline + offset
-        found, why = least_fixed_point(q * (d.cost + d.blocking), w + d.cost + d.blocking, d.streams, limit, q,
+        found, why = least_fixed_point(q * (d.cost + d.blocking) + d.once, w + d.cost + d.blocking, d.streams, q,
                                        budget)
         if found is None:
             return None, q, None, why
@@ -384,17 +382,18 @@ def response_time(system: SystemModel, task: TaskModel, events: Mapping[str, Eve
     deadline, deadline_rule = deadline_of(task, events[task.id])
     hp = higher_priority(system, task)
     streams = [causally_capped(system, task, j, events, estimates) for j in hp]
-    hold = hold_time(system, task, events, estimates, deadline)
-    blocking, remote = cooperative_blocking(system, task, events, estimates)
+    hold = hold_time(system, task, events, estimates)
+    blocking, once, remote = cooperative_blocking(system, task, events, estimates)
     names = tuple(j.id for j in hp) + tuple(s.task for s in remote)
     computed: Fraction | None
     failure: str | None
     used: Fraction | None
-    if blocking is None:
+    if blocking is None or once is None:
         computed, q, crit, failure = None, None, None, "a cooperative sibling's hold time is not bounded"
+        blocking = None
     else:
-        computed, q, crit, failure = wcrt(Demand(task.wcet, blocking, streams + remote,
-                                                        events[task.id]), deadline)
+        computed, q, crit, failure = wcrt(Demand(task.wcet, blocking, streams + remote, events[task.id], once))
+        blocking = max(blocking, once)  # (reported: the longest wait for the token)
     if task.activation.unknown:
         failure = "its activation is an unresolved synthesis hole (run `synth` first)"
     if task.wcrt_bound is not None:
@@ -418,20 +417,27 @@ def causally_capped(system: SystemModel, task: TaskModel, j: TaskModel, events: 
 
 
 def cooperative_blocking(system: SystemModel, task: TaskModel, events: Mapping[str, EventModel],
-                         estimates: Mapping[str, Fraction | None]) -> tuple[Fraction | None, list[Interferer]]:
-    """(βᵢ, remote sibling streams). βᵢ = max Eₛ over siblings that may hold the token when a job of i
-    is released: every remote sibling and every local one of lower priority (a local sibling of
-    higher or equal priority is already in hp(i)). Remote siblings can also take the token while
-    i's core is busy, once per activation: demand ``η⁺ₛ(w)·Eₛ`` (§6.3)."""
+                         estimates: Mapping[str, Fraction | None]
+                         ) -> tuple[Fraction | None, Fraction | None, list[Interferer]]:
+    """(βᵢ per job, βᵢ once per busy window, remote sibling streams). A sibling on another core may hold
+    the token at the release of every job of i: the most of their hold times ``Eₛ``, per job. A sibling
+    of i's core with lower priority can start only while i has no pending job, so it holds the token at
+    most once per level-i busy window: the most of their ``Eₛ``, once (a local sibling of higher or
+    equal priority is already in hp(i)). Remote siblings can also take the token while i's core is
+    busy, once per activation: demand ``η⁺ₛ(w)·Eₛ`` (§6.3)."""
     sibs = siblings(system, task)
     if not sibs:
-        return ZERO, []
-    holds = {s.id: hold_time(system, s, events, estimates, deadline_of(s, events[s.id])[0]) for s in sibs}
-    blockers = [s for s in sibs if s.core != task.core or s.priority < task.priority]
-    values = [holds[s.id] for s in blockers]
-    blocking = None if any(v is None for v in values) else max(values, default=ZERO)  # type: ignore[type-var]
+        return ZERO, ZERO, []
+    holds = {s.id: hold_time(system, s, events, estimates) for s in sibs}
+
+    def most(blockers: list[TaskModel]) -> Fraction | None:
+        values = [holds[s.id] for s in blockers]
+        return None if any(v is None for v in values) else max(values, default=ZERO)  # type: ignore[type-var]
+
+    per_job = most([s for s in sibs if s.core != task.core])
+    once = most([s for s in sibs if s.core == task.core and s.priority < task.priority])
     remote = [token_stream(s, events[s.id], estimates.get(s.id), holds[s.id]) for s in sibs if s.core != task.core]
-    return blocking, remote
+    return per_job, once, remote
 
 
 def token_stream(sibling: TaskModel, events: EventModel, response: Fraction | None,
@@ -459,21 +465,25 @@ def response_times(system: SystemModel, events: Mapping[str, EventModel],
 
 def check_response_times(system: SystemModel, responses: Mapping[str, TaskResponse],
                          sink: DiagnosticSink) -> None:
-    """E312: no response-time bound within the deadline (tasks with a user bound are trusted)."""
+    """E312: no response-time bound; E316: a bound above the deadline, which it does not prove (tasks with a
+    user bound are trusted)."""
     for task in system.tasks:
         r = responses[task.id]
-        if task.wcrt_bound is not None or r.wcrt is not None:
+        if task.wcrt_bound is not None:
             continue
-        deadline = (f"its deadline {fmt_time(r.deadline)} ({r.deadline_rule})" if r.deadline is not None
-                    else "any deadline (it has none)")
-        reason = r.failure or "no bound"
         notes = [f"higher-or-equal-priority tasks on `{r.core}`: "
                  + (name_list(r.interferers) or "none")]
         if r.blocking:
-            notes.append(f"cooperative blocking per job: {fmt_time(r.blocking)}")
-        sink.emit("E312", f"no response-time bound for `{task.id}` on core `{r.core}` within {deadline}: "
-                  f"{reason}", task.span, "may miss its deadline",
-                  secondary=tuple(Label(system.task(t).span, "interferes") for t in r.interferers)[:3],
-                  notes=tuple(notes),
-                  help="give it a higher priority, move higher-priority tasks to another core, "
-                  "or relax the deadline")
+            notes.append(f"cooperative blocking (the longest wait for the token): {fmt_time(r.blocking)}")
+        interferers = tuple(Label(system.task(t).span, "interferes") for t in r.interferers)[:3]
+        if r.wcrt is None:
+            sink.emit("E312", f"no response-time bound for `{task.id}` on core `{r.core}`: "
+                      f"{r.failure or 'no bound'}", task.span, "no bound", secondary=interferers, notes=tuple(notes),
+                      help="give it a higher priority, move higher-priority tasks to another core, or lower "
+                           "the load of its core")
+        elif r.deadline is not None and r.wcrt > r.deadline:
+            sink.emit("E316", f"the response-time bound of `{task.id}` on core `{r.core}`, {fmt_time(r.wcrt)}, is "
+                      f"above its deadline {fmt_time(r.deadline)} ({r.deadline_rule}): the bound does not prove the "
+                      "deadline", task.span, "deadline not proved by the bound", secondary=interferers,
+                      notes=tuple(notes), help="`verify prove` decides it (it shows a run that misses it, or "
+                      "proves it); or give the task a higher priority or relax its deadline")
