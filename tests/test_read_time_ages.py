@@ -11,9 +11,8 @@ independent simulator and prove's falsifying search.
 * A Hypothesis property: small systems around trigger hops on one or two cores — equal and distinct
   priorities, zero ``bcet``, cooperative siblings, delays, prescalers, AND joins, an interfering task
   — with no simulated latency beyond the analytic bounds, and none found by prove's search.
-* A soundness bug of §6.2 this property found (not of §7.7): the causal cap bounds an interferer
-  whose suspension jitter is unbounded (``test_causal_cap_with_an_unbounded_suspension``, xfail);
-  the property leaves such systems out until it is fixed.
+* A soundness bug of §6.2 this property found (not of §7.7), fixed: the causal cap bounded an
+  interferer whose suspension jitter is unbounded (``test_causal_cap_with_an_unbounded_suspension``).
 """
 from __future__ import annotations
 
@@ -21,7 +20,7 @@ import random
 from fractions import Fraction
 
 import pytest
-from hypothesis import HealthCheck, assume, given, settings
+from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import verify
@@ -353,13 +352,6 @@ def age_systems(draw) -> str:
     return text
 
 
-def _unbounded_suspension(model, analysis) -> bool:
-    """Whether a cooperative task with a sibling has no WCRT bound (so an unbounded suspension jitter)."""
-    cooperative = [t for t in model.tasks if t.kind == "cooperative"]
-    return any(analysis.task(t.id).wcrt is None and sum(s.instance == t.instance for s in cooperative) > 1
-               for t in cooperative)
-
-
 @pytest.mark.slow
 @settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(age_systems(), st.integers(0, 2**16))
@@ -368,8 +360,6 @@ def test_no_run_beyond_the_bounds_around_trigger_hops(text, seed):
     assert loaded.ok, [(d.code, d.message) for d in loaded.diagnostics] + [text]
     model = loaded.system()
     analysis = analyze(model)
-    # a known soundness bug of §6.2, not of §7.7: see test_causal_cap_with_an_unbounded_suspension
-    assume(not _unbounded_suspension(model, analysis))
     chain = analysis.chain("ch")
     for run in range(4):
         scenario = random_scenario(model, random.Random(f"{seed}/{run}"), Fraction(1, 2))
@@ -416,18 +406,15 @@ system S {
 """
 
 
-@pytest.mark.xfail(strict=True, reason="known soundness bug of the causal cap (specs/timing.md §6.2), found by "
-                   "this file's property: the cap on p.W's demand in u.T's busy window ignores p.W's suspension "
-                   "jitter, which is unbounded (p.W and its sibling p.R need 110 % of the token), so u.T gets "
-                   "R = 3 ms while its responses grow without bound")
 def test_causal_cap_with_an_unbounded_suspension():
     """u.T (c1, priority 1, 5 ms timer) triggers p.W (c1, priority 1, cooperative) whose sibling p.R
     (c0) it triggers in turn: W and R need 2.5 + 3 ms of the shared token every 5 ms, so W's jobs
     pile up, and each ranks before the u.T job released after it (FIFO, §1). The analysis gives W
-    and R no bound (E312) but u.T R = 3 ms: W's stream is causally capped (it is triggered by u.T's
-    output), and a capped stream is bounded even where its jitter — here W's suspension jitter
-    R − C, with R unbounded — is not. Without the cap where the suspension jitter is unbounded, u.T
-    has no bound either."""
+    and R no bound (E312), and gave u.T R = 3 ms: W's stream was causally capped (it is triggered by
+    u.T's output), and a capped stream was bounded even where its jitter — here W's suspension jitter
+    R − C, with R unbounded — is not. No cap applies where the suspension jitter is unbounded, so u.T
+    has no bound either (§6.2)."""
     model = _load(UNBOUNDED_SUSPENSION)
+    assert analyze(model).task("u.T").wcrt is None
     scenario = _slowest(random_scenario(model, random.Random("0/0"), Fraction(1, 2)), model)
     assert bound_violations(model, simulate(model, scenario)) == []

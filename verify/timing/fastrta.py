@@ -272,6 +272,8 @@ class Round:
                   for c in self.static.causes]
         estimates = [self.ticks(e) for e in self.estimates]
         for source in range(len(tasks)):
+            if self.static.siblings[source] and estimates[source] is None:
+                continue  # (its suspension jitter is not bounded: rta.causally_capped caps nothing then)
             core, priority = tasks[source].core, tasks[source].priority
             visited, found = {source}, set()
             stack = [(iter(causes[source]), 1, 0, 0)]  # (causes not yet tried, Π, E, L⁺) per task on the path

@@ -409,6 +409,8 @@ def causally_capped(system: SystemModel, task: TaskModel, j: TaskModel, events: 
                     estimates: Mapping[str, Fraction | None]) -> Interferer:
     """j's demand on ``task``'s busy window, capped when j only runs because ``task`` completed."""
     stream = interferer(system, j, events[j.id], estimates.get(j.id), j.wcet)
+    if suspension_jitter(system, j, estimates.get(j.id)) is None:
+        return stream  # (a job of j may wait for its token without bound: released early, it runs late)
     path = causal_path(system, j, task, estimates)
     if path is None:
         return stream
