@@ -14,8 +14,8 @@ per system and 1,000 for the Autoware example, seeded per system): the worst run
 larger of the two (issue 16 measures against "worst simulated or found by prove"). It reports, per
 latency metric: the share of chains with a bound, and over the bounded ones the mean and the minimum
 of worst run / bound (and of the simulated worst alone / bound); and the share of systems with E312
-(some task without a response-time bound within its deadline: the drawn systems have explicit
-deadlines, which a run may really miss, besides the implicit ones, A⁺). A run above its bound is a
+(some task without any response-time bound: specs/timing.md §6.2; a bound above a deadline is E316,
+not counted). A run above its bound is a
 soundness bug: the stage stops with an error row (``AboveBound``) instead of a ratio above 1.
 """
 from __future__ import annotations
