@@ -430,7 +430,7 @@ def pair_span(t: Timing, hop: HopModel) -> Fraction | None:
     streams = [interferer(t.system, j, t.events[j.id], t.R(j.id), j.wcet)
                for j in t.on_core[p.core] if j.priority >= p.priority and j.id not in (p.id, i.id)
                and (overtakes(t, p, j) or j.priority >= i.priority)]
-    value, _ = least_fixed_point(p.wcet + i.wcet, p.wcet + i.wcet, streams, e + r)
+    value, _ = least_fixed_point(p.wcet + i.wcet, p.wcet + i.wcet, streams)
     return value if value is not None and value < e + r else None
 
 
@@ -475,7 +475,7 @@ def start_to_completion(t: Timing, task: str) -> Fraction | None:
         keep = [j for j in hp if overtakes(t, model, j)]
         if len(keep) < len(hp):
             streams = [interferer(t.system, j, t.events[j.id], t.R(j.id), j.wcet) for j in keep]
-            value, _ = least_fixed_point(model.wcet, model.wcet, streams, min(bounds))
+            value, _ = least_fixed_point(model.wcet, model.wcet, streams)
             if value is not None:
                 bounds.append(value)
     return min(bounds) if bounds else None
