@@ -471,13 +471,13 @@ def check_response_times(system: SystemModel, responses: Mapping[str, TaskRespon
     user bound are trusted)."""
     for task in system.tasks:
         r = responses[task.id]
-        if task.wcrt_bound is not None:
+        if task.wcrt_bound is not None or (r.wcrt is not None and (r.deadline is None or r.wcrt <= r.deadline)):
             continue
         notes = [f"higher-or-equal-priority tasks on `{r.core}`: "
                  + (name_list(r.interferers) or "none")]
         if r.blocking:
             notes.append(f"cooperative blocking (the longest wait for the token): {fmt_time(r.blocking)}")
-        interferers = tuple(Label(system.task(t).span, "interferes") for t in r.interferers)[:3]
+        interferers = tuple(Label(system.task(t).span, "interferes") for t in r.interferers[:3])
         if r.wcrt is None:
             sink.emit("E312", f"no response-time bound for `{task.id}` on core `{r.core}`: "
                       f"{r.failure or 'no bound'}", task.span, "no bound", secondary=interferers, notes=tuple(notes),
