@@ -14,6 +14,7 @@ from fractions import Fraction
 from typing import TYPE_CHECKING
 from collections.abc import Mapping
 
+from ..diagnostics import Diagnostic
 from ..model import SystemModel
 from ..resolve import SystemScope
 from ..timing import AnalysisResult, analyze
@@ -27,6 +28,14 @@ if TYPE_CHECKING:
 
     from .encode import Encoding
 
+
+
+
+def rejects(d: Diagnostic) -> bool:
+    """Whether a diagnostic of the analysis rejects a configuration: every error, and a deadline that its
+    bound does not prove (E316, a warning for `analyze`): synth returns only configurations whose
+    deadlines the analysis proves, as its encoding asks ``R ≤ deadline`` (specs/synthesis.md)."""
+    return d.severity.value == "error" or d.code == "E316"
 
 @dataclass(frozen=True)
 class Config:
@@ -73,13 +82,13 @@ class Problem:
 
     def evaluate(self, config: Config) -> Evaluation:
         """Analyse a configuration (specs/timing.md §5–§7): accepted when the analysis reports no
-        error and every spec holds."""
+        error, every deadline is proved by its bound (no E316) and every spec holds."""
         if config in self._cache:
             return self._cache[config]
         model = self.configured(config)
         result = analyze(model)
         self.analyses += 1
-        reasons = [f"{d.code}: {d.message}" for d in result.diagnostics if d.severity.value == "error"]
+        reasons = [f"{d.code}: {d.message}" for d in result.diagnostics if rejects(d)]
         for chain in result.chains:
             reasons += [f"chain `{chain.name}`: {c.kind} bound exceeds its spec" for c in chain.specs if not c.ok]
         self._cache[config] = Evaluation(model, result, not reasons, tuple(reasons))

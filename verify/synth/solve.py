@@ -131,7 +131,7 @@ def strictly_better(enc: Encoding, objectives: Sequence[Objective], values: Sequ
 
 def failing_checks(problem: Problem, ev: Evaluation) -> set[str] | None:
     """The statements whose checks reject ``ev`` (spec bounds, activation-constraint ends, sampling
-    tolerances); an empty set when some failure needs no statement (E311, E312); None when a failure
+    tolerances); an empty set when some failure needs no statement (E311, E312, E316); None when a failure
     cannot be attributed (then the whole configuration is blocked)."""
     from ..timing.rates import _tolerance_violation
 
@@ -139,7 +139,7 @@ def failing_checks(problem: Problem, ev: Evaluation) -> set[str] | None:
     checks: set[str | None]  # (None: a failure no statement asks for)
     result, checks = ev.result, set()
     for d in result.diagnostics:
-        if d.severity.value == "error" and d.code in ("E311", "E312"):
+        if d.code in ("E311", "E312", "E316"):
             return set()
     for chain in result.chains:
         checks |= {f"spec:{chain.name}:{s.kind}" for s in chain.specs if not s.ok}

@@ -26,6 +26,7 @@ from collections.abc import Mapping
 from .. import syntax as s
 from ..api import LoadResult, _finish
 from ..diagnostics import DiagnosticSink
+from .problem import rejects
 from ..fmt import blank_lines, collect_comments, format_activation, format_module, format_number, format_quantity
 from ..loader import Project
 from ..model import SystemModel
@@ -204,7 +205,7 @@ def recheck(load: LoadResult, system: str,
         return reloaded, None, None, [f"{d.code}: {d.message}" for d in reloaded.diagnostics] or ["not loaded"]
     model = reloaded.models[system]
     result = analyze(model)
-    problems = [f"{d.code}: {d.message}" for d in result.diagnostics if d.severity.value == "error"]
+    problems = [f"{d.code}: {d.message}" for d in result.diagnostics if rejects(d)]
     problems += [f"`{c.name}`: {sp.kind} exceeds its spec" for c in result.chains for sp in c.specs if not sp.ok]
     problems += [f"`{t.id}` still has a hole" for t in model.holes]
     return reloaded, model, result, problems
