@@ -28,7 +28,7 @@ from hypothesis import strategies as st
 import verify
 from verify.sim import KINDS, Scenario, chain_latencies, random_scenario, simulate
 from verify.timing import analyze
-from verify.timing.chains import REGISTER, SAME_CORE
+from verify.timing.chains import READ_AGE, REGISTER, SAME_CORE
 
 from .test_bounds_vs_simulation import _slowest
 from .test_timing import bound_violations
@@ -129,12 +129,15 @@ def test_equal_priorities_keep_the_register_rule():
     p and q at priority 1, h (priority 5, 2 ms) and q released at 9.99 ms, p at 10 ms. h runs until
     11.99 ms; then q, released before p's job, starts first and reads p's job of 0 ms while p's
     job of 10 ms waits. The analysis keeps the register rule: R(p) = 3 + 1 + 2 = 6 ms,
-    R(q) = 1 + 3 + 2 = 6 ms, data age d⁺ 0 + A⁺(p) 10 + R(p) 6 + R(q) 6 = 22 ms. (§7.6 explains
+    R(q) = 1 + 3 + 2 = 6 ms, data age d⁺ 0 + A⁺(p) 10 + R(p) 6 + E(q) 3 = 19 ms — the register
+    rule bounds q's age at its read, and from its read q's job completes within E(q) = 1 + 2 ms
+    (§7.7: h may preempt it, p, a timer of q's priority, may not), not R(q) = 6 ms. (§7.6 explains
     why the bound of (7.6a) would still hold here, and why the rule is not used.)"""
     model = _prio_system(writer_priority=1, high=True)
     c = analyze(model).chain("ch")
     assert c.steps[1].data_age.rule == REGISTER and c.steps[1].reaction.rule == REGISTER
-    assert c.bound("data_age").worst == 22 * MS
+    assert c.steps[2].data_age.rule == READ_AGE and c.steps[2].data_age.parts == (("E(q.R)", 3 * MS),)
+    assert c.bound("data_age").worst == 19 * MS
     scenario = Scenario(Fraction(1, 10), {"p.W": Fraction(0), "q.R": Fraction(999, 100_000),
                                           "h.T": Fraction(999, 100_000)})
     trace = simulate(model, scenario)

@@ -13,7 +13,9 @@ Real-time Distributed Automotive Systems*, DAC 2007.
 Per task: the maximum-distance event model ``P⁺, J⁺, F`` of specs/timing.md §5.2 (exact, as the
 analysis computes it), the response time ``R`` (an integer with lower bounds only: from ``wcet`` and
 from lemmas learnt lazily, specs/synthesis.md §4), the rate interval ``fl, fh``. Chains are sums of
-the hop terms of §7 with the same rule choice (the smaller of trigger and register rule). Constraints:
+the hop terms of §7 with the same rule choice (the smaller of trigger and register rule); the data age
+is the least sum through three ages per task (§7.7), with the start-to-completion time ``E`` and the
+same-core trigger pair's ``J`` learnt like ``R`` (lower bounds only, ``C ≤ E ≤ R``). Constraints:
 exactly one candidate, no trigger cycle, activation constraints of triggered tasks, sampling
 tolerances, utilisation per core, ``R ≤ deadline``, the specs. Tracked statements guard their
 constraints with an assumption literal (``guard``).
@@ -31,7 +33,7 @@ from .. import syntax as s
 from ..activations import Activation, DataTriggered
 from ..model import ChainModel, HopModel, LinkModel, SystemModel, TaskModel
 from ..timebase import TimeBase
-from ..timing.chains import same_core_reason
+from ..timing.chains import cooperative_counts, pair_shape, same_core_reason
 from .candidates import Choice
 from .statements import Statement, statement_index
 from .structure import Structure, activation_options, member_links
@@ -40,6 +42,8 @@ from .structure import Structure, activation_options, member_links
 Term: TypeAlias = "int | z3.ArithRef"
 #: a constraint: a Python bool when decided without Z3, else a Z3 Boolean expression
 Cond: TypeAlias = "bool | z3.BoolRef"
+#: a job's data ages at its release, its read (start) and its completion (specs/timing.md §7.7)
+Ages: TypeAlias = "tuple[Term, Term, Term]"
 
 
 # ================================================================== scale
@@ -214,6 +218,8 @@ class Encoding:
         self.lits: dict[str, z3.BoolRef] = {}
         self.sel: dict[str, list[z3.BoolRef]] = {}
         self.R: dict[str, Term] = {}
+        self.E: dict[str, Term] = {}  # start to completion (§7.7), for the tasks of chains
+        self.J: dict[tuple[str, str], tuple[HopModel, Term]] = {}  # same-core trigger pairs by link (§7.7)
         self.events: dict[str, tuple[Term, Term, Term]] = {}  # (P⁺, J⁺, F)
         self.rates: dict[str, tuple[Term, Term]] = {}  # (k·fl, k·fh)
         self.C: dict[str, Term] = {}
@@ -221,6 +227,7 @@ class Encoding:
         self.specs: list[tuple[Statement, Term, int]] = []  # (statement, latency term, bound ticks)
         self.ladders: dict[str, list[z3.BoolRef | None]] = {}
         self._floors: dict[str, Fraction] | None = None
+        self._cooperative = cooperative_counts(model)
         self._build()
 
     # -------------------------------------------------------------- basics
@@ -589,18 +596,17 @@ class Encoding:
 
     def _chain(self, chain: ChainModel) -> None:
         t = self.t
-        first, last = chain.tasks[0], chain.tasks[-1]
+        first = chain.tasks[0]
         reaction = [t.add(self.wait(first), self.R[first])]
-        age = []
+        # the reduced data age counts from τ₁'s read, its stamp: its job's release and read ages are 0
+        ages: Ages = (0, 0, self._completion(first, 0, 0))
         for n, hop in enumerate(chain.hops):
-            r, a = self._hop(chain.name, n, hop)
+            r, ages = self._hop(chain.name, n, hop, ages)
             reaction.append(r)
-            age.append(a)
-        age.append(self.R[last])
         best = sum(self.ticks(self.model.task(x).bcet) if self.model.task(x).bcet else 0 for x in chain.tasks)
         best += sum(self.ticks(h.link.delay_min) if h.link.delay_min else 0 for h in chain.hops)
         totals = {"reaction_time": self._named(f"lat|{chain.name}|reaction", t.add(*reaction)),
-                  "data_age": self._named(f"lat|{chain.name}|age", t.add(*age))}
+                  "data_age": self._named(f"lat|{chain.name}|age", ages[2])}
         totals["jitter"] = t.add(totals["data_age"], -best)
         self.latency[(chain.name, "reaction_time")] = totals["reaction_time"]
         self.latency[(chain.name, "data_age")] = totals["data_age"]
@@ -619,45 +625,99 @@ class Encoding:
         self.add(self.t.eq(var, term))
         return var
 
-    def _hop(self, chain: str, n: int, hop: HopModel) -> tuple[Term, Term]:
-        """(reaction term, data-age term) of one hop, by the reader's activation (§7.3)."""
+    def span(self, tid: str) -> Term:
+        """``Eᵢ`` (specs/timing.md §7.7): from a job's start to its completion, ``C⁺ᵢ ≤ E ≤ Rᵢ``; raised by
+        lemmas learnt from the analysis like ``R`` (``Engine.learn``)."""
+        if tid not in self.E:
+            R, C = self.R[tid], self.C[tid]
+            if isinstance(R, int) and isinstance(C, int) and R == C:
+                self.E[tid] = R
+            else:
+                e = z3.Int(f"E|{tid}", self.ctx)
+                self.add(self.t.ge(e, C))
+                self.add(self.t.le(e, R))
+                self.E[tid] = e
+        return self.E[tid]
+
+    def _pair(self, hop: HopModel) -> Term:
+        """``Jₚᵢ`` of a same-core trigger pair (specs/timing.md §7.7, (7.7d)): at least ``C⁺ₚ + C⁺ᵢ``,
+        raised by lemmas learnt from the analysis (``Engine.learn``)."""
+        key = (hop.link.source, hop.link.target)
+        if key not in self.J:
+            j = z3.Int(f"J|{hop.link.source}|{hop.link.target}", self.ctx)
+            self.add(self.t.ge(j, self.t.add(self.C[hop.writer], self.C[hop.reader])))
+            self.J[key] = (hop, j)
+        return self.J[key][1]
+
+    def _completion(self, tid: str, release: Term, read: Term, *more: Term) -> Term:
+        """The completion age of a job of ``tid`` from its release and read ages (rule (7.7a)), or ``more``."""
+        t = self.t
+        out = t.min(t.add(release, self.R[tid]), t.add(read, self.span(tid)))
+        for x in more:
+            out = t.min(out, x)
+        return out
+
+    def _hop(self, chain: str, n: int, hop: HopModel, ages: Ages) -> tuple[Term, Ages]:
+        """(reaction term, the reader's ages) of one hop, by the reader's activation (§7.3, §7.7)."""
         reader = self.model.task(hop.reader)
         options = activation_options(reader, self.choices.get(reader.id))
-        terms = [(index, self._hop_terms(hop, act)) for index, act in options]
+        terms = [(index, self._hop_terms(hop, act, ages)) for index, act in options]
         if len(terms) == 1:
-            return terms[0][1]
-        hr, ha = z3.Int(f"hop|{chain}|{n}|r", self.ctx), z3.Int(f"hop|{chain}|{n}|a", self.ctx)
-        for index, (r, a) in terms:  # (several options: the candidates of a choice, each with its index)
-            self.guard(None, self.t.eq(hr, r), self.sel[reader.id][index])  # type: ignore[index]
-            self.guard(None, self.t.eq(ha, a), self.sel[reader.id][index])  # type: ignore[index]
-        return hr, ha
+            r, out = terms[0][1]
+            return r, (self._named(f"age|{chain}|{n}|release", out[0]), self._named(f"age|{chain}|{n}|read", out[1]),
+                       self._named(f"age|{chain}|{n}|completion", out[2]))
+        hr = z3.Int(f"hop|{chain}|{n}|r", self.ctx)
+        names = ("release", "read", "completion")
+        new = tuple(z3.Int(f"age|{chain}|{n}|{x}", self.ctx) for x in names)
+        for index, (r, out) in terms:  # (several options: the candidates of a choice, each with its index)
+            sel = self.sel[reader.id][index]  # type: ignore[index]
+            self.guard(None, self.t.eq(hr, r), sel)
+            for var, value in zip(new, out):
+                self.guard(None, self.t.eq(var, value), sel)
+        return hr, (new[0], new[1], new[2])
 
-    def _hop_terms(self, hop: HopModel, act: Activation) -> tuple[Term, Term]:
+    def _hop_terms(self, hop: HopModel, act: Activation, ages: Ages) -> tuple[Term, Ages]:
+        """The reaction term (§7.3, §7.6) and the reader's (release, read, completion) ages (§7.7)."""
         t = self.t
         p, i = hop.writer, hop.reader
+        release, read, completion = ages
         d = self.ticks(hop.link.delay_max) if hop.link.delay_max else 0
         register_r = t.add(d, self.wait(i), self.R[i])
         register_a = t.add(d, self.a_max(p), self.R[p])
+        read_term = register_a
+        if same_core_reason(self.model, hop) is None:
+            read_term = t.min(register_a, self.a_max(p))
+        new_read = t.add(t.min(t.min(release, read), completion), read_term)
+        new_release = new_read
         member = hop.link.target.split(".", 1)[1]
         if not act.listens_to(member):
-            return self._same_core(hop, register_r, register_a)
-        assert isinstance(act, DataTriggered)  # (it listens to a member)
-        k = act.prescaler
-        if act.mode == "and":
-            trig = t.add(d, self._and_wait(hop, act), self._and_join(hop, act, k), self.R[i])
+            reaction = self._same_core(hop, register_r)
         else:
-            trig = t.add(d, self._delta_plus(p, k), self.R[i])
-        reaction = t.min(trig, register_r)
-        return self._same_core(hop, reaction, t.add(d, self.R[p]) if act.mode == "single" else register_a)
+            assert isinstance(act, DataTriggered)  # (it listens to a member)
+            k = act.prescaler
+            if act.mode == "and":
+                wait = self._and_wait(hop, act)
+                trig = t.add(d, wait, self._and_join(hop, act, k), self.R[i])
+            else:
+                wait = 0
+                trig = t.add(d, self._delta_plus(p, k), self.R[i])
+            reaction = self._same_core(hop, t.min(trig, register_r))
+            if act.mode != "or":  # the data trigger (7.7b) and the AND join age (7.7c)
+                for age, writer in ((release, self.R[p]), (read, self.span(p)), (completion, 0)):
+                    new_release = t.min(new_release, t.add(age, d, writer, wait))
+        pair = []
+        if pair_shape(self.model, hop, act, self._cooperative):
+            pair.append(t.add(read, t.min(self._pair(hop), t.add(self.span(p), self.R[i]))))
+        return reaction, (new_release, new_read, self._completion(i, new_release, new_read, *pair))
 
-    def _same_core(self, hop: HopModel, reaction: Term, age: Term) -> tuple[Term, Term]:
-        """The same-core priority rule (specs/timing.md §7.6) where it applies, as the analysis
-        chooses it: the smaller of the term and ``W⁺ᵢ + Rᵢ − Rₚ`` (reaction) or ``A⁺ₚ`` (data age)."""
+    def _same_core(self, hop: HopModel, reaction: Term) -> Term:
+        """The same-core priority rule (specs/timing.md §7.6) where it applies, as the analysis chooses
+        it: the smaller of the reaction term and ``W⁺ᵢ + Rᵢ − Rₚ`` ((7.6b); its data-age term ``A⁺ₚ``,
+        (7.6a), is a read term of ``_hop_terms``)."""
         if same_core_reason(self.model, hop) is not None:
-            return reaction, age
+            return reaction
         t, p, i = self.t, hop.writer, hop.reader
-        return (t.min(reaction, t.add(self.wait(i), self.R[i], t.mul(-1, self.R[p]))),
-                t.min(age, self.a_max(p)))
+        return t.min(reaction, t.add(self.wait(i), self.R[i], t.mul(-1, self.R[p])))
 
     def _delta_plus(self, writer: str, k: int) -> Term:
         """δ⁺ₚ(k) = 0 for k = 1, else (k−1)·P⁺ₚ + J⁺ₚ + Rₚ − Bₚ."""

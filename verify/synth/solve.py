@@ -25,7 +25,8 @@ from collections.abc import Callable, Sequence
 
 import z3
 
-from ..timing import TaskResponse
+from ..timing import TaskResponse, timing_of
+from ..timing.chains import pair_fixed_point, pair_qualifies
 from .encode import Encoding
 from .problem import Config, Evaluation, Problem
 from .repair import repair
@@ -366,22 +367,36 @@ class Engine:
         return parts
 
     def learn(self, config: Config, ev: Evaluation, model: z3.ModelRef | None) -> int:
-        """Lemmas ``antecedent → R ≥ r`` for every task whose analysed WCRT exceeds the solver's."""
-        added = 0
+        """Lemmas ``antecedent → R ≥ r`` for every task whose analysed WCRT exceeds the solver's, and
+        the same for the start-to-completion times ``E`` and the same-core trigger pairs' ``J`` of
+        specs/timing.md §7.7 (fixed points over the same interferers as ``R``, so monotone alike)."""
+        facts: list[tuple[list[str], z3.ArithRef, int | None]] = []
         for tid in sorted(self.enc.R):
-            var: int | z3.ArithRef = self.enc.R[tid]  # (``Encoding.R`` is typed ``object``)
-            if isinstance(var, int):
-                continue
-            bound = self._lower_bound(ev.result.task(tid).response)
+            var = self.enc.R[tid]
+            if not isinstance(var, int):
+                facts.append(([tid], var, self._lower_bound(ev.result.task(tid).response)))
+        if any(not isinstance(v, int) for v in self.enc.E.values()) or self.enc.J:
+            timing = timing_of(ev.result, ev.model)
+            for tid in sorted(self.enc.E):
+                span = self.enc.E[tid]
+                if not isinstance(span, int):
+                    e = timing.E(tid)
+                    facts.append(([tid], span, None if e is None else self.enc.ticks(e)))
+            for key in sorted(self.enc.J):
+                hop, pair = self.enc.J[key]
+                value = pair_fixed_point(timing, hop) if pair_qualifies(timing, hop) else None
+                facts.append(([hop.writer, hop.reader], pair,
+                              None if value is None else self.enc.ticks(value)))
+        added = 0
+        for tasks, var, bound in facts:
             if bound is None:
                 continue
             if model is not None and model.eval(var, model_completion=True).as_long() >= bound:
                 continue
-            if bound <= self.enc.floor(tid):
+            if len(tasks) == 1 and var is self.enc.R.get(tasks[0]) and bound <= self.enc.floor(tasks[0]):
                 continue
-            parts = self.antecedent(tid, config)
-            fact = var >= bound
-            self.enc.add(implies(parts, fact))
+            parts = [lit for tid in tasks for lit in self.antecedent(tid, config)]
+            self.enc.add(implies(parts, var >= bound))
             added += 1
         self.stats.lemmas += added
         return added

@@ -32,7 +32,7 @@ from .rta import response_times  # noqa: F401 - the reference statement of one r
 
 __all__ = ["ActivationInfo", "AnalysisResult", "Bound", "ChainBounds", "CoreLoad", "EventModel",
            "LinkSampling", "RateInterval", "SpecCheck", "Step", "TaskResponse", "TaskTiming", "Term",
-           "analyze", "diagnostics_of", "response_and_chain_bounds"]
+           "analyze", "diagnostics_of", "response_and_chain_bounds", "timing_of"]
 
 MAX_ROUNDS = 200  # CPA global iterations before reporting non-convergence
 VARIANTS = ("reduced", "non-reduced")
@@ -129,6 +129,14 @@ def response_and_chain_bounds(system: SystemModel, *, data_age: str = "reduced"
     with paused_gc():
         _, _, responses, chains, _, _ = _bounds(system, variant)
         return variant, responses, chains
+
+
+def timing_of(result: AnalysisResult, system: SystemModel) -> Timing:
+    """What the chain rules read (``Timing``), rebuilt from an analysis of ``system``: to evaluate a
+    rule's quantity for the analysed configuration, e.g. the start-to-completion time ``E`` of §7.7
+    that synthesis learns lemmas from."""
+    return Timing(system, {t.id: t.activation for t in result.tasks}, {t.id: t.events for t in result.tasks},
+                  {t.id: t.response for t in result.tasks})
 
 
 def _variant(data_age: str) -> str:

@@ -17,6 +17,14 @@ Every bound is a sum of per-step terms, each produced by one named rule:
 * "last-task response" (data age): ``Rₙ``;
 * "non-reduced origin" (non-reduced data age only, on τ₁'s step): ``A⁺₁``.
 
+Where it is smaller, the data age is the least sum over three ages per task — of a job at its
+release, at its read (start) and at its completion (§7.7): the register and same-core terms bound
+the reader's age at its read, from which its job completes within the start-to-completion time
+``Eᵢ`` ("read-time age (start to completion)": ``d⁺ + Eₚ`` for a trigger, ``Eₙ`` at the end); an AND
+member's value waits at most the other members' ``W⁺`` ("AND join age": ``d⁺ + Rₚ + maxₘ W⁺ₘ``); and a
+writer with a higher-priority reader it triggers on its core, without delay, is one busy interval
+from the writer's read to the reader's completion ("same-core trigger pair": ``Jₚᵢ``).
+
 Reaction time is non-reduced (from the stimulus), data age reduced by default (from τ₁'s read,
 Günzel et al. 2024); the other variants follow by adding or removing τ₁'s sampling term. Best cases
 are ``Σ bcetᵢ + Σ d⁻`` (rule "best case", one term per step). ``None`` means unbounded. Dürr et
@@ -24,17 +32,17 @@ al. 2019 and Becker et al. 2017 give the job-chain view these terms are derived 
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from fractions import Fraction
 from functools import cached_property
 from collections.abc import Iterable, Mapping
 
 from ..construct import direct_constructor
-from ..activations import DataTriggered
-from ..model import ChainModel, HopModel, SystemModel
+from ..activations import Activation, DataTriggered, Periodic, SporadicSource
+from ..model import ChainModel, HopModel, SystemModel, TaskModel
 from ..units import fmt_time
 from .rates import ActivationInfo, EventModel, arrival_model, combine_and, exact_sum
-from .rta import TaskResponse
+from .rta import TaskResponse, interferer, least_fixed_point
 
 ZERO = Fraction(0)
 
@@ -46,6 +54,9 @@ SAME_CORE = "same-core priority (Dürr et al. CASES 2019)"
 ORIGIN = "non-reduced origin"
 BEST = "best case"
 ORIGIN_BEST = "least read gap of τ₁"
+READ_AGE = "read-time age (start to completion)"
+AND_AGE = "AND join age"
+PAIR = "same-core trigger pair"
 
 
 def trigger_rule(k: int) -> str:
@@ -213,6 +224,46 @@ class Timing:
         """The number of cooperative tasks per instance (``cooperative_counts``), computed once."""
         return cooperative_counts(self.system)
 
+    @cached_property
+    def _spans(self) -> dict[str, Fraction | None]:
+        return {}
+
+    @cached_property
+    def on_core(self) -> Mapping[str, tuple[TaskModel, ...]]:
+        """The tasks of each core, in the system's order (``SystemModel.tasks_on``), computed once."""
+        cores: dict[str, list[TaskModel]] = {}
+        for task in self.system.tasks:
+            cores.setdefault(task.core, []).append(task)
+        return {core: tuple(tasks) for core, tasks in cores.items()}
+
+    @cached_property
+    def by_priority(self) -> Mapping[tuple[str, int], tuple[TaskModel, ...]]:
+        """The tasks of each (core, priority)."""
+        groups: dict[tuple[str, int], list[TaskModel]] = {}
+        for task in self.system.tasks:
+            groups.setdefault((task.core, task.priority), []).append(task)
+        return {key: tuple(tasks) for key, tasks in groups.items()}
+
+    @cached_property
+    def zero_time(self) -> bool:
+        """Whether a job may run for no time (some ``bcet`` is 0): only then does an instant have more than
+        one round of releases and dispatch (§2), so that a job may be released at an instant after a
+        job of its priority was dispatched at it."""
+        return any(task.bcet == 0 for task in self.system.tasks)
+
+    @cached_property
+    def order(self) -> Mapping[str, int]:
+        """Each task's position in the system (the dispatch order among equal releases, §1)."""
+        return {task.id: n for n, task in enumerate(self.system.tasks)}
+
+    def E(self, task: str) -> Fraction | None:  # noqa: N802 - the spec's name
+        """Eᵢ: a bound on the time from the start (read) of a job of ``task`` to its completion
+        (``start_to_completion``), computed once per task."""
+        spans = self._spans
+        if task not in spans:
+            spans[task] = start_to_completion(self, task)
+        return spans[task]
+
 
 def _total(parts: Iterable[tuple[str, Fraction | None]]) -> Fraction | None:
     values = [v for _, v in parts]
@@ -291,9 +342,9 @@ def trigger_age(t: Timing, hop: HopModel, k: int) -> Term:
     return _term(trigger_rule(k), (("d⁺", hop.link.delay_max), (f"R({p})", t.R(p))))
 
 
-def and_reaction(t: Timing, hop: HopModel, k: int) -> Term:
-    """``d⁺ + maxₘ W⁺ₘ + δ⁺_AND(k) + Rᵢ``: after this value arrives, the join fires once every other
-    member has a new arrival (each within its arrival stream's W⁺), then k − 1 further joins."""
+def _and_waits(t: Timing, hop: HopModel, k: int) -> tuple[Fraction | None, Fraction | None]:
+    """(``maxₘ W⁺ₘ`` over the arrival streams of the other members of the AND compound that triggers
+    ``hop.reader``, ``δ⁺_AND(k)``); None where a member is unconnected or not bounded."""
     info = t.infos[hop.reader]
     member = hop.link.target.split(".", 1)[1]
     arrivals: list[EventModel | None] = []
@@ -311,9 +362,151 @@ def and_reaction(t: Timing, hop: HopModel, k: int) -> Term:
     # (no None in waits or arrivals where they are used: checked)
     wait = None if any(w is None for w in waits) else max(waits, default=ZERO)  # type: ignore[type-var]
     join = None if any(a is None for a in arrivals) else combine_and(arrivals).delta_plus(k)  # type: ignore[arg-type]
+    return wait, join
+
+
+def and_reaction(t: Timing, hop: HopModel, k: int) -> Term:
+    """``d⁺ + maxₘ W⁺ₘ + δ⁺_AND(k) + Rᵢ``: after this value arrives, the join fires once every other
+    member has a new arrival (each within its arrival stream's W⁺), then k − 1 further joins."""
+    wait, join = _and_waits(t, hop, k)
     i = hop.reader
     return _term(AND_JOIN, (("d⁺", hop.link.delay_max), ("wait for the other members", wait),
                             (f"δ⁺_AND({k})", join), (f"R({i})", t.R(i))))
+
+
+def and_age(t: Timing, hop: HopModel, k: int, origin: str) -> Term:
+    """Release age over an AND member (specs/timing.md §7.7, (7.7c)): ``d⁺ + Rₚ + maxₘ W⁺ₘ`` (``Eₚ``
+    for ``Rₚ`` when p's age is counted from its start). The job of i is released at the event that
+    follows the latest arrival x of this member before it within ``maxₘ W⁺ₘ`` of the other members:
+    the member is fresh at x (it has a value since the previous event), and every other member is
+    fresh once it has a new arrival; i reads x's value or a newer one."""
+    p = hop.writer
+    wait, _ = _and_waits(t, hop, k)
+    writer = {"release": ((f"R({p})", t.R(p)),), "start": ((f"E({p})", t.E(p)),), "finish": ()}[origin]
+    note = "the join fires within the other members' W⁺ after this member's latest arrival"
+    rule = {"release": AND_AGE, "start": AND_AGE + ", " + READ_AGE, "finish": AND_AGE}[origin]
+    if origin == "finish":
+        note += f"; `{p}`'s completion is counted in the hop before ({PAIR})"
+    return _term(rule, (("d⁺", hop.link.delay_max),) + writer + (("wait for the other members", wait),), note)
+
+
+def trigger_age_from_start(t: Timing, hop: HopModel, k: int) -> Term:
+    """``d⁺ + Eₚ`` (specs/timing.md §7.7, (7.7b)): when p's age is counted from its job's start, the
+    job that triggers i completes within Eₚ of that start."""
+    p = hop.writer
+    return _term(READ_AGE, (("d⁺", hop.link.delay_max), (f"E({p})", t.E(p))),
+                 f"`{hop.reader}` is released by `{p}`'s output, which completes within E of its job's read "
+                 f"(its {trigger_rule(k)} term with E for R)")
+
+
+def trigger_age_from_finish(t: Timing, hop: HopModel, k: int) -> Term:
+    """``d⁺``: p's age is counted at its job's completion (after a same-core trigger pair, (7.7d))."""
+    return _term(trigger_rule(k), (("d⁺", hop.link.delay_max),),
+                 f"`{hop.writer}`'s completion is counted in the hop before ({PAIR})")
+
+
+def pair_qualifies(t: Timing, hop: HopModel) -> bool:
+    """Whether hop p → i is a same-core trigger pair (``pair_shape`` with i's activation)."""
+    return pair_shape(t.system, hop, t.system.task(hop.reader).activation, t.cooperative_count)
+
+
+def pair_shape(system: SystemModel, hop: HopModel, act: Activation, cooperative: Mapping[str, int]) -> bool:
+    """Whether hop p → i is a same-core trigger pair (specs/timing.md §7.7, (7.7d)) when i is activated
+    by ``act``: p and i on one core, i of strictly higher priority, triggered by this in-port alone (any
+    prescaler), the delay exactly 0, and i never waits for a token (preemptive, or the only cooperative
+    task of its instance). It depends on the model only, like ``same_core_reason``."""
+    p, i = system.task(hop.writer), system.task(hop.reader)
+    return (p.core == i.core and i.priority > p.priority and hop.link.delay_max == 0
+            and isinstance(act, DataTriggered) and act.mode == "single"
+            and act.port == hop.link.target.split(".", 1)[1]
+            and (i.kind != "cooperative" or cooperative.get(i.instance, 0) <= 1))
+
+
+def pair_fixed_point(t: Timing, hop: HopModel) -> Fraction | None:
+    """The least ``w = C⁺ₚ + C⁺ᵢ + Σⱼ η⁺ⱼ(w)·C⁺ⱼ`` of (7.7d) over the tasks j ≠ i of hp(p) that may run
+    while p's job is pending (``overtakes``) or while i's is (priority at least i's); None if none."""
+    p, i = t.system.task(hop.writer), t.system.task(hop.reader)
+    # a cooperative sibling of p cannot run while p's job holds the token, but may once it completes
+    streams = [interferer(t.system, j, t.events[j.id], t.R(j.id), j.wcet)
+               for j in t.on_core[p.core] if j.priority >= p.priority and j.id not in (p.id, i.id)
+               and (overtakes(t, p, j) or j.priority >= i.priority)]
+    value, _ = least_fixed_point(p.wcet + i.wcet, p.wcet + i.wcet, streams)
+    return value
+
+
+def pair_span(t: Timing, hop: HopModel) -> Fraction | None:
+    """``Jₚᵢ`` (specs/timing.md §7.7, (7.7d)): from the start of a job of p to the completion of the job of
+    i its output releases, ``pair_fixed_point``; None when it is not below ``Eₚ + Rᵢ`` (the two terms it
+    replaces) or one of those is unbounded."""
+    e, r = t.E(hop.writer), t.R(hop.reader)
+    if e is None or r is None:
+        return None
+    value = pair_fixed_point(t, hop)
+    return value if value is not None and value < e + r else None
+
+
+def pair_age(t: Timing, hop: HopModel) -> Term | None:
+    """The same-core trigger pair's term ``Jₚᵢ`` (from p's read to i's completion), or None."""
+    if not pair_qualifies(t, hop):
+        return None
+    span = pair_span(t, hop)
+    if span is None:
+        return None
+    p, i = hop.writer, hop.reader
+    return _term(PAIR, ((f"J({p}, {i})", span),),
+                 f"from the read of `{p}`'s job to the completion of the `{i}` job its output releases: "
+                 f"`{i}` outranks `{p}` on their core, so the core is busy with both and what outranks `{p}`")
+
+
+def last_from_finish(task: str) -> Term:
+    """0: τₙ's age is counted at its job's completion (after a same-core trigger pair)."""
+    return _term(LAST, (), f"`{task}`'s completion is counted in the hop before ({PAIR})")
+
+
+def last_from_start(t: Timing, task: str) -> Term:
+    """``Eₙ`` (specs/timing.md §7.7, (7.7a)): when τₙ's age is counted at its read, its job completes
+    within Eₙ of that read."""
+    return _term(READ_AGE, ((f"E({task})", t.E(task)),),
+                 "counted from the last task's read (its start), not its release")
+
+
+def start_to_completion(t: Timing, task: str) -> Fraction | None:
+    """Eᵢ (specs/timing.md §7.7): a bound on the time from the start of a job of ``task`` to its
+    completion — the least of Rᵢ, the hold time of §6.3 and the least ``w = C⁺ᵢ + Σ_{j ∈ hp'(i)} η⁺ⱼ(w)·C⁺ⱼ``
+    with hp'(i) the tasks of hp(i) that can run while a started job of i is pending (``overtakes``).
+    None when none of them is bounded."""
+    response = t.responses[task]
+    bounds = [v for v in (response.wcrt, response.hold) if v is not None]
+    model = t.system.task(task)
+    # only a task of i's priority or a cooperative sibling of i can be left out of hp(i); without one,
+    # hp'(i) = hp(i) and the fixed point is the hold time
+    if bounds and (len(t.by_priority[(model.core, model.priority)]) > 1
+                   or (model.kind == "cooperative" and t.cooperative_count.get(model.instance, 0) > 1)):
+        hp = [j for j in t.on_core[model.core] if j.priority >= model.priority and j.id != model.id]
+        keep = [j for j in hp if overtakes(t, model, j)]
+        if len(keep) < len(hp):
+            streams = [interferer(t.system, j, t.events[j.id], t.R(j.id), j.wcet) for j in keep]
+            value, _ = least_fixed_point(model.wcet, model.wcet, streams)
+            if value is not None:
+                bounds.append(value)
+    return min(bounds) if bounds else None
+
+
+def overtakes(t: Timing, task: TaskModel, j: TaskModel) -> bool:
+    """Whether a job of ``j`` (of hp(i)) may run on i's core between the start of a job of ``task`` and
+    its completion (specs/timing.md §7.7). Not when i is cooperative and j a cooperative task of i's
+    instance (i holds the token), nor when j has i's priority, never waits for a token (preemptive, or
+    the only cooperative task of its instance) and comes after i in the system's order, or is released by
+    time (a timer or sporadic source), or no job can run for no time (``Timing.zero_time``): every job of
+    j then ranks after a started job of i (§1: a pending one that ranked before it would have started
+    instead, and one released later ranks after it — also one released at the same instant, which comes
+    before that instant's first dispatch unless a job completing in no time at it triggers it)."""
+    if task.kind == "cooperative" and j.kind == "cooperative" and j.instance == task.instance:
+        return False
+    if j.priority != task.priority or (t.order[j.id] < t.order[task.id] and t.zero_time
+                                       and not isinstance(j.activation, (Periodic, SporadicSource))):
+        return True
+    return j.kind == "cooperative" and t.cooperative_count.get(j.instance, 0) > 1
 
 
 def cooperative_counts(system: SystemModel) -> dict[str, int]:
@@ -424,6 +617,92 @@ def hop_step(t: Timing, hop: HopModel) -> Step:
                      best.value, best, None, None)
 
 
+@dataclass(frozen=True)
+class HopAges:
+    """The data-age terms of one hop p → i by the ages they connect (specs/timing.md §7.7), each None
+    where it does not apply: ``read`` bounds i's age at its read (start) given p's release age (register,
+    same-core priority; valid from every age of p, all of which bound its release age);
+    ``release_from_*`` i's release age given p's age at its release, read or completion (data trigger,
+    AND join age); ``pair`` i's age at its completion given p's age at its read (same-core trigger pair)."""
+
+    read: Term
+    release_from_release: Term | None
+    release_from_start: Term | None
+    release_from_finish: Term | None
+    pair: Term | None
+
+
+def hop_ages(t: Timing, hop: HopModel, step: Step) -> HopAges:
+    """The terms of one hop for ``read_time_ages``; ``step`` is the hop's step of §7.3/§7.6, whose
+    data-age term is reused (with its note) where it is a bound at the read."""
+    act = t.system.task(hop.reader).activation
+    member = hop.link.target.split(".", 1)[1]
+    if step.data_age is not None and step.data_age.rule in (REGISTER, SAME_CORE):
+        read = step.data_age
+    else:
+        read = register_age(t, hop)
+        if same_core_priority(t, hop) is None:
+            refined = priority_age(t, hop)
+            if _tighter(refined, read):
+                read = refined
+    from_release = from_start = from_finish = None
+    if isinstance(act, DataTriggered) and member in act.members:
+        k = act.prescaler
+        if act.mode == "single":
+            from_release, from_start = trigger_age(t, hop, k), trigger_age_from_start(t, hop, k)
+            from_finish = trigger_age_from_finish(t, hop, k)
+        elif act.mode == "and":
+            from_release, from_start, from_finish = (and_age(t, hop, k, "release"), and_age(t, hop, k, "start"),
+                                                     and_age(t, hop, k, "finish"))
+    return HopAges(read, from_release, from_start, from_finish, pair_age(t, hop))
+
+
+_Path = tuple[Fraction | None, tuple[Term, ...]]
+
+
+def _extend(path: _Path | None, term: Term | None) -> _Path | None:
+    if path is None or term is None:
+        return None
+    value = None if path[0] is None or term.value is None else path[0] + term.value
+    return value, path[1] + (term,)
+
+
+def _lt(a: _Path | None, b: _Path | None) -> bool:
+    """a is strictly tighter than b (a missing path is the loosest, then an unbounded one)."""
+    if a is None or a[0] is None:
+        return False
+    return b is None or b[0] is None or a[0] < b[0]
+
+
+def _least(*paths: _Path | None) -> _Path | None:
+    """The tightest path; the first among equals."""
+    best: _Path | None = None
+    for path in paths:
+        if path is not None and (best is None or _lt(path, best)):
+            best = path
+    return best
+
+
+def read_time_ages(t: Timing, chain: ChainModel, hops: list[HopAges], from_read: bool) -> _Path | None:
+    """The reduced data age by the three ages of §7.7 — of each task's job at its release, at its read
+    (start) and at its completion — starting from τ₁'s age at its release (``from_read`` False) or at its
+    read (True), both 0 for the reduced data age (τ₁'s stamp is its read): (bound, the data-age terms of
+    the hops and of the last step) along the least sum of terms; None if that start reaches no bound."""
+    empty: _Path = (ZERO, ())
+    release: _Path | None = None if from_read else empty
+    start: _Path | None = empty if from_read else None
+    finish: _Path | None = None
+    for ages in hops:
+        new_start = _extend(_least(release, start, finish), ages.read)
+        new_finish = _extend(start, ages.pair)
+        release = _least(_extend(release, ages.release_from_release), new_start,
+                         _extend(start, ages.release_from_start), _extend(finish, ages.release_from_finish))
+        start, finish = new_start, new_finish
+    last = chain.tasks[-1]
+    return _least(_extend(release, _term(LAST, ((f"R({last})", t.R(last)),))),
+                  _extend(start, last_from_start(t, last)), _extend(finish, last_from_finish(last)))
+
+
 # ================================================================== chain totals
 
 
@@ -484,6 +763,7 @@ def chain_bounds(t: Timing, chain: ChainModel, variant: str = "reduced") -> Chai
                        else "the chain's hops do not match its tasks")
     first, last = chain.tasks[0], chain.tasks[-1]
     steps = (first_step(t, first),) + tuple(hop_step(t, h) for h in chain.hops) + (last_step(t, last),)
+    steps = _with_read_time_ages(t, chain, steps)
     best = exact_sum(s.best for s in steps)
     wait = t.events[first].sampling_wait
     reaction = reaction_time(steps)
@@ -502,6 +782,40 @@ def chain_bounds(t: Timing, chain: ChainModel, variant: str = "reduced") -> Chai
                              dominating_data_age=_dominating(steps, "data_age"),
                              dominating_data_age_non_reduced=_dominating(steps, "data_age",
                                                                          "data_age_non_reduced"), **bounds)
+
+
+def _with_read_time_ages(t: Timing, chain: ChainModel, steps: tuple[Step, ...]) -> tuple[Step, ...]:
+    """``steps`` with the data-age terms of ``read_time_ages`` where their sum is strictly smaller than
+    that of the terms of §7.3–§7.4 (so the report changes only where the bound does).
+
+    The non-reduced data age counts from τ₁'s previous read, at most ``A⁺₁`` before τ₁'s release and
+    at most ``A⁺₁ + R₁ − C⁻₁`` before its read (§7.7): when the terms counted from τ₁'s read are the
+    tighter reduced bound, τ₁'s non-reduced term adds the least of ``R₁ − C⁻₁`` and the excess of the
+    terms counted from its release."""
+    hops = [hop_ages(t, hop, step) for hop, step in zip(chain.hops, steps[1:])]
+    from_release, from_read = read_time_ages(t, chain, hops, False), read_time_ages(t, chain, hops, True)
+    best = from_read if _lt(from_read, from_release) else from_release
+    current = data_age(steps)
+    if best is None or best[0] is None or (current is not None and best[0] >= current):
+        return steps
+    first, value = steps[0], best[0]
+    if best is from_read:
+        task = first.reader
+        r = t.R(task)
+        gap = None if r is None else r - t.bcet(task)
+        excess = None if from_release is None or from_release[0] is None else from_release[0] - value
+        extra: tuple[str, Fraction | None]
+        if excess is not None and (gap is None or excess < gap):
+            extra = ("terms counted from its release − these terms", excess)
+            note = (f"from the previous read of `{task}`, at most A⁺ before the current job's release: the "
+                    "terms counted from the release exceed these (counted from its read) by the second part")
+        else:
+            extra = (f"R({task}) − C⁻({task})", gap)
+            note = f"from the previous read of `{task}`, at most A⁺ + R − C⁻ before the current job's read"
+        origin = _term(ORIGIN, ((f"A⁺({task})", t.events[task].a_max), extra), note)
+        first = replace(first, data_age_non_reduced=origin)
+    ages = iter(best[1])
+    return (first,) + tuple(replace(step, data_age=next(ages)) for step in steps[1:])
 
 
 def _spec_checks(chain: ChainModel, bounds: dict[str, Bound], variant: str) -> tuple[SpecCheck, ...]:
