@@ -7,6 +7,9 @@ a chain with reaction-time and data-age specs). For each:
 * synth agrees with brute-force enumeration of every candidate combination (analysed one by one):
   the same verdict, and the same optimal value of the objective;
 * every satisfiable answer is accepted by the analysis and no simulated latency exceeds its bound;
+* the encoding keeps every configuration the analysis accepts, and its chain bounds, with every
+  learnt quantity (``R``, ``E``, ``J``) at its analysed value, are exactly the analysis' (also on the
+  trigger-hop systems of ``tests/test_trigger_hop_bounds.py``);
 * an unsat core is minimal: without any one member (every statement outside the core relaxed) the
   analysis accepts a configuration;
 * scaling every time by 10 scales the answer by 10; reordering declarations changes nothing.
@@ -26,6 +29,7 @@ from verify.synth import brute_force, synthesize
 from verify.synth.statements import configured_model
 
 from .test_synth import accepted, simulated_within_bounds
+from .test_trigger_hop_bounds import age_systems
 
 PERIODS = [10, 20, 25, 40, 50]
 SETTINGS = dict(deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
@@ -236,6 +240,65 @@ def test_utilisation_floor_is_below_every_configuration(system):
     assert all(floor <= v for v in values), (floor, values)
     if all(len(problem.choices[t].candidates) == 1 for t in tids) and values:
         assert values == [floor]  # one configuration: the floor is its utilisation
+
+
+@settings(max_examples=40, **SETTINGS)
+@given(systems())
+def test_the_encoded_chain_bounds_are_the_analysis_bounds(system):
+    """For every configuration the analysis accepts (up to 40 of the pruned space), the encoding with
+    each ``R``, ``E`` and ``J`` at the value the analysis computes is satisfiable (it keeps every
+    accepted configuration, specs/synthesis.md §4) and its reaction time and data age are exactly the
+    analysis' bounds (§3: the same rules, the same choices among them, §7.7's three ages included)."""
+    system.reaction, system.age = None, None  # (no spec: every configuration the analysis bounds is accepted)
+    assume(_encoded_bounds_match(render(system)) > 0)
+
+
+@settings(max_examples=60, **SETTINGS)
+@given(age_systems())
+def test_the_encoded_chain_bounds_are_the_analysis_bounds_around_trigger_hops(text):
+    """The same on the systems of ``tests/test_trigger_hop_bounds.py`` (no holes, but equal priorities,
+    cooperative siblings, AND joins and same-core trigger pairs, where §7.7's rules differ most)."""
+    _encoded_bounds_match(text)
+
+
+def _encoded_bounds_match(text: str) -> int:
+    """Check ``test_the_encoded_chain_bounds_are_the_analysis_bounds`` on ``text``; the number of
+    configurations checked."""
+    import itertools
+
+    import z3
+
+    from verify.synth.driver import _inputs
+    from verify.synth.problem import Config, build_problem
+    from verify.timing import timing_of
+    from verify.timing.chains import pair_fixed_point, pair_qualifies
+
+    model, scope = _inputs(load(text), None, None)
+    problem = build_problem(model, scope)
+    if problem.infeasible is not None:
+        return 0
+    enc = problem.encoding(z3.Context())
+    tids = sorted(problem.choices)
+    checked = 0
+    for combo in itertools.islice(itertools.product(*(range(len(problem.choices[t].candidates)) for t in tids)), 40):
+        ev = problem.evaluate(Config(tuple(zip(tids, combo))))
+        if not ev.accepted:
+            continue
+        timing = timing_of(ev.result, ev.model)
+        values = [(enc.R[t.id], ev.result.task(t.id).response.wcrt) for t in model.tasks]
+        values += [(var, timing.E(tid)) for tid, var in enc.E.items()]
+        values += [(var, pair_fixed_point(timing, hop)) for hop, var in enc.J.values() if pair_qualifies(timing, hop)]
+        solver = z3.Solver(ctx=enc.ctx)
+        solver.add(*enc.hard, *(enc.sel[tid][index] for tid, index in zip(tids, combo)))
+        solver.add(*(var == enc.ticks(value) for var, value in values if not isinstance(var, int)))
+        assert solver.check() == z3.sat, (combo, text)
+        answer = solver.model()
+        chain = ev.result.chain("ch")
+        for kind in ("reaction_time", "data_age"):
+            encoded = answer.eval(enc.t.lift(enc.latency[("ch", kind)]), model_completion=True).as_long()
+            assert encoded == enc.ticks(chain.bound(kind).worst), (kind, combo, text)
+        checked += 1
+    return checked
 
 
 @pytest.mark.slow
