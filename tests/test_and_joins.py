@@ -95,3 +95,25 @@ def test_a_join_fed_by_the_analysed_task_is_capped():
     assert [d.code for d in diagnostics_of(analysis)] == []
     assert all(t.wcrt is not None for t in analysis.tasks)
     _check_against_simulation(text, runs=30)
+
+
+def test_a_local_path_caps_without_its_tasks_response_times():
+    """t1 (priority 2) writes member a of the AND join t2 (priority 7), which triggers t3 (priority 8),
+    all on core c without delays: a local path (specs/timing.md §6.2). In t1's busy window t3 is
+    released at most ``⌈(⌈(q − 1 + 1 + 1)/1⌉ + 1)/1⌉ = q + 2`` times: one completion of t1 at the
+    window's start (N of L⁺ = 0), the join's waiting value (1), and one job of t2 completing at the
+    window's start (the + 1 of a task in between). With L⁺ = R(t2) the cap grew with the jitters of
+    the pipeline, which grew with it: the CPA fixed point had no bound for t0, t1, t2 (E312), the last
+    AND-shape system of the ``tightness`` stage without one. Now every task has a bound, and the bounds
+    hold against the simulator."""
+    from verify.timing.rta import causal_path
+
+    text = shaped(5, 40, 1, [400, 400, 1000, 1000, 1000, 800, 600], [4, 4, 1, 2, 2, 2, 4], [8, 2, 7, 8, 8, 8, 2])
+    model = verify.load_text(text, "and.vfy").system()
+    analysis = analyze(model)
+    estimates = {t.id: t.wcrt for t in analysis.tasks}
+    path = causal_path(model, model.task("t3.T"), model.task("t1.T"), estimates)
+    assert path is not None and path[2] == (0, 1) and path[3] == (1, 1)
+    assert "E312" not in [d.code for d in diagnostics_of(analysis)]  # (E316: bounds above implicit deadlines)
+    assert all(t.wcrt is not None for t in analysis.tasks)
+    _check_against_simulation(text, runs=30)

@@ -256,8 +256,9 @@ class Round:
         load = 0 if events.silent else None if period is None else cost * (self.unit // period)
         return _Stream(n, cost, period, self.ticks(jitter), events.silent, load)
 
-    def _causal_paths(self) -> dict[int, list[tuple[int, int, int, int]]]:
-        """target -> [(source, Π prescalers, L⁺ in ticks, E)] for every ``rta.causal_path(source,
+    def _causal_paths(self) -> dict[int, list[tuple[int, int, int, int, int | None]]]:
+        """target -> [(source, Π prescalers, L⁺ in ticks, E, E of the local path or None)] for every
+        ``rta.causal_path(source,
         target)`` that ``_capped_into`` can use (source on target's core at no lower priority): one
         walk per source, in ``rta.causal_path``'s order (depth first, members in order, each task
         entered once), keeps the first path to each task it meets. The nested ceilings of the cap,
@@ -265,8 +266,10 @@ class Round:
         source each hop makes Π ← Π·k and E ← e + E·k (⌈(⌈x/a⌉ + e)/b⌉ = ⌈(x + e·a)/(ab)⌉ for
         integers), so a path is a few integers, not a tuple per hop (a trigger chain of n tasks has
         n²/2 paths). L⁺ is a sum of delays and WCRT estimates, all multiples of the tick
-        (``_time_base``), so it is summed in ticks."""
-        capped: dict[int, list[tuple[int, int, int, int]]] = {}
+        (``_time_base``), so it is summed in ticks. A local path (no delay, every task in between on
+        the core with ``C⁻ > 0`` and a priority at least the target's; specs/timing.md §6.2) has its
+        own E, one more at every hop from a task in between, used with the carry of L⁺ = 0."""
+        capped: dict[int, list[tuple[int, int, int, int, int | None]]] = {}
         tasks = self.tasks
         causes = [[(k, extra, self.ticks(delay), writer) for k, extra, delay, writer in c]
                   for c in self.static.causes]
@@ -276,23 +279,31 @@ class Round:
                 continue  # (its suspension jitter is not bounded: rta.causally_capped caps nothing then)
             core, priority = tasks[source].core, tasks[source].priority
             visited, found = {source}, set()
-            stack = [(iter(causes[source]), 1, 0, 0)]  # (causes not yet tried, Π, E, L⁺) per task on the path
+            # per task on the path: (causes not yet tried, Π, E, L⁺, E of the local path or None, the least
+            # priority of the tasks in between)
+            start: int | None = 0
+            stack = [(iter(causes[source]), 1, 0, 0, start, priority)]
             while stack:
-                pending, product, extras, latency = stack[-1]
+                pending, product, extras, latency, local, least = stack[-1]
                 step = next(pending, None)
                 if step is None:
                     stack.pop()
                     continue
                 k, extra, delay, writer = step
                 here = (product * k, extra + extras * k, latency + delay)
+                near = None if local is None or delay else extra + local * k
                 if writer not in found and tasks[writer].core == core and priority >= tasks[writer].priority:
                     found.add(writer)
-                    capped.setdefault(writer, []).append((source, here[0], here[2], here[1]))
+                    alt = near if near is not None and least >= tasks[writer].priority else None
+                    capped.setdefault(writer, []).append((source, here[0], here[2], here[1], alt))
                 estimate = estimates[writer]
                 if writer in visited or estimate is None:
                     continue
                 visited.add(writer)
-                stack.append((iter(causes[writer]), here[0], here[1], here[2] + estimate))
+                through = (near + 1 if near is not None and tasks[writer].core == core and tasks[writer].bcet > 0
+                           else None)
+                stack.append((iter(causes[writer]), here[0], here[1], here[2] + estimate, through,
+                              min(least, tasks[writer].priority)))
         return capped
 
     # ------------------------------------------------------------------ the sweep
@@ -466,8 +477,9 @@ class Round:
             carry = self._carry(n)
             if carry is not None:
                 streams = self.streams
-                capped = [(streams[source], product, extra + carry(latency))
-                          for source, product, latency, extra in paths]
+                capped = [(streams[source], product, extra + carry(latency) if alt is None
+                           else min(extra + carry(latency), alt + carry(0)))
+                          for source, product, latency, extra, alt in paths]
         return self._wcrt(n, core, with_self, blocking, once, capped, remote) + (max(blocking, once), remote)
 
     def _carry(self, n: int) -> Callable[[int], int] | None:
@@ -486,7 +498,7 @@ class Round:
             return lambda latency: (latency + base) // period + 1
         return lambda latency: min((latency + base) // period, latency // gap) + 1
 
-    def _capped_into(self, n: int) -> list[tuple[int, int, int, int]]:
+    def _capped_into(self, n: int) -> list[tuple[int, int, int, int, int | None]]:
         """The causal paths into n from streams of hp(n) (``_causal_paths`` keeps no others)."""
         return self.capped.get(n, [])
 

@@ -155,6 +155,7 @@ class Interferer:
     prescalers: tuple[int, ...] | None = None  # causal path back to the analysed task, nearest last
     carry: int | None = None
     extras: tuple[int, ...] = ()  # per hop of the path: events without a new arrival (AND: 1)
+    local: tuple[int, tuple[int, ...]] | None = None  # a local path's (carry for L⁺ = 0, extras)
 
     def demand(self, window: Fraction, q: int = 1) -> Fraction | None:
         if self.silent or window <= 0:
@@ -172,9 +173,13 @@ class Interferer:
         before the window may complete, and the prescaler divides (rounded up)."""
         if self.prescalers is None or self.carry is None:
             return None
-        n = q - 1 + self.carry
-        extras = self.extras or (0,) * len(self.prescalers)
-        for k, extra in zip(reversed(self.prescalers), reversed(extras)):
+        cap = self._nested(q - 1 + self.carry, self.extras or (0,) * len(self.prescalers))
+        if self.local is not None:
+            cap = min(cap, self._nested(q - 1 + self.local[0], self.local[1]))
+        return cap
+
+    def _nested(self, n: int, extras: tuple[int, ...]) -> int:
+        for k, extra in zip(reversed(self.prescalers or ()), reversed(extras)):
             n = -((-(n + extra)) // k)
         return n
 
@@ -188,34 +193,41 @@ class Interferer:
 
 def causal_path(system: SystemModel, source: TaskModel, target: TaskModel,
                 estimates: Mapping[str, Fraction | None]
-                ) -> tuple[tuple[int, ...], Fraction, tuple[int, ...]] | None:
+                ) -> tuple[tuple[int, ...], Fraction, tuple[int, ...], tuple[int, ...] | None] | None:
     """If every activation of ``source`` is caused by completions of ``target`` through data
     triggers: the prescalers on the way (from ``source`` back), the largest latency L⁺ from a
-    completion of ``target`` to the release it causes (Σ d⁺ + Σ R of the tasks in between), and per
-    hop the events that need no new arrival (``causes``: 1 at an AND compound). None if there is no
-    such path. A single-port trigger is caused by its writer; an AND compound by the writer of any of
-    its members, whose arrivals it consumes one per event (specs/timing.md §6.2). The walk is depth
-    first, members in order, each task entered once; the first path found counts."""
+    completion of ``target`` to the release it causes (Σ d⁺ + Σ R of the tasks in between), per
+    hop the events that need no new arrival (``causes``: 1 at an AND compound), and the same with
+    one more at every hop from a task in between where the path is **local** — no delay, every task
+    in between on ``target``'s core with a priority at least its and ``C⁻ > 0`` (specs/timing.md
+    §6.2) — else None. None if there is no such path. A single-port trigger is caused by its writer; an AND
+    compound by the writer of any of its members, whose arrivals it consumes one per event
+    (specs/timing.md §6.2). The walk is depth first, members in order, each task entered once; the
+    first path found counts."""
     visited = {source.id}
-    # (task, its causes not yet tried, prescalers, L⁺, extras): the path so far, innermost last
+    # (task, its causes not yet tried, prescalers, L⁺, extras, local extras): the path so far, innermost last
     path: tuple[int, ...] = ()
-    stack = [(source, iter(causes(system, source)), path, ZERO, path)]
+    local: tuple[int, ...] | None = ()
+    stack = [(source, iter(causes(system, source)), path, ZERO, path, local)]
     while stack:
-        current, pending, prescalers, latency, extras = stack[-1]
+        current, pending, prescalers, latency, extras, local = stack[-1]
         step = next(pending, None)
         if step is None:
             stack.pop()
             continue
         k, extra, link = step
         here = (prescalers + (k,), latency + link.delay_max, extras + (extra,))
+        near = None if local is None or link.delay_max != 0 else local + (extra,)
         if link.writer == target.id:
-            return here
+            return here + (near,)
         estimate = estimates.get(link.writer)
         if link.writer in visited or estimate is None:
             continue
         visited.add(link.writer)
         writer = system.task(link.writer)
-        stack.append((writer, iter(causes(system, writer)), here[0], here[1] + estimate, here[2]))
+        through = (near[:-1] + (extra + 1,) if near is not None and writer.core == target.core
+                   and writer.priority >= target.priority and writer.bcet > 0 else None)
+        stack.append((writer, iter(causes(system, writer)), here[0], here[1] + estimate, here[2], through))
     return None
 
 
@@ -415,7 +427,12 @@ def causally_capped(system: SystemModel, task: TaskModel, j: TaskModel, events: 
     if path is None:
         return stream
     carry = carry_in(task, events[task.id], estimates.get(task.id), path[1])
-    return Interferer(stream.task, stream.cost, stream.period, stream.jitter, stream.silent, path[0], carry, path[2])
+    local = None
+    if path[3] is not None:
+        local_carry = carry_in(task, events[task.id], estimates.get(task.id), ZERO)
+        local = None if local_carry is None else (local_carry, path[3])
+    return Interferer(stream.task, stream.cost, stream.period, stream.jitter, stream.silent, path[0], carry, path[2],
+                      local)
 
 
 def cooperative_blocking(system: SystemModel, task: TaskModel, events: Mapping[str, EventModel],
