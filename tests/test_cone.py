@@ -132,17 +132,17 @@ def test_the_exact_worst_case_of_a_cone_is_that_of_the_whole_rigid_system(sysm):
 
 
 def test_a_range_outside_the_cone_no_longer_leaves_a_spec_undecided():
-    """The chain H → L of ``test_undecided_outside_the_exact_class`` with constant times, and a task
-    with an execution-time range on another core: exactly proved (it was undecided)."""
+    """The chain H → L of ``test_undecided_outside_the_exact_class`` (1 ms between them) with constant
+    times, and a task with an execution-time range on another core: exactly proved (it was undecided)."""
     ts = [task("c.H", timer(10), wcet=5 * MS, prio=2, produces=["o"]),
           task("m.L", trigger("i"), wcet=MS, prio=1, reads=["i"]),
           task("o.N", timer(3), wcet=2 * MS, bcet=MS / 2, prio=1, core="c1")]
-    ls = [link("c.o", "m.i", ts)]
+    ls = [link("c.o", "m.i", ts, dmin=MS)]
     sysm = system(ts, ls, [chain("ctl", ["c.H", "m.L"], ls, reaction_time=F(18, 1000))])
     assert exact_class(sysm) is not None
     v = prove(sysm, budget=60).verdict("ctl", "reaction_time")
     assert (v.status, v.method) == ("proved", "exact-enumeration")
-    assert v.exact == F(16, 1000) and v.bound > v.spec  # H's release to L's completion, past one period
+    assert v.exact == F(17, 1000) and v.bound > v.spec  # H's release to L's completion, past one period
 
 
 def test_undecided_cones_share_the_budget_of_the_falsifying_search():
@@ -153,7 +153,7 @@ def test_undecided_cones_share_the_budget_of_the_falsifying_search():
     for n, core in ((1, "c0"), (2, "c1")):
         ts += [task(f"c{n}.H", timer(10), wcet=5 * MS, bcet=4 * MS, prio=2, core=core, produces=["o"]),
                task(f"m{n}.L", trigger("i"), wcet=MS, prio=1, core=core, reads=["i"])]
-        ls.append(link(f"c{n}.o", f"m{n}.i", ts))
+        ls.append(link(f"c{n}.o", f"m{n}.i", ts, dmin=MS))  # (no pipeline: the bound stays above the spec)
     for n in (1, 2):
         cs.append(chain(f"ctl{n}", [f"c{n}.H", f"m{n}.L"], ls, reaction_time=F(18, 1000)))
     result = prove(system(ts, ls, cs), budget=100)
@@ -173,7 +173,7 @@ def test_budget_a_batch_leaves_goes_to_the_cones_still_undecided(monkeypatch):
     for n, core_name in ((1, "c0"), (2, "c1")):
         ts += [task(f"c{n}.H", timer(10), wcet=5 * MS, bcet=4 * MS, prio=2, core=core_name, produces=["o"]),
                task(f"m{n}.L", trigger("i"), wcet=MS, prio=1, core=core_name, reads=["i"])]
-        ls.append(link(f"c{n}.o", f"m{n}.i", ts))
+        ls.append(link(f"c{n}.o", f"m{n}.i", ts, dmin=MS))  # (no pipeline: the bound stays above the spec)
     cs = [chain("ctl1", ["c1.H", "m1.L"], ls, reaction_time=F(3, 1000)),  # below every run's latency
           chain("ctl2", ["c2.H", "m2.L"], ls, reaction_time=F(18, 1000))]
     result = prove(system(ts, ls, cs), budget=100, jobs=1)

@@ -213,14 +213,15 @@ def test_exact_worst_case_and_counterexample_of_a_register_hop():
 
 
 def test_exact_proof_below_the_bound():
-    """A triggered reader after its writer on one core: the bound counts one preemption too many."""
+    """A triggered reader after its writer on one core, 1 ms behind it: the bound counts one preemption
+    too many (with the delay, the pipeline release offsets of timing.md §6.2 do not apply)."""
     ts = [task("c.H", timer(10), wcet=5 * MS, prio=2, produces=["o"]),
           task("m.L", trigger("i"), wcet=MS, prio=1, reads=["i"])]
-    ls = [link("c.o", "m.i", ts)]
-    sysm = system(ts, ls, [chain("ctl", ["c.H", "m.L"], ls, reaction_time=F(17, 1000))])
+    ls = [link("c.o", "m.i", ts, dmin=MS)]
+    sysm = system(ts, ls, [chain("ctl", ["c.H", "m.L"], ls, reaction_time=F(18, 1000))])
     v = prove(sysm).verdict("ctl", "reaction_time")
-    assert v.bound == F(21, 1000)
-    assert (v.status, v.method, v.exact) == ("proved", "exact-enumeration", F(16, 1000))
+    assert v.bound == F(22, 1000)
+    assert (v.status, v.method, v.exact) == ("proved", "exact-enumeration", F(17, 1000))
     assert v.margin == F(1, 1000)
 
 
@@ -240,8 +241,8 @@ def test_deadline_miss_by_exact_search():
 def test_undecided_outside_the_exact_class():
     ts = [task("c.H", timer(10), wcet=5 * MS, bcet=4 * MS, prio=2, produces=["o"]),
           task("m.L", trigger("i"), wcet=MS, prio=1, reads=["i"])]
-    ls = [link("c.o", "m.i", ts)]
-    sysm = system(ts, ls, [chain("ctl", ["c.H", "m.L"], ls, reaction_time=F(18, 1000))])
+    ls = [link("c.o", "m.i", ts, dmin=MS)]
+    sysm = system(ts, ls, [chain("ctl", ["c.H", "m.L"], ls, reaction_time=F(19, 1000))])
     result = prove(sysm, budget=60)
     v = result.verdict("ctl", "reaction_time")
     assert (v.status, v.method) == ("undecided", "search") and result.exit_code == 3

@@ -33,7 +33,8 @@ from .. import syntax as s
 from ..activations import Activation, DataTriggered
 from ..model import ChainModel, HopModel, LinkModel, SystemModel, TaskModel
 from ..timebase import TimeBase
-from ..timing.chains import cooperative_counts, pair_shape, same_core_reason
+from ..timing.chains import pair_shape, same_core_reason
+from ..timing.rta import cooperative_counts
 from .candidates import Choice
 from .statements import Statement, statement_index
 from .structure import Structure, activation_options, member_links
@@ -756,8 +757,10 @@ def first_job_bounds(model: SystemModel, choices: Mapping[str, Choice], *,
     level-i busy window (specs/timing.md §6.2), ``w = C + Σ_{hp} η·C`` with ``η = ⌈w / T_max⌉`` for
     an interferer that is a timer in every configuration (``T_max`` its longest candidate period) and
     1 otherwise (every interferer is activated at least once in a window, and a causal cap is at
-    least 1). ``relaxed`` (tracked problems): an execution time may fall to ``bcet`` and a task may
-    leave its core, so only the task's own ``bcet`` is certain."""
+    least 1), and 0 for a task on its pipeline path in some configuration (``_possible_upstream``:
+    the pipeline release offsets of §6.2 may leave it no job in the window). ``relaxed`` (tracked
+    problems): an execution time may fall to ``bcet`` and a task may leave its core, so only the
+    task's own ``bcet`` is certain."""
     if relaxed:
         return {t.id: t.bcet for t in model.tasks}
     out: dict[str, Fraction] = {}
@@ -778,7 +781,9 @@ def first_job_bounds(model: SystemModel, choices: Mapping[str, Choice], *,
         per = [int(p * scale) if p is not None else None for p in periods]
         limit = max([p for p in per if p is not None], default=scale) * 1000
         for n, t in enumerate(tasks):
-            hp = [m for m, o in enumerate(tasks) if m != n and o.priority >= t.priority]
+            # (a task upstream of t on a pipeline may have no job in the window: timing.pipeline)
+            ahead = _possible_upstream(model, choices, t)
+            hp = [m for m, o in enumerate(tasks) if m != n and o.priority >= t.priority and o.id not in ahead]
             w = c[n] + sum(c[m] for m in hp)
             for _ in range(1000):
                 new = c[n] + sum(c[m] * (-(-w // per[m]) if per[m] else 1) for m in hp)  # type: ignore[operator, misc]  # per[m] is set
@@ -787,6 +792,26 @@ def first_job_bounds(model: SystemModel, choices: Mapping[str, Choice], *,
                 w = new
             out[t.id] = Fraction(max(w, c[n]), scale)
     return out
+
+
+def _possible_upstream(model: SystemModel, choices: Mapping[str, Choice], task: TaskModel) -> set[str]:
+    """The tasks that are on ``task``'s pipeline path (``verify.timing.pipeline.upstream``) in some
+    configuration: writers reached back through single-port triggers of any candidate, without delay,
+    on ``task``'s core at a higher priority (a superset: tokens and the depth limit are ignored)."""
+    found: set[str] = set()
+    todo = [task]
+    while todo:
+        reader = todo.pop()
+        for _, act in activation_options(reader, choices.get(reader.id)):
+            port = act.single_port
+            link = None if port is None else model.link_into(f"{reader.instance}.{port}")
+            if link is None or link.delay_max != 0 or link.writer in found:
+                continue
+            writer = model.task(link.writer)
+            if writer.core == task.core and writer.priority > task.priority:
+                found.add(writer.id)
+                todo.append(writer)
+    return found
 
 
 def _lt_pair(t: Terms, a: tuple[Term, Term], b: tuple[Term, Term]) -> Cond:

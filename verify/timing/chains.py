@@ -42,7 +42,7 @@ from ..activations import Activation, DataTriggered, Periodic, SporadicSource
 from ..model import ChainModel, HopModel, SystemModel, TaskModel
 from ..units import fmt_time
 from .rates import ActivationInfo, EventModel, arrival_model, combine_and, exact_sum
-from .rta import TaskResponse, interferer, least_fixed_point
+from .rta import TaskResponse, cooperative_counts, interferer, least_fixed_point
 
 ZERO = Fraction(0)
 
@@ -507,15 +507,6 @@ def overtakes(t: Timing, task: TaskModel, j: TaskModel) -> bool:
                                        and not isinstance(j.activation, (Periodic, SporadicSource))):
         return True
     return j.kind == "cooperative" and t.cooperative_count.get(j.instance, 0) > 1
-
-
-def cooperative_counts(system: SystemModel) -> dict[str, int]:
-    """The number of cooperative tasks per instance (a token is shared where there are two)."""
-    count: dict[str, int] = {}
-    for task in system.tasks:
-        if task.kind == "cooperative":
-            count[task.instance] = count.get(task.instance, 0) + 1
-    return count
 
 
 def same_core_reason(system: SystemModel, hop: HopModel, cooperative: Mapping[str, int] | None = None) -> str | None:

@@ -40,8 +40,10 @@ from typing import overload
 from collections.abc import Mapping
 
 from ..construct import direct_constructor
+from ..ids import TaskId
 from ..model import SystemModel
 from ..timebase import TimeBase
+from .pipeline import cases, upstream
 from .rates import EventModel
 from .rta import (MAX_JOBS, MAX_STEPS, ZERO, TaskResponse, bcrt, causes, deadline_of, ratio)
 
@@ -91,6 +93,9 @@ class Static:
         self.causes: list[list[tuple[int, int, Fraction, int]]] = [
             [(k, extra, link.delay_max, self.index[link.writer]) for k, extra, link in causes(system, t)]
             for t in tasks]
+        counts = {instance: len(members) for instance, members in cooperative.items()}
+        #: ``pipeline.upstream`` of each task (the pipeline release offsets of §6.2)
+        self.upstream = [upstream(system, t, counts) for t in tasks]
 
 
 @dataclass
@@ -350,8 +355,12 @@ class Round:
     def _unchanged(self, n: int, previous: Round) -> bool:
         """Task n's own inputs are last round's: its stream and event model (the same objects, so the
         same deadline), its WCRT estimate, its causal caps; and no cooperative sibling."""
+        index = self.static.index
         return (self.streams[n] is previous.streams[n] and not self.static.siblings[n]
-                and self.estimates[n] == previous.estimates[n] and self.capped.get(n) == previous.capped.get(n))
+                and self.estimates[n] == previous.estimates[n] and self.capped.get(n) == previous.capped.get(n)
+                and all(self.estimates[index[t.id]] == previous.estimates[index[t.id]]
+                        and self.streams[index[t.id]] is previous.streams[index[t.id]]
+                        for t, _ in self.static.upstream[n]))
 
     def _interference(self, n: int, core: _Core, with_self: bool, capped: Sequence[_Capped] = (),
                       remote: Sequence[_Stream] = ()
@@ -573,8 +582,50 @@ class Round:
             if best is None or w - offset > best:
                 best, best_q = w - offset, q
             if own.silent or w <= max(0, q * period - jitter):  # the busy window closes before job q + 1
+                if self.static.upstream[n]:
+                    refined = self._pipeline(n, q, cost, once_ticks, period, jitter, groups, extra_at, first_bad,
+                                             load, capped)
+                    if refined is not None and refined[0] < best:
+                        best, best_q = refined
                 return self.seconds(best), q, best_q, None
         return None, MAX_JOBS, None, f"the busy window does not close within {MAX_JOBS} jobs"
+
+    def _pipeline(self, n: int, jobs: int, cost: int, once: int, period: int, jitter: int, groups: list[_Period],
+                  extra_at: _ExtraAt | None, first_bad: int | None, load: int | None, capped: Sequence[_Capped]
+                  ) -> tuple[int, int] | None:
+        """``rta.pipeline_response`` in ticks: (R, critical q), or None when a fixed point is not found.
+        A path task whose cascade job was released up to X before the window counts
+        ``min(η⁺(w), ⌈(w + X + J)/P⌉ − 1, cap)`` jobs: ``extra`` takes the excess over what the core's
+        sums and the causal caps count away."""
+        index = self.static.index
+        estimates: dict[str, Fraction | None] = {t.id: self.estimates[index[t.id]] for t, _ in self.static.upstream[n]}
+        caps = {st.task: (product, carry) for st, product, carry in capped}
+        best: tuple[int, int] | None = None
+        for case in cases(self.static.upstream[n], estimates):
+            reduced = []
+            for tid, before in case.before.items():
+                st = self.streams[index[TaskId(tid)]]
+                if not st.silent and st.period is not None and st.jitter is not None:
+                    reduced.append((st.jitter, st.period, st.cost, self.ticks(before), caps.get(st.task)))
+            offset, per_job = self.ticks(case.offset), self.ticks(case.per_job)
+            work = None if case.work is None else self.ticks(case.work)
+            per_job_work = self.ticks(case.per_job_work)
+            w: int | None = 0
+            left = MAX_STEPS
+            for q in range(1, jobs + 1):
+                extra = _reduced_extra(extra_at and extra_at(q), reduced, q)
+                assert w is not None, "(a failed iteration returns)"
+                w, _, left = self._lfp(q * cost + once, w + cost, groups, extra, first_bad, load, left)
+                if w is None:
+                    return None
+                low = 0 if q == 1 else max(0, (q - 1) * period - jitter)
+                gone = offset + max(low, (q - 1) * per_job)
+                if work is not None:
+                    gone = max(gone, work + (q - 1) * per_job_work)
+                value = w - gone
+                if best is None or value > best[0]:
+                    best = (value, q)
+        return best
 
     def _all_loads(self, n: int, core: _Core, with_self: bool, remote: Sequence[_Stream]) -> int | None:
         """Σ cost/period (units of 1/U) over all of n's streams (capped ones included) and its remote
@@ -637,6 +688,28 @@ class Round:
         deadline, deadline_rule = self.deadlines[n]
         return _new_response(task.id, task.core, task.priority, task.bcet, used, computed, rule, deadline,
                              deadline_rule, blocking, self.hold(n), q, crit, names, failure)
+
+
+def _reduced_extra(extra: Callable[[int], int] | None, reduced: list[tuple[int, int, int, int, tuple[int, int] | None]],
+                   q: int) -> Callable[[int], int] | None:
+    """``extra`` less, per stream (J, P, C, X, causal cap or None) of a path task whose cascade job was
+    released up to X before the window, the jobs ``⌈(w + X + J)/P⌉ − 1`` does not allow beyond what
+    the core's sums (η⁺) and its cap count (``Round._pipeline``)."""
+    if not reduced:
+        return extra
+
+    def less(w: int) -> int:
+        total = extra(w) if extra is not None else 0
+        for jitter, period, cost, before, cap in reduced:
+            count = -((-w - jitter) // period)
+            if cap is not None:
+                count = min(count, _cap(cap[0], cap[1], q))
+            allowed = -((-w - before - jitter) // period) - 1
+            if count > allowed:
+                total -= (count - allowed) * cost
+        return total
+
+    return less
 
 
 def _cap(product: int, carry: int, q: int) -> int:

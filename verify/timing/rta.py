@@ -17,13 +17,14 @@ is ``bcet`` (§6.4).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from fractions import Fraction
 from collections.abc import Mapping
 
 from ..diagnostics import DiagnosticSink, Label, name_list
 from ..model import LinkModel, SystemModel, TaskModel
 from ..units import fmt_number, fmt_time
+from .pipeline import Case, cases, upstream
 from .rates import ActivationInfo, EventModel, ratio_sum
 
 ZERO = Fraction(0)
@@ -156,6 +157,7 @@ class Interferer:
     carry: int | None = None
     extras: tuple[int, ...] = ()  # per hop of the path: events without a new arrival (AND: 1)
     local: tuple[int, tuple[int, ...]] | None = None  # a local path's (carry for L⁺ = 0, extras)
+    before: Fraction | None = None  # a job of it was released at most this long before the window (pipeline)
 
     def demand(self, window: Fraction, q: int = 1) -> Fraction | None:
         if self.silent or window <= 0:
@@ -165,6 +167,8 @@ class Interferer:
             # a capped stream (``causally_capped``) costs the task's wcet: never None
             return None if cap is None else cap * self.cost  # type: ignore[operator, return-value]
         count = -((-(window + self.jitter)) // self.period)
+        if self.before is not None:  # that job is not in the window (verify.timing.pipeline)
+            count = min(count, -((-(window + self.before + self.jitter)) // self.period) - 1)
         return (count if cap is None else min(count, cap)) * self.cost
 
     def causal_cap(self, q: int) -> int | None:
@@ -260,6 +264,15 @@ def carry_in(task: TaskModel, events: EventModel, response: Fraction | None, lat
     return by_rate if by_gap is None else min(by_rate, by_gap)
 
 
+def cooperative_counts(system: SystemModel) -> dict[str, int]:
+    """The number of cooperative tasks per instance (a token is shared where there are two)."""
+    count: dict[str, int] = {}
+    for task in system.tasks:
+        if task.kind == "cooperative":
+            count[task.instance] = count.get(task.instance, 0) + 1
+    return count
+
+
 def siblings(system: SystemModel, task: TaskModel) -> tuple[TaskModel, ...]:
     """The other cooperative tasks of ``task``'s instance (empty unless ``task`` is cooperative)."""
     if task.kind != "cooperative":
@@ -349,6 +362,7 @@ class Demand:
     streams: list[Interferer]
     own: EventModel
     once: Fraction = ZERO  # once per busy window (a lower-priority sibling of the same core)
+    cases: tuple[Case, ...] = ()  # the pipeline release offsets of verify.timing.pipeline
 
 
 def wcrt(d: Demand) -> tuple[Fraction | None, int | None, int | None, str | None]:
@@ -364,6 +378,7 @@ def wcrt(d: Demand) -> tuple[Fraction | None, int | None, int | None, str | None
         return None, None, None, "the utilisation of its level is 1 or more"
     best: tuple[Fraction, int] | None = None
     w, budget = ZERO, Budget()
+    windows: list[Fraction] = []
     for q in range(1, MAX_JOBS + 1):
         # δ⁻(q) is None only for a silent task and q > 1, and a silent task's window closes at q = 1
         offset: Fraction = d.own.delta_min(q)  # type: ignore[assignment]
@@ -372,12 +387,39 @@ def wcrt(d: Demand) -> tuple[Fraction | None, int | None, int | None, str | None
         if found is None:
             return None, q, None, why
         w = found
+        windows.append(w)
         if best is None or w - offset > best[0]:
             best = (w - offset, q)
         following = d.own.delta_min(q + 1)
         if following is None or w <= following:
+            offsets = pipeline_response(d, len(windows)) if d.cases else None
+            if offsets is not None and offsets[0] < best[0]:
+                best = offsets
             return best[0], q, best[1], None
     return None, MAX_JOBS, None, f"the busy window does not close within {MAX_JOBS} jobs"
+
+
+def pipeline_response(d: Demand, jobs: int) -> tuple[Fraction, int] | None:
+    """The WCRT by the pipeline release offsets of §6.2 (``verify.timing.pipeline``): the most, over
+    the jobs q of the busy window (``jobs`` of them) and the ``Case``s, of ``w_c(q) − Case.gone``,
+    where ``w_c(q)`` is the busy window with the counts of the path's
+    tasks whose cascade job was released before it reduced (``Interferer.before``): (R, critical q),
+    or None when a fixed point is not found."""
+    best: tuple[Fraction, int] | None = None
+    for case in d.cases:
+        streams = [replace(s, before=case.before[s.task]) if s.task in case.before else s for s in d.streams]
+        w, budget = ZERO, Budget()
+        for q in range(1, jobs + 1):
+            found, _ = least_fixed_point(q * (d.cost + d.blocking) + d.once, w + d.cost + d.blocking, streams, q,
+                                         budget)
+            if found is None:
+                return None
+            w = found
+            low: Fraction = d.own.delta_min(q)  # type: ignore[assignment]  # (as in ``wcrt``)
+            value = w - case.gone(q, low)
+            if best is None or value > best[0]:
+                best = (value, q)
+    return best
 
 
 def deadline_of(task: TaskModel, events: EventModel) -> tuple[Fraction | None, str]:
@@ -404,7 +446,9 @@ def response_time(system: SystemModel, task: TaskModel, events: Mapping[str, Eve
         computed, q, crit, failure = None, None, None, "a cooperative sibling's hold time is not bounded"
         blocking = None
     else:
-        computed, q, crit, failure = wcrt(Demand(task.wcet, blocking, streams + remote, events[task.id], once))
+        offsets = cases(upstream(system, task, cooperative_counts(system)), estimates)
+        computed, q, crit, failure = wcrt(Demand(task.wcet, blocking, streams + remote, events[task.id], once,
+                                                 offsets))
         blocking = max(blocking, once)  # (reported: the longest wait for the token)
     if task.activation.unknown:
         failure = "its activation is an unresolved synthesis hole (run `synth` first)"
