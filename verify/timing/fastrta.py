@@ -93,6 +93,10 @@ class Static:
         self.causes: list[list[tuple[int, int, Fraction, int]]] = [
             [(k, extra, link.delay_max, self.index[link.writer]) for k, extra, link in causes(system, t)]
             for t in tasks]
+        #: whether each task's jobs take time (``bcet > 0``: a local causal path may pass it, §6.2)
+        self.timed = [t.bcet > 0 for t in tasks]
+        self.cores = [t.core for t in tasks]
+        self.priorities = [t.priority for t in tasks]
         counts = {instance: len(members) for instance, members in cooperative.items()}
         #: ``pipeline.upstream`` of each task (the pipeline release offsets of §6.2)
         self.upstream = [upstream(system, t, counts) for t in tasks]
@@ -279,10 +283,12 @@ class Round:
         causes = [[(k, extra, self.ticks(delay), writer) for k, extra, delay, writer in c]
                   for c in self.static.causes]
         estimates = [self.ticks(e) for e in self.estimates]
+        timed = self.static.timed
+        cores, priorities = self.static.cores, self.static.priorities
         for source in range(len(tasks)):
             if self.static.siblings[source] and estimates[source] is None:
                 continue  # (its suspension jitter is not bounded: rta.causally_capped caps nothing then)
-            core, priority = tasks[source].core, tasks[source].priority
+            core, priority = cores[source], priorities[source]
             visited, found = {source}, set()
             # per task on the path: (causes not yet tried, Π, E, L⁺, E of the local path or None, the least
             # priority of the tasks in between)
@@ -297,18 +303,18 @@ class Round:
                 k, extra, delay, writer = step
                 here = (product * k, extra + extras * k, latency + delay)
                 near = None if local is None or delay else extra + local * k
-                if writer not in found and tasks[writer].core == core and priority >= tasks[writer].priority:
+                mine = cores[writer] == core
+                if mine and writer not in found and priority >= priorities[writer]:
                     found.add(writer)
-                    alt = near if near is not None and least >= tasks[writer].priority else None
+                    alt = near if near is not None and least >= priorities[writer] else None
                     capped.setdefault(writer, []).append((source, here[0], here[2], here[1], alt))
                 estimate = estimates[writer]
                 if writer in visited or estimate is None:
                     continue
                 visited.add(writer)
-                through = (near + 1 if near is not None and tasks[writer].core == core and tasks[writer].bcet > 0
-                           else None)
+                through = near + 1 if near is not None and mine and timed[writer] else None
                 stack.append((iter(causes[writer]), here[0], here[1], here[2] + estimate, through,
-                              min(least, tasks[writer].priority)))
+                              min(least, priorities[writer])))
         return capped
 
     # ------------------------------------------------------------------ the sweep
@@ -486,8 +492,9 @@ class Round:
             carry = self._carry(n)
             if carry is not None:
                 streams = self.streams
+                local = carry(0)
                 capped = [(streams[source], product, extra + carry(latency) if alt is None
-                           else min(extra + carry(latency), alt + carry(0)))
+                           else min(extra + carry(latency), alt + local))
                           for source, product, latency, extra, alt in paths]
         return self._wcrt(n, core, with_self, blocking, once, capped, remote) + (max(blocking, once), remote)
 
