@@ -662,3 +662,37 @@ def test_a_crowded_row_of_a_chart_draws_bars_less_than_a_pixel_apart_as_one():
              and (j.finish if j.finish is not None else full.horizon) >= t0]
     assert merged and len(fast) < 50 < len(drawn)
     assert sum(merged) + len(fast) - len(merged) == len(drawn)
+
+
+E312_SYSTEM = """
+component Ticker { out tick : Msg
+  task Tick { produces tick  wcet 1 ms } }
+component Echo { in tick : Msg  in again : Msg  in any = tick | again  out echo : Msg
+  task Run { reads tick  reads again  produces echo  wcet 1 ms } }
+system Robot {
+  core cpu
+  instance ticker : Ticker on cpu { task Tick priority 2 timer 10 ms }
+  instance echo : Echo on cpu { task Run priority 1 trigger any }
+  connect ticker.tick -> echo.tick
+  connect echo.echo -> echo.again
+}
+"""
+
+
+def test_a_task_without_bound_or_deadline_is_never_passed(tmp_path, capsys):
+    """E312's example: every echo job starts another and every tick adds one, so its backlog grows.
+    It has no deadline (its A⁺ is not bounded): prove has nothing to prove it against, reports E312
+    with how its jobs queue in the first search scenario, and exits 3 (proof spec §1)."""
+    model = verify.load_text(E312_SYSTEM, "e312.vfy").system()
+    result = prove(model)
+    assert [(v.name, v.status) for v in result.verdicts] == [("ticker.Tick", "proved")]
+    assert [d.code for d in result.diagnostics] == ["E312"] and result.exit_code == 3
+    queue = result.diagnostics[0].notes[-1]
+    assert "job #0 (released at 1 ms) in 1 ms" in queue and "in 12 ms" in queue and "still pending" in queue
+    trace = replay(model, ConcreteScenario(F(120, 1000)))  # (the same run: every default is the extreme)
+    responses = [j.finish - j.release for j in trace.jobs["echo.Run"] if j.finish is not None]
+    assert responses[0] == MS and max(responses) == 12 * MS
+    path = tmp_path / "e312.vfy"
+    path.write_text(E312_SYSTEM)
+    assert main(["prove", str(path)]) == 3
+    assert "error[E312]: no response-time bound for `echo.Run`, and no deadline to prove" in capsys.readouterr().err

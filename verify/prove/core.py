@@ -20,8 +20,8 @@ from typing import cast
 from ..diagnostics import Diagnostic, DiagnosticSink, Label
 from ..gcpause import paused_gc
 from ..model import SystemModel
-from ..sim import Sample, ScenarioError, SimulationError
-from ..timing import response_and_chain_bounds
+from ..sim import Sample, ScenarioError, SimulationError, Trace
+from ..timing import TaskResponse, response_and_chain_bounds
 from ..units import fmt_time
 from . import bound as bound_mod
 from .bound import Obligation
@@ -29,7 +29,7 @@ from .cone import SliceMismatch, check_all_carry_over, restrict, slices
 from .exact import (SEARCH_EVENTS, Budget, ExactResult, Extreme, Goal, approach, count_representatives,
                     enumerate_exact, SearchResult, exact_class, first_scenarios, grid_of, search, search_horizon)
 from .parallel import ordered_map, resolve_workers
-from .scenario import ConcreteScenario, Measured, ResponseSample, Target, measure
+from .scenario import ConcreteScenario, Measured, ResponseSample, Target, measure, replay
 from .verdict import Counterexample, ProofResult, Verdict
 from ..budgets import PROVE_BUDGET, PROVE_RLIMIT
 
@@ -64,8 +64,51 @@ def prove(model: SystemModel, *, budget: int = DEFAULT_BUDGET, rlimit: int = DEF
         verdicts.update(_decide(model, open_, budget_obj, rlimit, use_z3, jobs))
     with paused_gc():
         ordered = tuple(verdicts[i] for i in range(len(obs)))
-        return ProofResult(model.name, ordered, tuple(diagnostics(model, ordered)), variant, budget_obj.used,
-                           budget)
+        found = diagnostics(model, ordered) + unbounded(model, responses)
+        return ProofResult(model.name, ordered, tuple(found), variant, budget_obj.used, budget)
+
+
+def unbounded(model: SystemModel, responses: Mapping[str, TaskResponse]) -> list[Diagnostic]:
+    """E312 for every task with neither a response-time bound nor a deadline (its activations are not
+    bounded, so neither is ``A⁺``): there is nothing to prove it against, so nothing is proved for it,
+    and ``prove`` does not pass (proof spec §1). The run of the first search scenario — every phase
+    0, every job at its wcet, every message at its largest delay (§6) — shows how its jobs queue."""
+    tasks = [t for t in model.tasks if responses[t.id].wcrt is None and responses[t.id].deadline is None]
+    if not tasks:
+        return []
+    horizon = search_horizon(model, None)
+    try:
+        trace = replay(model, first_scenarios(model, horizon)[0], SEARCH_EVENTS)
+    except (ScenarioError, SimulationError):
+        trace = None
+    sink = DiagnosticSink()
+    for task in tasks:
+        notes = [f"the response-time analysis finds no bound: {responses[task.id].failure or 'not bounded'}",
+                 "it has no deadline either (its activations are not bounded), so there is nothing to prove "
+                 "it against: nothing is proved for it"]
+        if trace is not None:
+            notes.append(_queue_text(trace, task.id))
+        sink.emit("E312", f"no response-time bound for `{task.id}`, and no deadline to prove", task.span,
+                  "not bounded", notes=notes,
+                  help="break what lets its activations grow (a trigger cycle, an unbounded source), or give "
+                       "it a deadline: prove then searches for a run that misses it")
+    return sink.items
+
+
+def _queue_text(trace: Trace, task: str) -> str:
+    """How the jobs of ``task`` queue in ``trace``: the responses of its finished jobs at four points,
+    and its jobs still pending at the end."""
+    jobs = trace.jobs.get(task, ())
+    done = [j for j in jobs if j.finish is not None]
+    pending = len(jobs) - len(done)
+    if not done:
+        return f"in the run with every phase 0 and every job at its wcet, no job of it completes within " \
+               f"{fmt_time(trace.horizon)} ({pending} released)"
+    picks = sorted({done[(len(done) - 1) * k // 3] for k in range(4)}, key=lambda j: j.index)
+    shown = ", ".join(f"job #{j.index} (released at {fmt_time(j.release)}) in {fmt_time(j.finish - j.release)}"
+                      for j in picks if j.finish is not None)
+    return (f"in the run with every phase 0 and every job at its wcet, its jobs respond: {shown}; "
+            f"{pending} still pending at {fmt_time(trace.horizon)}")
 
 
 # ------------------------------------------------------------------ deciding what the bound left open
