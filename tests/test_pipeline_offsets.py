@@ -18,8 +18,6 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import verify
-from verify.prove.exact import Budget, Goal, search, search_horizon
-from verify.prove.scenario import CHAIN_KINDS, Target
 from verify.sim import random_scenario, simulate
 from verify.timing import analyze
 from verify.timing.pipeline import upstream
@@ -28,6 +26,7 @@ from verify.timing.rta import cooperative_counts
 from .test_bounds_vs_simulation import _slowest
 from .test_perf_equivalence import _rounds_agree
 from .test_timing import bound_violations
+from .test_trigger_hop_bounds import assert_no_run_beyond_the_bounds
 
 MS = Fraction(1, 1000)
 
@@ -124,18 +123,4 @@ def test_no_run_beyond_the_bounds_of_pipelines(text, seed):
     assert loaded.ok, [(d.code, d.message) for d in loaded.diagnostics] + [text]
     model = loaded.system()
     _rounds_agree(model)
-    analysis = analyze(model)
-    for run in range(4):
-        scenario = random_scenario(model, random.Random(f"{seed}/{run}"), Fraction(1, 2))
-        if run == 0:
-            scenario = _slowest(scenario, model)
-        assert bound_violations(model, simulate(model, scenario)) == [], text
-    chain = analysis.chain("ch")
-    goals = [Goal(Target(kind, "ch"), above=chain.bound(kind).worst) for kind in CHAIN_KINDS
-             if chain.bound(kind).worst is not None]
-    if goals:
-        found = search(model, goals, Budget(24), search_horizon(model, None), seed=f"pipeline/{seed}")
-        for goal in goals:
-            measured = found.worst.get(goal.target)
-            sample = None if measured is None else measured.values[goal.target].worst
-            assert sample is None or sample.value <= goal.above, (goal.target, sample, goal.above, text)
+    assert_no_run_beyond_the_bounds(model, text, f"pipeline/{seed}")
