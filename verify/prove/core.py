@@ -105,8 +105,8 @@ def _queue_text(trace: Trace, task: str) -> str:
         return f"in the run with every phase 0 and every job at its wcet, no job of it completes within " \
                f"{fmt_time(trace.horizon)} ({pending} released)"
     picks = sorted({done[(len(done) - 1) * k // 3] for k in range(4)}, key=lambda j: j.index)
-    shown = ", ".join(f"job #{j.index} (released at {fmt_time(j.release)}) in {fmt_time(j.finish - j.release)}"
-                      for j in picks if j.finish is not None)
+    shown = ", ".join(f"job #{j.index} (released at {fmt_time(j.release)}) in "
+                      f"{fmt_time(j.finish - j.release)}" for j in picks)  # type: ignore[operator]  # (finished)
     return (f"in the run with every phase 0 and every job at its wcet, its jobs respond: {shown}; "
             f"{pending} still pending at {fmt_time(trace.horizon)}")
 

@@ -614,9 +614,6 @@ class Round:
                 st = self.streams[index[TaskId(tid)]]
                 if not st.silent and st.period is not None and st.jitter is not None:
                     reduced.append((st.jitter, st.period, st.cost, self.ticks(before), caps.get(st.task)))
-            offset, per_job = self.ticks(case.offset), self.ticks(case.per_job)
-            work = None if case.work is None else self.ticks(case.work)
-            per_job_work = self.ticks(case.per_job_work)
             w: int | None = 0
             left = MAX_STEPS
             for q in range(1, jobs + 1):
@@ -626,10 +623,7 @@ class Round:
                 if w is None:
                     return None
                 low = 0 if q == 1 else max(0, (q - 1) * period - jitter)
-                gone = offset + max(low, (q - 1) * per_job)
-                if work is not None:
-                    gone = max(gone, work + (q - 1) * per_job_work)
-                value = w - gone
+                value = w - self.ticks(case.gone(q, self.seconds(low)))
                 if best is None or value > best[0]:
                     best = (value, q)
         return best

@@ -378,7 +378,6 @@ def wcrt(d: Demand) -> tuple[Fraction | None, int | None, int | None, str | None
         return None, None, None, "the utilisation of its level is 1 or more"
     best: tuple[Fraction, int] | None = None
     w, budget = ZERO, Budget()
-    windows: list[Fraction] = []
     for q in range(1, MAX_JOBS + 1):
         # δ⁻(q) is None only for a silent task and q > 1, and a silent task's window closes at q = 1
         offset: Fraction = d.own.delta_min(q)  # type: ignore[assignment]
@@ -387,12 +386,11 @@ def wcrt(d: Demand) -> tuple[Fraction | None, int | None, int | None, str | None
         if found is None:
             return None, q, None, why
         w = found
-        windows.append(w)
         if best is None or w - offset > best[0]:
             best = (w - offset, q)
         following = d.own.delta_min(q + 1)
         if following is None or w <= following:
-            offsets = pipeline_response(d, len(windows)) if d.cases else None
+            offsets = pipeline_response(d, q) if d.cases else None
             if offsets is not None and offsets[0] < best[0]:
                 best = offsets
             return best[0], q, best[1], None
