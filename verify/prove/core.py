@@ -26,6 +26,7 @@ from ..units import fmt_time
 from . import bound as bound_mod
 from .bound import Obligation
 from .cone import SliceMismatch, check_all_carry_over, restrict, slices
+from .dominant import exact_system
 from .exact import (SEARCH_EVENTS, Budget, ExactResult, Extreme, Goal, approach, count_representatives,
                     enumerate_exact, SearchResult, exact_class, first_scenarios, grid_of, search, search_horizon)
 from .parallel import ordered_map, resolve_workers
@@ -329,25 +330,29 @@ def _search_verdicts(items: list[_Left], found: SearchResult | None, budget: Bud
 def _decide_exactly(model: SystemModel, open_: list[tuple[int, Obligation]], budget: Budget, rlimit: int,
                     use_z3: bool, jobs: int | None = None) -> tuple[dict[int, Verdict], list[_Left]]:
     """The obligations of one cone that an exact method decides (it may use all the budget that is
-    left), and the others with the reason they are not decided exactly."""
+    left), and the others with the reason they are not decided exactly. Outside the exact class the
+    exact methods search the cone's dominating rigid system where one applies (§4.7); its
+    counterexamples must replay on the cone itself."""
     targets = sorted({ob.target for _, ob in open_})
     want_best = frozenset(ob.target for _, ob in open_ if ob.kind == "jitter")
-    reason = exact_class(model)
+    system = exact_system(model, targets)
+    reason = exact_class(model) if system is None else None
     exact: ExactResult | None = None
-    if reason is None:
-        exact = enumerate_exact(model, targets, budget, want_best, jobs=jobs)
+    if system is not None:
+        exact = enumerate_exact(system.model, targets, budget, want_best, jobs=jobs)
         if exact is None and use_z3:
             from .z3bmc import EncodingMismatch, z3_applicable, z3_exact
 
             try:
-                exact = z3_exact(model, targets, want_best, rlimit=rlimit, budget=budget)
+                exact = z3_exact(system.model, targets, want_best, rlimit=rlimit, budget=budget)
             except EncodingMismatch:  # a bug: the encoding and the simulator disagree; decide nothing by it
                 exact = None
         if exact is None:
-            reason = (f"the exact search space has {count_representatives(grid_of(model))} phase representatives, "
-                      f"more than the budget of {budget.left + budget.used} scenarios (raise --budget)")
+            reason = (f"the exact search space has {count_representatives(grid_of(system.model))} phase "
+                      f"representatives, more than the budget of {budget.left + budget.used} scenarios "
+                      "(raise --budget)")
             if use_z3:
-                why_not = z3_applicable(model)
+                why_not = z3_applicable(system.model)
                 reason += (", and the Z3 search did not decide within its resource limit"
                            + (" and the time limit" if budget.deadline is not None else "")
                            if why_not is None else f", and the Z3 search does not apply: {why_not}")
@@ -356,16 +361,21 @@ def _decide_exactly(model: SystemModel, open_: list[tuple[int, Obligation]], bud
     out: dict[int, Verdict] = {}
     leftover: list[_Left] = []
     for i, ob in open_:
-        v = _from_exact(model, ob, exact, budget) if exact is not None else None
+        v = _from_exact(system.model, ob, exact, budget, system.what) if exact is not None and system else None
         if v is None:
             leftover.append(_Left(i, ob, reason or "", exact.explored if exact else 0))
         else:
             out[i] = v
+    if system is not None and system.model is not model and not _carries_over(model, out):
+        return {}, [_Left(i, ob, "a run of the dominating rigid system did not replay on the system (a bug)",
+                          exact.explored if exact else 0) for i, ob in open_]
     return out, leftover
 
 
-def _from_exact(model: SystemModel, ob: Obligation, exact: ExactResult, budget: Budget) -> Verdict | None:
-    """The verdict an exact result gives, or None when it gives none (incomplete and no violation)."""
+def _from_exact(model: SystemModel, ob: Obligation, exact: ExactResult, budget: Budget,
+                note: str = "") -> Verdict | None:
+    """The verdict an exact result gives, or None when it gives none (incomplete and no violation);
+    ``note`` says which system the exact search ran on when it was not the cone itself."""
     worst: Extreme | None = exact.worst.get(ob.target)
     best: Extreme | None = exact.best.get(ob.target) if ob.kind == "jitter" else None
     if worst is None or worst.value is None or (ob.kind == "jitter" and (best is None or best.value is None)):
@@ -379,15 +389,16 @@ def _from_exact(model: SystemModel, ob: Obligation, exact: ExactResult, budget: 
         if not exact.complete:
             return None
         return ob.verdict("proved", exact.method, exact=value, exact_best=best.value if best else None,
-                          explored=exact.explored)
+                          explored=exact.explored, note=note)
     cex = _concrete(model, ob, exact, budget, value)
     if cex is None:
         return None
     if not exact.complete:  # a real violation, but the supremum is not established
         return ob.verdict("violated", exact.method, counterexample=cex, explored=exact.explored,
-                          note="the exact search was incomplete (" + exact.reason + "); the run shown is real")
+                          note="; ".join(filter(None, (note, "the exact search was incomplete (" + exact.reason
+                                                       + "); the run shown is real"))))
     return ob.verdict("violated", exact.method, exact=value, exact_best=best.value if best else None,
-                      counterexample=cex, explored=exact.explored)
+                      counterexample=cex, explored=exact.explored, note=note)
 
 
 def _concrete(model: SystemModel, ob: Obligation, exact: ExactResult, budget: Budget,
@@ -452,7 +463,8 @@ def diagnostics(model: SystemModel, verdicts: Sequence[Verdict]) -> list[Diagnos
     sink = DiagnosticSink()
     undecided = sorted({_subject_target(v) for v in verdicts if v.status == "undecided"})
     # whether an exact search applies to the cone of each undecided subject (§4.0), all cones at once
-    exact_applies = {t: exact_class(sub) is None for sub, members in slices(model, undecided) for t in members}
+    exact_applies = {t: exact_system(sub, members) is not None for sub, members in slices(model, undecided)
+                     for t in members}
     for v in verdicts:
         if v.status == "proved":
             continue
