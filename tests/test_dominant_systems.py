@@ -8,6 +8,7 @@ import random
 from dataclasses import replace
 from fractions import Fraction as F
 
+import pytest
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
@@ -15,13 +16,15 @@ from verify.activations.sporadic import SporadicSource
 from verify.prove import prove
 from verify.prove.dominant import exact_system
 from verify.prove.exact import Budget, count_representatives, enumerate_exact, exact_class, grid_of
+from verify.prove.refine import exact_cones, exact_responses, with_responses
 from verify.prove.scenario import Target, extremes
 from verify.sim import random_scenario, simulate
 from verify.timebase import ceil_to
 from verify.timing import analyze
 
 from .builders import link
-from .test_timing import MS, chain, system, task, timer, trigger
+from .test_bounds_vs_simulation import _slowest
+from .test_timing import MS, bound_violations, chain, random_system, system, task, timer, trigger
 
 
 def sporadic(lo_ms, hi_ms):
@@ -160,3 +163,44 @@ def test_the_property_fails_for_a_dominating_system_at_the_best_execution_times(
     exact = enumerate_exact(best, targets, Budget(1500))
     run = simulate(sysm, random_scenario(sysm, random.Random(1), 40 * MS).__class__(40 * MS, {}))
     assert extremes(run, sysm, targets[0]).worst.value > exact.worst[targets[0]].value
+
+
+# ------------------------------------------------------------------ the bound refined by exact response times
+
+
+def _refined_chain_system(spec_ms):
+    """The offset system's sporadic task as a timer writing to a reader on a second core; both have
+    execution-time ranges, so the chain's cone has no exact system, but the writer's deadline cone has."""
+    hp1 = task("a.hp1", timer(10, 0), prio=3, wcet=3 * MS)
+    hp2 = task("a.hp2", timer(10, 5), prio=2, wcet=3 * MS)
+    lo = task("a.lo", timer(20), prio=1, wcet=MS, bcet=MS / 2, produces=("x",))
+    reader = task("b.r", timer(20), prio=1, wcet=2 * MS, bcet=MS, reads=("y",), core="c1")
+    lk = link("a.x", "b.y", [hp1, hp2, lo, reader])
+    return system([hp1, hp2, lo, reader], [lk], [chain("c", ["a.lo", "b.r"], [lk], data_age=F(spec_ms) * MS)])
+
+
+def test_a_chain_spec_is_proved_by_the_bound_with_exact_response_times():
+    v = prove(_refined_chain_system(27)).verdict("c", "data_age")
+    # register hop: A⁺ 20 ms + R(a.lo) + R(b.r) 2 ms, with R(a.lo) 7 ms by the analysis, 4 ms exactly
+    assert (v.status, v.method, v.bound, v.refined, v.exact) == ("proved", "refined-bound", 29 * MS, 26 * MS, None)
+    assert v.margin == MS and "`a.lo` 4 ms" in v.note
+    below = prove(_refined_chain_system(25)).verdict("c", "data_age")
+    assert below.method != "refined-bound" and below.refined is None
+
+
+#: the seeds below 200 whose random system has a task with an exact response time below its bound
+REFINED_SEEDS = (6, 11, 30, 40, 44, 55, 69, 70, 72, 74, 98, 99, 105, 117, 118, 137, 152, 172, 184, 189)
+
+
+@pytest.mark.parametrize("seed", REFINED_SEEDS)
+def test_no_run_exceeds_the_bounds_refined_by_exact_response_times(seed):
+    sysm = random_system(random.Random(seed))
+    responses = {t.id: t.response for t in analyze(sysm).tasks}
+    exact = exact_responses(exact_cones(sysm, frozenset(t.id for t in sysm.tasks)), responses, Budget(3000))
+    assert exact and all(exact[t] < responses[t].wcrt for t in exact)
+    refined = with_responses(sysm, exact)
+    for run in range(4):
+        scenario = random_scenario(sysm, random.Random(f"{seed}/{run}"), F(1, 2))
+        if run == 0:
+            scenario = _slowest(scenario, sysm)
+        assert bound_violations(refined, simulate(sysm, scenario)) == [], (seed, exact)

@@ -25,6 +25,7 @@ class VerdictExtra(TypedDict, total=False):
 
     exact: Fraction | None
     exact_best: Fraction | None
+    refined: Fraction | None
     counterexample: Counterexample | None
     note: str
     explored: int

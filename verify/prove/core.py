@@ -27,6 +27,7 @@ from . import bound as bound_mod
 from .bound import Obligation
 from .cone import SliceMismatch, check_all_carry_over, restrict, slices
 from .dominant import exact_system
+from .refine import refine, verdict as refined_verdict
 from .exact import (SEARCH_EVENTS, Budget, ExactResult, Extreme, Goal, approach, count_representatives,
                     enumerate_exact, SearchResult, exact_class, first_scenarios, grid_of, search, search_horizon)
 from .parallel import ordered_map, resolve_workers
@@ -62,7 +63,7 @@ def prove(model: SystemModel, *, budget: int = DEFAULT_BUDGET, rlimit: int = DEF
                 open_.append((i, ob))
     budget_obj = Budget(budget, None if timeout is None else time.monotonic() + timeout)
     if open_:
-        verdicts.update(_decide(model, open_, budget_obj, rlimit, use_z3, jobs))
+        verdicts.update(_decide(model, open_, budget_obj, rlimit, use_z3, jobs, (responses, variant)))
     with paused_gc():
         ordered = tuple(verdicts[i] for i in range(len(obs)))
         found = diagnostics(model, ordered) + unbounded(model, responses)
@@ -128,12 +129,14 @@ SHARED_EVENTS = 4 * SEARCH_EVENTS
 
 
 def _decide(model: SystemModel, open_: list[tuple[int, Obligation]], budget: Budget, rlimit: int,
-            use_z3: bool, jobs: int | None = None) -> dict[int, Verdict]:
+            use_z3: bool, jobs: int | None = None,
+            analysis: tuple[dict[str, TaskResponse], str] | None = None) -> dict[int, Verdict]:
     """Decide the obligations the bound left open, cone by cone (proof spec §3, §4.0): first the
-    exact methods, each group of obligations with the same cone on the subsystem of its cone; then
-    the falsifying searches of what they left (``_search_all``). Every counterexample found on a
-    subsystem is replayed on the whole system; if one did not carry over (a bug), its obligations are
-    decided again on the whole system."""
+    exact methods, each group of obligations with the same cone on the subsystem of its cone; then,
+    with ``analysis`` (the responses and the data-age variant of the bound), the bound refined by the
+    exact response times (§4.8); then the falsifying searches of what they left (``_search_all``).
+    Every counterexample found on a subsystem is replayed on the whole system; if one did not carry
+    over (a bug), its obligations are decided again on the whole system."""
     out: dict[int, Verdict] = {}
     pending: list[tuple[SystemModel, list[_Left]]] = []
     for sub, targets in slices(model, sorted({ob.target for _, ob in open_})):
@@ -146,8 +149,32 @@ def _decide(model: SystemModel, open_: list[tuple[int, Obligation]], budget: Bud
         out.update(decided)
         if rest:
             pending.append((sub, rest))
+    if pending and analysis is not None:
+        pending = _refined(model, pending, budget, jobs, analysis, out)
     out.update(_search_all(model, pending, budget, jobs))
     return out
+
+
+def _refined(model: SystemModel, pending: list[tuple[SystemModel, list[_Left]]], budget: Budget,
+             jobs: int | None, analysis: tuple[dict[str, TaskResponse], str],
+             out: dict[int, Verdict]) -> list[tuple[SystemModel, list[_Left]]]:
+    """The obligations the exact methods left that the bound refined by exact response times proves
+    (verdicts into ``out``), and what is left for the searches."""
+    refinement = refine(model, [r.ob for _, rest in pending for r in rest], *analysis, budget, jobs)
+    if refinement is None:
+        return pending
+    left = []
+    for sub, rest in pending:
+        keep = []
+        for r in rest:
+            v = refined_verdict(r.ob, refinement)
+            if v is None:
+                keep.append(r)
+            else:
+                out[r.i] = v
+        if keep:
+            left.append((sub, keep))
+    return left
 
 
 @dataclass(frozen=True)
@@ -454,7 +481,8 @@ def _spec_text(v: Verdict) -> str:
 
 
 def _method_text(method: str) -> str:
-    return {"bound": "the compositional bound", "exact-enumeration": "exact enumeration",
+    return {"bound": "the compositional bound", "refined-bound": "the bound with exact response times",
+            "exact-enumeration": "exact enumeration",
             "exact-z3": "the exact Z3 search", "search": "a falsifying search"}[method]
 
 

@@ -46,7 +46,8 @@ def to_text(model: SystemModel, proof: ProofResult) -> str:
         margin = _cell(v.margin)
         if v.status == "violated" and v.counterexample is not None:
             margin += f" (run: {fmt_time(v.counterexample.latency)})"
-        rows.append([v.label, v.status, v.method, "<= " + fmt_time(v.spec), _cell(v.bound), exact_cell, margin])
+        bound_cell = _cell(v.bound) + (f" (refined {fmt_time(v.refined)})" if v.refined is not None else "")
+        rows.append([v.label, v.status, v.method, "<= " + fmt_time(v.spec), bound_cell, exact_cell, margin])
     widths = [max(len(r[i]) for r in rows) for i in range(len(rows[0]))]
     for r in rows:
         lines.append("  " + "  ".join(c.ljust(w) for c, w in zip(r, widths)).rstrip())
@@ -70,7 +71,8 @@ def verdict_json(model: SystemModel, v: Verdict, runs: Runs | None = None) -> di
     from .trace import to_json as cex_json
 
     return {"subject": v.subject, "name": v.name, "kind": v.kind, "variant": v.variant, "spec": exact(v.spec),
-            "status": v.status, "method": v.method, "bound": exact(v.bound), "exact": exact(v.exact),
+            "status": v.status, "method": v.method, "bound": exact(v.bound), "refined_bound": exact(v.refined),
+            "exact": exact(v.exact),
             "exact_best": exact(v.exact_best), "margin": exact(v.margin), "explored": v.explored,
             "note": v.note or None, "location": _location(v),
             "counterexample": None if v.counterexample is None else cex_json(model, v, runs)}

@@ -2,7 +2,8 @@
 
 One ``Verdict`` per checked property: every chain spec (reaction time, data age, jitter) and the
 deadline of every task. ``status`` is "proved", "violated" or "undecided"; ``method`` says what
-established it: "bound" (the compositional analysis of specs/timing.md), "exact-enumeration" or
+established it: "bound" (the compositional analysis of specs/timing.md), "refined-bound" (the same
+with exact response times, specs/proof.md §4.8), "exact-enumeration" or
 "exact-z3" (the exact search of specs/proof.md §4–§5), or "search" (a falsifying search, which can
 only establish violations).
 """
@@ -16,7 +17,7 @@ from ..source import NO_SPAN, Span
 from ..timing.chains import SPEC_WORDS
 from .scenario import ConcreteScenario, Measured, Target
 
-METHODS = ("bound", "exact-enumeration", "exact-z3", "search")
+METHODS = ("bound", "refined-bound", "exact-enumeration", "exact-z3", "search")
 STATUSES = ("proved", "violated", "undecided")
 
 EXIT_OK, EXIT_VIOLATED, EXIT_UNDECIDED = 0, 1, 3
@@ -62,7 +63,9 @@ class Verdict:
     ``subject`` "chain" (``name`` the chain) or "task" (``name`` the task id); ``kind``
     "reaction_time", "data_age", "jitter" or "deadline"; ``spec`` the bound asked for; ``bound``
     the analysis' bound (None: unbounded); ``exact`` the exact worst case (supremum over all runs)
-    when an exact method established it; ``margin`` = spec − exact when known, else spec − bound.
+    when an exact method established it; ``refined`` the bound recomputed with exact response times
+    that proved it (method "refined-bound"); ``margin`` = spec − exact when known, else spec − refined
+    when known, else spec − bound.
     """
 
     subject: str
@@ -74,6 +77,7 @@ class Verdict:
     bound: Fraction | None
     exact: Fraction | None = None
     exact_best: Fraction | None = None  # jitter: the exact best case of the data age
+    refined: Fraction | None = None  # the bound recomputed with exact response times (§4.8)
     counterexample: Counterexample | None = None
     variant: str = ""
     note: str = ""
@@ -83,7 +87,7 @@ class Verdict:
 
     @property
     def margin(self) -> Fraction | None:
-        value = self.exact if self.exact is not None else self.bound
+        value = self.exact if self.exact is not None else self.refined if self.refined is not None else self.bound
         if self.status == "violated" and self.counterexample is not None and self.exact is None:
             value = self.counterexample.latency
         return None if value is None else self.spec - value
