@@ -33,7 +33,7 @@ from .. import syntax as s
 from ..activations import Activation, DataTriggered
 from ..model import ChainModel, HopModel, LinkModel, SystemModel, TaskModel
 from ..timebase import TimeBase
-from ..timing.chains import pair_shape, same_core_reason
+from ..timing.chains import cascade_in_time, cascade_links, pair_shape, same_core_reason
 from ..timing.rta import cooperative_counts
 from .candidates import Choice
 from .statements import Statement, statement_index
@@ -733,13 +733,40 @@ class Encoding:
         return [(m, self.arrival(link)) for m, link in member_links(self.model, reader, act) if link is not None]
 
     def _and_wait(self, hop: HopModel, act: DataTriggered) -> Term:
+        """``maxₘ W⁺ₘ`` of the other members, 0 where they are fresh by (7.3e) (``_cascade``)."""
         t = self.t
         member = hop.link.target.split(".", 1)[1]
         wait = 0
         for m, (aP, aJ, aF) in self._and_arrivals(hop, act):
             if m != member:
                 wait = t.max(wait, t.max(t.add(aP, aJ), aF))
-        return wait
+        return t.ite(self._cascade(hop, act), 0, wait)
+
+    def _cascade(self, hop: HopModel, act: DataTriggered) -> Cond:
+        """Whether the AND join ``act`` is one of a cascade whose other members are fresh when this hop's
+        value arrives (specs/timing.md §7.3, (7.3e)), as the analysis decides it (``cascade_fresh``) for
+        each activation the writer ``p`` and the task ``w`` triggering it may take: the shape and the
+        delays (``cascade_links``, ``cascade_in_time``), and ``d⁺ + Rₚ + d⁺ < max(C⁻_w, a⁻_w − R_w +
+        B_w) + d⁻ₘ``."""
+        t, model = self.t, self.model
+        p = model.task(hop.writer)
+        out: list[Cond] = []
+        for pidx, pact in activation_options(p, self.choices.get(p.id)):
+            shape = cascade_links(model, hop, act, pact)
+            if shape is None or not cascade_in_time(shape[0], hop, shape[1], p.bcet):
+                continue
+            feed, others = shape
+            w = model.task(feed.writer)
+            bcet = self.ticks(w.bcet)
+            late = t.add(self.ticks(feed.delay_max), self.R[p.id], self.ticks(hop.link.delay_max), 1)
+            for widx, wact in activation_options(w, self.choices.get(w.id)):
+                if wact.gaps is None:
+                    continue
+                spacing = t.max(bcet, t.add(self.ticks(wact.gaps[0]), t.mul(-1, self.R[w.id]), bcet))
+                conds = [t.le(late, t.add(spacing, self.ticks(lk.delay_min))) for lk in others]
+                conds += [self.sel[x.id][i] for x, i in ((p, pidx), (w, widx)) if i is not None]
+                out.append(_all(conds))
+        return _any(out)
 
     def _and_join(self, hop: HopModel, act: DataTriggered, k: int) -> Term:
         if k == 1:
@@ -749,6 +776,22 @@ class Encoding:
         for _, (aP, aJ, _) in self._and_arrivals(hop, act):
             gap = t.add(aP, aJ) if gap is None else t.max(gap, t.add(aP, aJ))
         return t.mul(k - 1, gap)
+
+
+def _all(conds: list[Cond]) -> Cond:
+    """The conjunction of ``conds``, decided without Z3 where it can be."""
+    if any(c is False for c in conds):
+        return False
+    rest = [c for c in conds if c is not True]
+    return True if not rest else rest[0] if len(rest) == 1 else z3.And(*rest)
+
+
+def _any(conds: list[Cond]) -> Cond:
+    """The disjunction of ``conds``, decided without Z3 where it can be."""
+    if any(c is True for c in conds):
+        return True
+    rest = [c for c in conds if c is not False]
+    return False if not rest else rest[0] if len(rest) == 1 else z3.Or(*rest)
 
 
 def first_job_bounds(model: SystemModel, choices: Mapping[str, Choice], *,

@@ -39,7 +39,7 @@ from collections.abc import Iterable, Mapping
 
 from ..construct import direct_constructor
 from ..activations import Activation, DataTriggered, Periodic, SporadicSource
-from ..model import ChainModel, HopModel, SystemModel, TaskModel
+from ..model import ChainModel, HopModel, LinkModel, SystemModel, TaskModel
 from ..units import fmt_time
 from .rates import ActivationInfo, EventModel, arrival_model, combine_and, exact_sum
 from .rta import TaskResponse, cooperative_counts, interferer, least_fixed_point
@@ -342,9 +342,63 @@ def trigger_age(t: Timing, hop: HopModel, k: int) -> Term:
     return _term(trigger_rule(k), (("d⁺", hop.link.delay_max), (f"R({p})", t.R(p))))
 
 
+def cascade_links(system: SystemModel, hop: HopModel, act: Activation, pact: Activation
+                  ) -> tuple[LinkModel, tuple[LinkModel, ...]] | None:
+    """The shape of an AND join of one cascade (specs/timing.md §7.3, (7.3e)) when ``hop.reader`` is
+    activated by ``act`` and ``hop.writer`` by ``pact``: (the connection ``w → p`` that triggers p,
+    alone and without a prescaler; the connections into the other members of the AND compound
+    ``act``, every one from ``w``), or None. Whether ``w`` is released by time is the caller's to check."""
+    if not (isinstance(act, DataTriggered) and act.mode == "and" and isinstance(pact, DataTriggered)
+            and pact.mode == "single" and pact.release_every == 1):
+        return None
+    i, p = system.task(hop.reader), system.task(hop.writer)
+    feed = system.link_into(f"{p.instance}.{pact.port}")
+    member = hop.link.target.split(".", 1)[1]
+    others = tuple(system.link_into(f"{i.instance}.{m}") for m in act.members if m != member)
+    kept = tuple(lk for lk in others if lk is not None and feed is not None and lk.writer == feed.writer)
+    if feed is None or not others or len(kept) != len(others):
+        return None
+    return feed, kept
+
+
+def cascade_in_time(feed: LinkModel, hop: HopModel, others: Iterable[LinkModel], bcet_p: Fraction) -> bool:
+    """(7.3e)'s first condition: ``w``'s message reaches every other member no later than the output of
+    the job of ``p`` it releases reaches this one (``d⁺ₘ ≤ d⁻ + C⁻ₚ + d⁻``)."""
+    return all(lk.delay_max <= feed.delay_min + bcet_p + hop.link.delay_min for lk in others)
+
+
+def cascade_writer(system: SystemModel, hop: HopModel) -> str | None:
+    """The task ``w`` of an AND join of one cascade by its shape ((7.3e), ``cascade_links``, with ``w``
+    released by time), or None."""
+    shape = cascade_links(system, hop, system.task(hop.reader).activation, system.task(hop.writer).activation)
+    if shape is None or system.task(shape[0].writer).activation.gaps is None:
+        return None
+    writer: str = shape[0].writer
+    return writer
+
+
+def cascade_fresh(t: Timing, hop: HopModel) -> bool:
+    """Whether every other member of the AND join is fresh when this hop's value arrives ((7.3e)): the
+    shape (``cascade_writer``), ``cascade_in_time``, and the value of ``p``'s job released by ``w``'s
+    message before arrives first: ``d⁺ + Rₚ + d⁺ < δ⁻_out(w) + d⁻ₘ``, with ``δ⁻_out(w) = max(C⁻_w, a⁻_w −
+    (R_w − B_w))`` the least distance of ``w``'s completions."""
+    system = t.system
+    w = cascade_writer(system, hop)
+    if w is None:
+        return False
+    p = system.task(hop.writer)
+    feed, others = cascade_links(system, hop, system.task(hop.reader).activation, p.activation)  # type: ignore[misc]
+    R_p, R_w, gaps = t.R(p.id), t.R(w), system.task(w).activation.gaps
+    if R_p is None or R_w is None or gaps is None or not cascade_in_time(feed, hop, others, p.bcet):
+        return False
+    spacing = max(t.bcet(w), gaps[0] - (R_w - t.B(w)))
+    return all(feed.delay_max + R_p + hop.link.delay_max < spacing + lk.delay_min for lk in others)
+
+
 def _and_waits(t: Timing, hop: HopModel, k: int) -> tuple[Fraction | None, Fraction | None]:
     """(``maxₘ W⁺ₘ`` over the arrival streams of the other members of the AND compound that triggers
-    ``hop.reader``, ``δ⁺_AND(k)``); None where a member is unconnected or not bounded."""
+    ``hop.reader`` — 0 when they are fresh by (7.3e) —, ``δ⁺_AND(k)``); None where a member is
+    unconnected or not bounded."""
     info = t.infos[hop.reader]
     member = hop.link.target.split(".", 1)[1]
     arrivals: list[EventModel | None] = []
@@ -361,6 +415,8 @@ def _and_waits(t: Timing, hop: HopModel, k: int) -> tuple[Fraction | None, Fract
             waits.append(model.sampling_wait)
     # (no None in waits or arrivals where they are used: checked)
     wait = None if any(w is None for w in waits) else max(waits, default=ZERO)  # type: ignore[type-var]
+    if wait is not None and cascade_fresh(t, hop):
+        wait = ZERO
     join = None if any(a is None for a in arrivals) else combine_and(arrivals).delta_plus(k)  # type: ignore[arg-type]
     return wait, join
 
