@@ -204,3 +204,17 @@ def test_no_run_exceeds_the_bounds_refined_by_exact_response_times(seed):
         if run == 0:
             scenario = _slowest(scenario, sysm)
         assert bound_violations(refined, simulate(sysm, scenario)) == [], (seed, exact)
+
+
+def test_many_free_timers_do_not_stall_the_exact_methods():
+    """Fourteen timers with free phases on one core: the deadline's dominating rigid system is in the
+    exact class, but its weak orders alone number Fubini(15) ≈ 3·10¹⁴. Counting stops at the budget, so
+    prove leaves the deadline to the falsifying search at once, whose first run (every timer at phase 0)
+    reaches the bound, 7 ms."""
+    tasks = [task(f"i.t{n}", timer(10 + n), prio=20 - n, wcet=MS / 2, bcet=MS / 4) for n in range(14)]
+    tasks[-1] = replace(tasks[-1], deadline=F(9, 2) * MS)
+    sysm = system(tasks)
+    dom = exact_system(sysm, [Target("response", "i.t13")])
+    assert dom is not None and count_representatives(grid_of(dom.model), 1000) > 1000
+    v = prove(sysm, budget=50).verdict("i.t13", "deadline")
+    assert (v.status, v.method, v.bound, v.counterexample.latency) == ("violated", "search", 7 * MS, 7 * MS)

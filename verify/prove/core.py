@@ -375,9 +375,10 @@ def _decide_exactly(model: SystemModel, open_: list[tuple[int, Obligation]], bud
             except EncodingMismatch:  # a bug: the encoding and the simulator disagree; decide nothing by it
                 exact = None
         if exact is None:
-            reason = (f"the exact search space has {count_representatives(grid_of(system.model))} phase "
-                      f"representatives, more than the budget of {budget.left + budget.used} scenarios "
-                      "(raise --budget)")
+            allowed, shown = budget.left + budget.used, max(10 * (budget.left + budget.used), 100_000)
+            n = count_representatives(grid_of(system.model), shown)
+            reason = (f"the exact search space has {n if n <= shown else f'more than {shown}'} "
+                      f"phase representatives, more than the budget of {allowed} scenarios (raise --budget)")
             if use_z3:
                 why_not = z3_applicable(system.model)
                 reason += (", and the Z3 search did not decide within its resource limit"

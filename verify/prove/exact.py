@@ -157,22 +157,27 @@ def _u_ranges(grid: Grid, w: tuple[int, ...]) -> list[range]:
     return [range(1 if wa < 0 else 0, (p + 1) if wa < 0 else p) for wa, p in zip(w, grid.periods)]
 
 
-def count_representatives(grid: Grid) -> int:
+def count_representatives(grid: Grid, limit: int | None = None) -> int:
+    """The size of the theorem's finite set (§4.2). With ``limit``, counting stops once the count
+    exceeds it (the result is then some number above ``limit``): every weak order adds at least one
+    phase vector, and there are Fubini(m + 1) of them, far too many to walk for many timers."""
+    counters = math.prod(k for _, k in grid.counters)
     if grid.m == 0:
-        phases = 1
-    else:
-        phases = 0
-        for w in weak_orders(grid.m):
-            ranges = _u_ranges(grid, w)
-            total = math.prod(len(r) for r in ranges)
-            if grid.normalise:
-                zero = [a for a, wa in enumerate(w) if wa == 0]
-                if not zero:
-                    continue
-                without = math.prod(len(r) - (1 if a in zero and 0 in r else 0) for a, r in enumerate(ranges))
-                total -= without
-            phases += total
-    return phases * math.prod(k for _, k in grid.counters)
+        return counters
+    phases = 0
+    for w in weak_orders(grid.m):
+        ranges = _u_ranges(grid, w)
+        total = math.prod(len(r) for r in ranges)
+        if grid.normalise:
+            zero = [a for a, wa in enumerate(w) if wa == 0]
+            if not zero:
+                continue
+            without = math.prod(len(r) - (1 if a in zero and 0 in r else 0) for a, r in enumerate(ranges))
+            total -= without
+        phases += total
+        if limit is not None and phases * counters > limit:
+            break
+    return phases * counters
 
 
 def representatives(grid: Grid) -> Iterator[tuple[dict[str, Fraction], dict[str, int]]]:
@@ -244,7 +249,7 @@ def enumerate_exact(model: SystemModel, targets: list[Target], budget: Budget,
     if exact_class(model) is not None:
         return None
     grid = grid_of(model)
-    n = count_representatives(grid)
+    n = count_representatives(grid, budget.left)
     if n > budget.left:
         return None
     result = ExactResult("exact-enumeration", {t: Extreme() for t in targets},
