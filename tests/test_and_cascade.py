@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 
 import verify
 from verify.timing import analyze, timing_of
-from verify.timing.chains import cascade_fresh, cascade_writer
+from verify.timing.chains import cascade_fresh, cascade_links
 
 from .test_synth_properties import _encoded_bounds_match
 from .test_trigger_hop_bounds import _ms, assert_no_run_beyond_the_bounds
@@ -57,7 +57,9 @@ def test_the_join_of_one_cascade_fires_at_the_last_arrival():
     assert dict(join.data_age.parts)["wait for the other members"] == 0
     assert (chain.bound("reaction_time").worst, chain.bound("data_age").worst) == (150 * MS, 50 * MS)
     (hop,) = [h for h in model.chains[0].hops if h.reader == "fuse.F"]
-    assert cascade_writer(model, hop) == "plan.P" and cascade_fresh(timing_of(analyze(model), model), hop)
+    feed, others = cascade_links(model, hop, model.task("fuse.F").activation, model.task("ctl.C").activation)
+    assert feed.writer == "plan.P" and [lk.source for lk in others] == ["plan.o"]
+    assert cascade_fresh(timing_of(analyze(model), model), hop)
 
 
 def test_a_slower_direct_connection_keeps_the_wait():

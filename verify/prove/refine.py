@@ -43,6 +43,8 @@ def refine(model: SystemModel, open_: Sequence[Obligation], responses: Mapping[s
     have their cones enumerated: a smaller response time is never found, so the others stay open."""
     eligible = {tid: sub for tid, sub in exact_cones(model, in_cones(model, open_)).items()
                 if _above_wcet(responses[tid].wcrt, model.task(tid).wcet)}
+    if not eligible:
+        return None
     optimistic = _bounds(with_responses(model, {tid: model.task(tid).wcet for tid in eligible}), variant)
     hopeful = [ob for ob in open_ if (b := optimistic.get((ob.name, ob.kind))) is not None and b <= ob.spec]
     wanted = in_cones(model, hopeful)
@@ -53,8 +55,8 @@ def refine(model: SystemModel, open_: Sequence[Obligation], responses: Mapping[s
 
 
 def _above_wcet(wcrt: Fraction | None, wcet: Fraction) -> bool:
-    """A response-time bound an exact value might improve (a task never responds within less than its
-    ``wcet`` in every run, so a bound at the ``wcet`` is exact)."""
+    """A response-time bound an exact value might improve: one at the ``wcet`` cannot be, since a job
+    may run for its ``wcet``."""
     return wcrt is None or wcet < wcrt
 
 

@@ -367,27 +367,18 @@ def cascade_in_time(feed: LinkModel, hop: HopModel, others: Iterable[LinkModel],
     return all(lk.delay_max <= feed.delay_min + bcet_p + hop.link.delay_min for lk in others)
 
 
-def cascade_writer(system: SystemModel, hop: HopModel) -> str | None:
-    """The task ``w`` of an AND join of one cascade by its shape ((7.3e), ``cascade_links``, with ``w``
-    released by time), or None."""
-    shape = cascade_links(system, hop, system.task(hop.reader).activation, system.task(hop.writer).activation)
-    if shape is None or system.task(shape[0].writer).activation.gaps is None:
-        return None
-    writer: str = shape[0].writer
-    return writer
-
-
 def cascade_fresh(t: Timing, hop: HopModel) -> bool:
     """Whether every other member of the AND join is fresh when this hop's value arrives ((7.3e)): the
-    shape (``cascade_writer``), ``cascade_in_time``, and the value of ``p``'s job released by ``w``'s
-    message before arrives first: ``d⁺ + Rₚ + d⁺ < δ⁻_out(w) + d⁻ₘ``, with ``δ⁻_out(w) = max(C⁻_w, a⁻_w −
-    (R_w − B_w))`` the least distance of ``w``'s completions."""
+    shape (``cascade_links``, with ``w`` released by time), ``cascade_in_time``, and the value of
+    ``p``'s job released by ``w``'s message before arrives first: ``d⁺ + Rₚ + d⁺ < δ⁻_out(w) + d⁻ₘ``,
+    with ``δ⁻_out(w) = max(C⁻_w, a⁻_w − (R_w − B_w))`` the least distance of ``w``'s completions."""
     system = t.system
-    w = cascade_writer(system, hop)
-    if w is None:
-        return False
     p = system.task(hop.writer)
-    feed, others = cascade_links(system, hop, system.task(hop.reader).activation, p.activation)  # type: ignore[misc]
+    shape = cascade_links(system, hop, system.task(hop.reader).activation, p.activation)
+    if shape is None:
+        return False
+    feed, others = shape
+    w = feed.writer
     R_p, R_w, gaps = t.R(p.id), t.R(w), system.task(w).activation.gaps
     if R_p is None or R_w is None or gaps is None or not cascade_in_time(feed, hop, others, p.bcet):
         return False
