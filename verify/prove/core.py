@@ -389,7 +389,7 @@ def _decide_exactly(model: SystemModel, open_: list[tuple[int, Obligation]], bud
     out: dict[int, Verdict] = {}
     leftover: list[_Left] = []
     for i, ob in open_:
-        v = _from_exact(system.model, ob, exact, budget, system.what) if exact is not None and system else None
+        v = None if exact is None or system is None else _from_exact(system.model, ob, exact, budget, system.what)
         if v is None:
             leftover.append(_Left(i, ob, reason or "", exact.explored if exact else 0))
         else:

@@ -24,6 +24,7 @@ from dataclasses import dataclass, replace
 from ..activations.sporadic import SporadicSource
 from ..activations.timer import Periodic
 from ..model import LinkModel, SystemModel, TaskModel
+from ..units import fmt_time
 from .exact import exact_class
 from .scenario import Target
 
@@ -89,8 +90,6 @@ def _constant_delay(lk: LinkModel) -> LinkModel:
 
 
 def _period_text(t: TaskModel) -> str:
-    from ..units import fmt_time
-
     act = t.activation
     assert isinstance(act, SporadicSource)
     return fmt_time(act.min_interarrival)
