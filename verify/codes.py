@@ -38,6 +38,7 @@ _ALL = [
     Code("E105", "no such system"),
     Code("E106", "unknown scheduling policy"),
     Code("E107", "wrong kind of port or member"),
+    Code("E108", "unknown executor kind"),
     # E2xx: structure
     Code("E201", "connection type mismatch"),
     Code("E202", "out-port produced by no task"),
@@ -57,6 +58,10 @@ _ALL = [
     Code("E216", "synthesis hole on a task whose rate is fixed"),
     Code("E217", "task has no worst-case execution time"),
     Code("E218", "synthesis hole where a configured system is needed"),
+    Code("E219", "executor has no core or no priority"),
+    Code("E220", "priority or core given for a task bound to an executor"),
+    Code("E221", "activation a ROS 2 executor callback cannot have"),
+    Code("E222", "two threads share a priority on a core with an executor"),
     # E3xx: timing
     Code("E301", "best-case execution time exceeds worst case"),
     Code("E302", "time where a frequency is expected, or vice versa"),

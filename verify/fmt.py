@@ -175,11 +175,18 @@ def _binding(b: s.TaskBinding) -> str:
     clauses = [
         f"priority {format_number(b.priority.value)}" if b.priority is not None else None,
         f"on {b.core}" if b.core is not None else None,
+        f"executor {b.executor}" if b.executor is not None else None,
         f"wcrt {format_quantity(b.wcrt)}" if b.wcrt is not None else None,
         f"deadline {format_quantity(b.deadline)}" if b.deadline is not None else None,
         *(_activation(a) for a in b.activations),
     ]
     return " ".join([f"task {b.task}", *(c for c in clauses if c)])
+
+
+def _executor(e: s.Executor) -> str:
+    clauses = [f"on {e.core}" if e.core is not None else None,
+               f"priority {format_number(e.priority.value)}" if e.priority is not None else None]
+    return " ".join([f"executor {e.name} {e.kind}", *(c for c in clauses if c)])
 
 
 def _connection(c: s.Connection) -> str:
@@ -287,6 +294,8 @@ def _print_system(p: _Printer, system: s.System) -> None:
     p.line(0, f"system {system.name} {{", system.span, leaf=False)
     for core in system.cores:
         p.line(1, f"core {core.name}" + (f" policy {core.policy}" if core.policy else ""), core.span)
+    for ex in system.executors:
+        p.line(1, _executor(ex), ex.span)
     for inst in system.instances:
         header = f"instance {inst.name} : {inst.component}" + (f" on {inst.core}" if inst.core else "")
         _print_block(p, header, inst.span, inst.end, [(_binding(b), b.span) for b in inst.bindings])

@@ -16,7 +16,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Literal, TypedDict
+from typing import Literal, TypedDict, cast
 
 from . import syntax as s
 from .activations import KINDS as KINDS
@@ -71,6 +71,7 @@ class TaskModel:
     deadline: Fraction | None = None
     span: Span = _span()  # the binding in the system
     definition_span: Span = _span()  # the task in its component
+    executor: str | None = None  # the ROS 2 executor running it as a callback (core, priority: the executor's)
 
     def reads_port(self, port: str) -> bool:
         return any(r.port == port for r in self.reads)
@@ -233,6 +234,27 @@ class CoreModel:
     span: Span = _span()
 
 
+ExecutorKind = Literal["single_threaded", "static_single_threaded", "events"]
+
+
+@dataclass(frozen=True)
+class ExecutorModel:
+    """A ROS 2 executor (specs/timing.md §9): one thread of ``priority`` on ``core`` that runs the
+    callbacks bound to it one at a time, in the order its ``kind`` defines."""
+
+    name: str
+    kind: ExecutorKind
+    core: str
+    priority: int
+    span: Span = _span()
+
+    @property
+    def polls(self) -> bool:
+        """A wait-set executor: it takes a snapshot of the ready callbacks at polling points (the events
+        executor runs its events in FIFO order instead)."""
+        return self.kind != "events"
+
+
 class _Index(TypedDict):
     """``SystemModel``'s lookup tables."""
 
@@ -264,6 +286,7 @@ class SystemModel:
     instances: tuple[InstanceModel, ...] = ()
     components: tuple[ComponentModel, ...] = ()
     ports: tuple[PortModel, ...] = ()
+    executors: tuple[ExecutorModel, ...] = ()
 
     def task(self, task_id: str) -> TaskModel:
         return self._index()["tasks"][task_id]
@@ -297,7 +320,7 @@ class SystemModel:
     def _with_chains(self, chains: tuple[ChainModel, ...]) -> SystemModel:
         """This system with ``chains``; it shares the lookup tables, which do not depend on the chains."""
         other = SystemModel(self.name, self.cores, self.tasks, self.links, chains, self.span, self.compounds,
-                            self.instances, self.components, self.ports)
+                            self.instances, self.components, self.ports, self.executors)
         if "_lookup" in self.__dict__:
             object.__setattr__(other, "_lookup", self.__dict__["_lookup"])
         return other
@@ -324,6 +347,13 @@ class SystemModel:
 
     def tasks_on(self, core: str) -> tuple[TaskModel, ...]:
         return tuple(t for t in self.tasks if t.core == core)
+
+    def executor(self, name: str) -> ExecutorModel:
+        return next(e for e in self.executors if e.name == name)
+
+    def callbacks(self, executor: str) -> tuple[TaskModel, ...]:
+        """The tasks bound to ``executor``, in system order (its registration order, §9)."""
+        return tuple(t for t in self.tasks if t.executor == executor)
 
 
 # ------------------------------------------------------------------ building
@@ -407,12 +437,16 @@ def _trigger_members(component: s.Component, port: str) -> tuple[Literal["single
 def build_system(scope: SystemScope) -> SystemModel:
     """The semantic model of a system that resolved and validated without errors."""
     system = scope.system
+    executors = tuple(ExecutorModel(e.name.text, cast(ExecutorKind, e.kind.text), e.core.text,  # type: ignore[union-attr]
+                                    int(e.priority.value), e.span)  # type: ignore[union-attr]  # (validated)
+                      for e in system.executors)
+    threads = {e.name: e for e in executors}
     tasks: list[TaskModel] = []
     for inst in system.instances:
         component = scope.component_of[inst.name.text].component
         for task in component.tasks:
             binding = scope.bindings[(inst.name.text, task.name.text)]
-            tasks.append(_task_model(inst, task, binding, component))
+            tasks.append(_task_model(inst, task, binding, component, threads))
     producers = {f"{t.instance}.{p}": t.id for t in tasks for p in t.produces}
     readers: dict[str, list[TaskId]] = {}
     for t in tasks:
@@ -426,18 +460,24 @@ def build_system(scope: SystemScope) -> SystemModel:
     compounds = tuple(cm for inst in system.instances
                       for cm in _compound_models(inst, scope.component_of[inst.name.text].component))
     model = SystemModel(system.name.text, cores, tuple(tasks), links, (), system.span, compounds, instances,
-                        components, ports)
+                        components, ports, executors)
     chains = tuple(_chain_model(ch, model, scope) for ch in system.chains)
     return model._with_chains(chains)
 
 
-def _task_model(inst: s.Instance, task: s.Task, binding: s.TaskBinding, component: s.Component) -> TaskModel:
-    # validation guarantees a core (the binding's or the instance's), a priority, a WCET and an activation
-    core_name = binding.core or inst.core
-    assert core_name is not None and binding.priority is not None and task.wcet is not None
+def _task_model(inst: s.Instance, task: s.Task, binding: s.TaskBinding, component: s.Component,
+                executors: Mapping[str, ExecutorModel]) -> TaskModel:
+    # validation guarantees a core (the binding's or the instance's) and a priority, or an executor, a WCET
+    # and an activation
     activation = binding.activation
-    assert activation is not None
-    core = core_name.text
+    assert activation is not None and task.wcet is not None
+    executor = executors[binding.executor.text] if binding.executor is not None else None
+    if executor is not None:
+        core, priority = executor.core, executor.priority
+    else:
+        core_name = binding.core or inst.core
+        assert core_name is not None and binding.priority is not None
+        core, priority = core_name.text, int(binding.priority.value)
     c = task.constraint
     return _new_task(
         id=TaskId(f"{inst.name.text}.{task.name.text}"),
@@ -446,7 +486,7 @@ def _task_model(inst: s.Instance, task: s.Task, binding: s.TaskBinding, componen
         component=inst.component.text,
         kind=task.kind,
         core=core,
-        priority=int(binding.priority.value),
+        priority=priority,
         bcet=quantity_seconds(task.bcet) if task.bcet else Fraction(0),
         wcet=quantity_seconds(task.wcet),
         reads=tuple([_new_read(r.port.text, r.optional, r.oversampling, r.undersampling, r.span)
@@ -460,6 +500,7 @@ def _task_model(inst: s.Instance, task: s.Task, binding: s.TaskBinding, componen
         deadline=_seconds(binding.deadline),
         span=binding.span,
         definition_span=task.span,
+        executor=None if executor is None else executor.name,
     )
 
 

@@ -496,7 +496,19 @@ class _Builder:
             tuple(m for m in members if isinstance(m, s.Chain)),
             self._span(start, end),
             rbrace,
+            tuple(m for m in members if isinstance(m, s.Executor)),
         )
+
+    def executor(self, start: _Pos, end: _Pos, children: _Children) -> s.Executor:
+        name, kind, *clauses = children
+        fields: dict[str, Any] = {}
+        repeated: list[Span] = []
+        for tag, value, where in clauses:
+            if tag in fields:
+                repeated.append(self._span(*where))
+            else:
+                fields[tag] = value
+        return s.Executor(name, kind, span=self._span(start, end), repeated=tuple(repeated), **fields)
 
     def core(self, start: _Pos, end: _Pos, children: _Children) -> s.Core:
         policy = children[1] if len(children) > 1 else None
@@ -537,6 +549,9 @@ class _Builder:
 
     def task_core(self, start: _Pos, end: _Pos, children: _Children) -> tuple[str, s.Name, _Where]:
         return ("core", children[0], (start, end))
+
+    def task_executor(self, start: _Pos, end: _Pos, children: _Children) -> tuple[str, s.Name, _Where]:
+        return ("executor", children[0], (start, end))
 
     def wcrt(self, start: _Pos, end: _Pos, children: _Children) -> tuple[str, s.Quantity, _Where]:
         return ("wcrt", children[0], (start, end))

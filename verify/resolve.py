@@ -18,6 +18,9 @@ MemberKind = Literal["in-port", "out-port", "compound in-port", "task"]
 MemberNode = s.InPort | s.OutPort | s.CompoundPort | s.Task
 _Node = TypeVar("_Node")
 KNOWN_POLICIES = ("fixed_priority",)
+#: the executor kinds of specs/timing.md §9 (rclcpp's SingleThreadedExecutor, StaticSingleThreadedExecutor
+#: and EventsExecutor)
+KNOWN_EXECUTORS = ("single_threaded", "static_single_threaded", "events")
 
 
 @dataclass(frozen=True)
@@ -49,6 +52,7 @@ class SystemScope:
     component_of: dict[str, ComponentScope] = field(compare=False)  # instance name -> scope
     bindings: dict[tuple[str, str], s.TaskBinding] = field(compare=False)
     resolved: bool = True
+    executors: dict[str, s.Executor] = field(default_factory=dict, compare=False)
 
     @property
     def name(self) -> str:
@@ -159,6 +163,7 @@ def _scope_system(system: s.System, components: dict[str, ComponentScope], sink:
             sink.emit("E106", f"unknown scheduling policy `{core.policy.text}`", core.policy.span,
                       "not a known policy",
                       help=f"did you mean `{hint}`?" if hint else "supported: " + ", ".join(KNOWN_POLICIES))
+    executors = _scope_executors(system, cores, sink)
     instances = _unique(system.instances, lambda i: i.name, "instance", sink)
     component_of: dict[str, ComponentScope] = {}
     bindings: dict[tuple[str, str], s.TaskBinding] = {}
@@ -170,7 +175,7 @@ def _scope_system(system: s.System, components: dict[str, ComponentScope], sink:
             _unknown(sink, "component", inst.component, components)
             continue
         component_of.setdefault(inst.name.text, scope)
-        _resolve_bindings(inst, scope, cores, bindings, sink)
+        _resolve_bindings(inst, scope, cores, executors, bindings, sink)
     for conn in system.connections:
         _resolve_ref(conn.source, ("out-port",), instances, component_of, sink, "connection source")
         _resolve_ref(conn.target, ("in-port",), instances, component_of, sink, "connection target")
@@ -181,11 +186,26 @@ def _scope_system(system: s.System, components: dict[str, ComponentScope], sink:
             kinds: tuple[MemberKind, ...] = ("out-port", "in-port", "task") if last else ("out-port",)
             _resolve_ref(ref, kinds, instances, component_of, sink, "chain element")
     after = len([d for d in sink.items if d.severity.value == "error"])
-    return SystemScope(system, cores, instances, component_of, bindings, resolved=after == before)
+    return SystemScope(system, cores, instances, component_of, bindings, resolved=after == before,
+                       executors=executors)
+
+
+def _scope_executors(system: s.System, cores: dict[str, s.Core], sink: DiagnosticSink) -> dict[str, s.Executor]:
+    """The executors by name (E102 for a second of one name), each of a known kind (E108) on a known core."""
+    executors = _unique(system.executors, lambda e: e.name, "executor", sink)
+    for ex in system.executors:
+        if ex.kind.text not in KNOWN_EXECUTORS:
+            hint = suggest(ex.kind.text, KNOWN_EXECUTORS)
+            sink.emit("E108", f"unknown executor kind `{ex.kind.text}`", ex.kind.span, "not a known executor kind",
+                      help=f"did you mean `{hint}`?" if hint else "supported: " + ", ".join(KNOWN_EXECUTORS))
+        if ex.core is not None and ex.core.text not in cores:
+            _unknown(sink, "core", ex.core, cores)
+    return executors
 
 
 def _resolve_bindings(inst: s.Instance, scope: ComponentScope, cores: dict[str, s.Core],
-                      bindings: dict[tuple[str, str], s.TaskBinding], sink: DiagnosticSink) -> None:
+                      executors: dict[str, s.Executor], bindings: dict[tuple[str, str], s.TaskBinding],
+                      sink: DiagnosticSink) -> None:
     for binding in inst.bindings:
         if not _expect_member(scope, binding.task, ("task",), "E101", sink, "task"):
             continue
@@ -198,6 +218,8 @@ def _resolve_bindings(inst: s.Instance, scope: ComponentScope, cores: dict[str, 
         bindings[key] = binding
         if binding.core is not None and binding.core.text not in cores:
             _unknown(sink, "core", binding.core, cores)
+        if binding.executor is not None and binding.executor.text not in executors:
+            _unknown(sink, "executor", binding.executor, executors)
         for act in binding.activations:
             if isinstance(act, s.Trigger):
                 _expect_member(scope, act.port, ("in-port", "compound in-port"), "E101", sink, "trigger port")

@@ -24,6 +24,14 @@ Events at one instant are processed in rounds, each round in this order (specs/t
 4. **dispatch**: every core picks its job (§1); a job that starts now reads its inputs now, so it
    sees everything that arrived at this instant.
 
+A task bound to a ROS 2 executor (specs/timing.md §9) is a callback: its jobs wait in the executor,
+whose thread competes on its core at the executor's priority with the job it runs or would run next.
+A wait-set executor (``single_threaded``, ``static_single_threaded``) takes a snapshot of its pending
+callbacks when its thread gets the core with none left (a polling point) and runs them in the order
+of kinds, then system order; the ``events`` executor runs its jobs in release order (FIFO, ties in
+system order). A callback with a pending job absorbs a further activation (no job), except a timer on
+the events executor.
+
 A job with execution time 0 that starts at ``t`` completes at ``t`` in a further round at the same
 instant; jobs started in the earlier round have already read their inputs by then.
 
@@ -43,7 +51,7 @@ from fractions import Fraction
 from typing import Any, cast
 from collections.abc import Callable, Mapping
 
-from .model import Activation, ChainModel, LinkModel, SystemModel, TaskModel
+from .model import Activation, ChainModel, ExecutorModel, LinkModel, SystemModel, TaskModel
 
 ZERO = Fraction(0)
 GRID = 1000  # random choices lie on a grid of GRID steps across their range
@@ -212,6 +220,50 @@ class _Job:
 _ARRIVAL, _RELEASE = 1, 2  # heap phases: arrivals before releases at one instant
 
 
+def absorbs(task: TaskModel, executor: ExecutorModel) -> bool:
+    """A callback with a pending job releases no job for a further activation (§9): rcl's timer
+    skips missed periods, a subscription's history of depth 1 keeps only the newest message; the
+    events executor queues one event per timer expiry."""
+    return executor.polls or task.activation.kind != "timer"
+
+
+def snapshot_rank(task: TaskModel, executor: ExecutorModel) -> int:
+    """The position of a callback's kind in a wait-set executor's processing order (§9): timers before
+    subscriptions, except on the static executor, which processes subscriptions first."""
+    timer = task.activation.kind == "timer"
+    return int(not timer) if executor.kind == "single_threaded" else int(timer)
+
+
+@dataclass(eq=False)
+class _Executor:
+    """One executor's jobs: released and not started (``pending``, in release order), the snapshot of
+    its last polling point still to run, and the job it started and has not completed."""
+
+    model: ExecutorModel
+    pending: list[_Job] = field(default_factory=list)
+    snapshot: list[_Job] = field(default_factory=list)
+    current: _Job | None = None
+
+    def head(self) -> _Job | None:
+        """The job the thread runs when it gets its core (a polling point first if the snapshot is empty)."""
+        if self.current is not None:
+            return self.current
+        if not self.model.polls:
+            return min(self.pending, key=lambda j: (j.release, j.order, j.index), default=None)
+        return self.snapshot[0] if self.snapshot else min(self.pending, key=self._rank, default=None)
+
+    def _rank(self, job: _Job) -> tuple[int, int, int]:
+        return snapshot_rank(job.task, self.model), job.order, job.index
+
+    def start(self, job: _Job) -> None:
+        if self.model.polls and not self.snapshot:  # the polling point
+            self.snapshot = sorted(self.pending, key=self._rank)
+        if self.model.polls:
+            self.snapshot.remove(job)
+        self.pending.remove(job)
+        self.current = job
+
+
 def _check(ok: bool, what: str) -> None:
     if not ok:
         raise ScenarioError(what)
@@ -229,6 +281,11 @@ class _Simulator:
         self.ready: dict[str, list[_Job]] = {t.core: [] for t in system.tasks}
         self.running: dict[str, _Job | None] = dict.fromkeys(self.ready)
         self.holder: dict[str, _Job] = {}  # instance -> started, uncompleted cooperative job
+        self.executors = {e.name: _Executor(e) for e in system.executors}
+        self.threads: dict[str, list[_Executor]] = {}
+        for ex in self.executors.values():
+            self.threads.setdefault(ex.model.core, []).append(ex)
+        self.releases: dict[str, int] = {t.id: 0 for t in system.tasks}
         self.registers: dict[str, Message] = {}
         self.messages: list[Message] = []
         self.links_from: dict[str, list[LinkModel]] = {}
@@ -336,7 +393,10 @@ class _Simulator:
     def _complete(self, job: _Job) -> None:
         t = job.task
         job.finish = self.now
-        self.ready[t.core].remove(job)
+        if t.executor is not None:
+            self.executors[t.executor].current = None
+        else:
+            self.ready[t.core].remove(job)
         self.running[t.core] = None
         if self.holder.get(t.instance) is job:
             del self.holder[t.instance]
@@ -378,16 +438,20 @@ class _Simulator:
             self._release(t)
 
     def _timed_release(self, t: TaskModel) -> None:
-        job = self._release(t)
-        self._push(self.now + self._gap(t, t.activation, job.index), _RELEASE, t)
+        index = self.releases[t.id]
+        self._release(t)
+        self._push(self.now + self._gap(t, t.activation, index), _RELEASE, t)
 
-    def _release(self, t: TaskModel) -> _Job:
+    def _release(self, t: TaskModel) -> None:
+        self.releases[t.id] += 1
+        ex = self.executors[t.executor] if t.executor is not None else None
+        if ex is not None and absorbs(t, ex.model) and any(j.task is t for j in ex.pending):
+            return  # absorbed by the pending job (§9)
         index = len(self.jobs[t.id])
         c = self._exec_time(t, index)
         job = _Job(t, index, self.order[t.id], self.now, c, c)
         self.jobs[t.id].append(job)
-        self.ready[t.core].append(job)
-        return job
+        (self.ready[t.core] if ex is None else ex.pending).append(job)
 
     # -------------------------------------------------------------- scheduling (§1)
 
@@ -397,7 +461,9 @@ class _Simulator:
         return t.kind != "cooperative" or job.start is not None or t.instance not in self.holder
 
     def _pick(self, core: str) -> _Job | None:
-        return min((j for j in self.ready[core] if self._eligible(j)), key=_Job.key, default=None)
+        """The best eligible task job, or the job an executor thread of the core runs (§9)."""
+        heads = [h for ex in self.threads.get(core, ()) if (h := ex.head()) is not None]
+        return min([j for j in self.ready[core] if self._eligible(j)] + heads, key=_Job.key, default=None)
 
     def _dispatch(self) -> None:
         """Every core runs its best eligible job. Jobs about to start are started one at a time in
@@ -414,6 +480,8 @@ class _Simulator:
         """Read all inputs at start (§2) and take the instance's cooperative token (§1)."""
         t = job.task
         job.start = self.now
+        if t.executor is not None:
+            self.executors[t.executor].start(job)
         for r in t.reads:
             port = f"{t.instance}.{r.port}"
             job.reads[port] = self.registers.get(port)

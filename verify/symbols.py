@@ -20,7 +20,7 @@ from .resolve import ComponentScope, Resolution, SystemScope
 from .source import Span
 
 SymbolKind = Literal["component", "system", "in-port", "out-port", "compound in-port", "task", "core", "instance",
-                     "chain"]
+                     "chain", "executor"]
 
 
 @dataclass(frozen=True)
@@ -121,8 +121,13 @@ def _system(scope: SystemScope, components: dict[str, tuple[Symbol, dict[str, Sy
     system = scope.name
     cores = {n: Symbol("core", n, system, c.name.span, c) for n, c in scope.cores.items()}
     instances = {n: Symbol("instance", n, system, i.name.span, i) for n, i in scope.instances.items()}
+    executors = {n: Symbol("executor", n, system, e.name.span, e) for n, e in scope.executors.items()}
     symbols.extend(cores.values())
+    symbols.extend(executors.values())
     symbols.extend(instances.values())
+    for ex in scope.system.executors:
+        if ex.core is not None:
+            _use(references, ex.core, cores)
     chains: dict[str, Symbol] = {}
     for chain in scope.system.chains:
         chains.setdefault(chain.name.text, Symbol("chain", chain.name.text, system, chain.name.span, chain))
@@ -137,6 +142,8 @@ def _system(scope: SystemScope, components: dict[str, tuple[Symbol, dict[str, Sy
             _use(references, binding.task, members, ("task",))
             if binding.core is not None:
                 _use(references, binding.core, cores)
+            if binding.executor is not None:
+                _use(references, binding.executor, executors)
             for act in binding.activations:
                 if isinstance(act, s.Trigger):
                     _use(references, act.port, members, ("in-port", "compound in-port"))

@@ -239,10 +239,23 @@ class Core:
 
 
 @dataclass(frozen=True)
+class Executor:
+    """``executor NAME KIND on CORE priority N``: a ROS 2 executor thread (specs/timing.md §9)."""
+
+    name: Name
+    kind: Name
+    core: Name | None = None
+    priority: Number | None = None
+    span: Span = _span()
+    repeated: tuple[Span, ...] = field(default=(), compare=False, repr=False)
+
+
+@dataclass(frozen=True)
 class TaskBinding:
     task: Name
     priority: Number | None = None
     core: Name | None = None
+    executor: Name | None = None  # the executor running it as a callback (then no priority, no core)
     activations: tuple[Activation, ...] = ()
     wcrt: Quantity | None = None
     deadline: Quantity | None = None
@@ -313,6 +326,7 @@ class System:
     chains: tuple[Chain, ...] = ()
     span: Span = _span()
     end: Span = _span()
+    executors: tuple[Executor, ...] = ()
 
 
 @dataclass(frozen=True)

@@ -186,7 +186,9 @@ def validate_system(scope: SystemScope, sink: DiagnosticSink) -> None:
                       help=f"add `task {task.name.text} priority 1 timer 100 ms` (or a trigger) "
                            f"to the body of instance `{inst.name.text}`")
             continue
-        _check_binding(inst, task, binding, comp, sink)
+        executor = scope.executors.get(binding.executor.text) if binding.executor else None
+        _check_binding(inst, task, binding, comp, sink, executor)
+    _check_executors(scope, sink)
     _check_connections(scope, sink)
     _check_trigger_sources(scope, sink)
     for chain in scope.system.chains:
@@ -203,16 +205,18 @@ def validate_system(scope: SystemScope, sink: DiagnosticSink) -> None:
 
 
 def _check_binding(inst: s.Instance, task: s.Task, b: s.TaskBinding, comp: ComponentScope,
-                   sink: DiagnosticSink) -> None:
+                   sink: DiagnosticSink, executor: s.Executor | None = None) -> None:
     who = f"`{inst.name.text}.{task.name.text}`"
     _check_repeated(b.repeated, f"task {who}", sink)
-    if b.priority is None:
+    if b.executor is not None:
+        _check_callback(task, b, who, sink)
+    elif b.priority is None:
         sink.emit("E213", f"task {who} has no priority", b.task.span, "no `priority`",
                   help="add `priority N` (a larger number is a higher priority)")
     elif not b.priority.is_integer or b.priority.value < 0:
         sink.emit("E309", f"priority of {who} must be a non-negative integer, found {fmt_number(b.priority.value)}",
                   b.priority.span, "not a priority", help="use a whole number such as `priority 3`")
-    if b.core is None and inst.core is None:
+    if b.core is None and inst.core is None and b.executor is None:
         sink.emit("E214", f"task {who} has no core", b.task.span, "no core",
                   help=f"add `on CORE` to instance `{inst.name.text}` or to this task")
     if _dimension(b.wcrt, "time", "wcrt", sink) and _positive(b.wcrt, "wcrt", sink):
@@ -234,6 +238,89 @@ def _check_binding(inst: s.Instance, task: s.Task, b: s.TaskBinding, comp: Compo
         _check_against_constraint(act, task, who, sink)
     if isinstance(act, s.Trigger):
         _check_trigger_reads(act, task, comp, who, sink)
+    if executor is not None:
+        _check_callback_activation(act, executor, who, sink)
+
+
+def _check_callback(task: s.Task, b: s.TaskBinding, who: str, sink: DiagnosticSink) -> None:
+    """E220: a callback runs in its executor's thread, which has the core and the priority; E221: a
+    cooperative task (callbacks of one single-threaded executor never overlap anyway)."""
+    assert b.executor is not None
+    for clause, what in ((b.priority, "priority"), (b.core, "core")):
+        if clause is not None:
+            sink.emit("E220", f"task {who} runs on executor `{b.executor.text}` and also has a {what}",
+                      clause.span, f"{what} of a callback",
+                      help=f"remove the {what}: a callback runs in its executor's thread, at the executor's "
+                           "priority on the executor's core")
+    if task.kind == "cooperative":
+        sink.emit("E221", f"task {who} is cooperative, which a callback on executor `{b.executor.text}` "
+                  "cannot be", b.executor.span, "cooperative task bound to an executor",
+                  secondary=(Label(task.name.span, "declared cooperative here"),),
+                  help="declare the task preemptive (callbacks of one executor never overlap), or bind it "
+                       "with a priority and a core instead of an executor")
+
+
+def _check_callback_activation(act: s.Activation, executor: s.Executor, who: str, sink: DiagnosticSink) -> None:
+    """E221: a ROS 2 subscription runs its callback on every message it takes, so a callback has no
+    prescaler; and an executor callback's kind (timer or subscription) is the integrator's choice."""
+    name = executor.name.text
+    if isinstance(act, s.UnknownActivation):
+        sink.emit("E221", f"task {who} on executor `{name}` has no activation kind to choose", act.span,
+                  "kind hole on a callback",
+                  help="bind the callback as a timer (`timer ?` lets synth choose its period) or as a "
+                       "subscription (`trigger PORT`)")
+    elif isinstance(act, s.Trigger) and (isinstance(act.prescaler, s.PrescalerHole) or act.prescaler.value != 1):
+        sink.emit("E221", f"task {who} on executor `{name}` has a prescaler, which a ROS 2 subscription "
+                  "callback does not have", act.span, "prescaler on a callback",
+                  help="drop `every …`: a subscription runs its callback on every message it takes "
+                       "(a callback that works on every k-th message is modelled as a timer reading the port, "
+                       "or bound with a priority instead of an executor)")
+
+
+def _check_executors(scope: SystemScope, sink: DiagnosticSink) -> None:
+    """E219: an executor needs a core and a priority; E309: a non-negative integer priority; E222: its
+    thread has a priority of its own on its core (no task or other executor of the core shares it)."""
+    threads: dict[tuple[str, int], tuple[str, Span]] = {}
+    for ex in scope.system.executors:
+        _check_repeated(ex.repeated, f"executor `{ex.name.text}`", sink)
+        missing = [what for what, clause in (("core", ex.core), ("priority", ex.priority)) if clause is None]
+        if missing:
+            sink.emit("E219", f"executor `{ex.name.text}` has no {' and no '.join(missing)}", ex.name.span,
+                      "no " + " and no ".join(missing),
+                      help=f"write `executor {ex.name.text} {ex.kind.text} on CORE priority N`: its thread runs "
+                           "on that core at that priority")
+        elif not ex.priority.is_integer or ex.priority.value < 0:  # type: ignore[union-attr]  # (not missing)
+            sink.emit("E309", f"priority of executor `{ex.name.text}` must be a non-negative integer, found "
+                      f"{fmt_number(ex.priority.value)}", ex.priority.span, "not a priority",  # type: ignore[union-attr]
+                      help="use a whole number such as `priority 3`")
+        else:
+            assert ex.core is not None and ex.priority is not None
+            threads.setdefault((ex.core.text, int(ex.priority.value)), (f"executor `{ex.name.text}`", ex.span))
+    if not threads:
+        return
+    for inst, _comp, task, b in _instance_tasks(scope):
+        core = b.core or inst.core if b is not None else None
+        if b is None or b.executor is not None or core is None or b.priority is None or not b.priority.is_integer:
+            continue
+        other = threads.get((core.text, int(b.priority.value)))
+        if other is not None and other[0].startswith("executor"):
+            sink.emit("E222", f"task `{inst.name.text}.{task.name.text}` has the priority of {other[0]} on core "
+                      f"`{core.text}`", b.priority.span, "shared with an executor's thread",
+                      secondary=(Label(other[1], "the executor"),),
+                      help="give the task or the executor another priority: a thread's priority on a core is "
+                           "its own, so that which of them runs first is defined")
+    seen: dict[tuple[str, int], s.Executor] = {}
+    for ex in scope.system.executors:
+        if ex.core is None or ex.priority is None or not ex.priority.is_integer:
+            continue
+        key = (ex.core.text, int(ex.priority.value))
+        if key in seen:
+            sink.emit("E222", f"executors `{seen[key].name.text}` and `{ex.name.text}` share priority "
+                      f"{key[1]} on core `{key[0]}`", ex.priority.span, "shared with another executor",
+                      secondary=(Label(seen[key].span, "the other executor"),),
+                      help="give each executor thread of a core its own priority")
+        else:
+            seen[key] = ex
 
 
 def _check_user_bound(b: s.TaskBinding, task: s.Task, who: str, sink: DiagnosticSink) -> None:

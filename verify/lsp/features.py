@@ -171,6 +171,8 @@ def outline(module: s.Module, lines: Lines, analyses: Mapping[str, AnalysisResul
     for system in module.systems:
         analysis = analyses.get(system.name.text)
         kids = [_symbol(c.name.text, lsp.SymbolKind.Constant, c.span, c.name.span, lines, "core") for c in system.cores]
+        kids += [_symbol(e.name.text, lsp.SymbolKind.Constant, e.span, e.name.span, lines, f"{e.kind.text} executor")
+                 for e in system.executors]
         for inst in system.instances:
             tasks = [_symbol(b.task.text, lsp.SymbolKind.Method, b.span, b.task.span, lines,
                              task_summary(analysis, f"{inst.name.text}.{b.task.text}")) for b in inst.bindings]
@@ -328,6 +330,8 @@ def name_items(result: LoadResult | None, before: str) -> list[lsp.CompletionIte
         kinds = {"component"}
     elif re.search(r"\bon\s*$|\bcore\s*$", before):
         kinds = {"core"}
+    elif re.search(r"\bexecutor\s*$", before):
+        kinds = {"executor"}
     else:
         kinds = {"instance"}
     seen: dict[str, lsp.CompletionItem] = {}

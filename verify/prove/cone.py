@@ -97,7 +97,8 @@ def restrict(model: SystemModel, tasks: frozenset[str], chains: set[str]) -> Sys
                        tuple(c for c in model.chains if c.name in chains), model.span,
                        tuple(c for c in model.compounds if c.instance in instances), used,
                        tuple(c for c in model.components if c.name in components),
-                       tuple(p for p in model.ports if p.instance in instances))
+                       tuple(p for p in model.ports if p.instance in instances),
+                       tuple(e for e in model.executors if any(t.executor == e.name for t in kept)))
 
 
 def slices(model: SystemModel, targets: list[Target]) -> list[tuple[SystemModel, list[Target]]]:

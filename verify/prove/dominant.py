@@ -57,7 +57,8 @@ def dominant(model: SystemModel, targets: Iterable[Target]) -> Dominant | None:
                           if isinstance(t.activation, SporadicSource)))
         return Dominant(replace(model, tasks=tasks, links=links), what)
     fixed = [t for t in model.tasks if isinstance(t.activation, SporadicSource)
-             and t.activation.min_interarrival == t.activation.max_interarrival]
+             and t.activation.min_interarrival == t.activation.max_interarrival
+             and t.executor is None]  # (on an executor a sporadic source is a subscription, not a timer: §9)
     if not fixed:
         return None
     tasks = tuple(_as_timer(t) if t in fixed else t for t in model.tasks)
@@ -69,7 +70,8 @@ def dominant(model: SystemModel, targets: Iterable[Target]) -> Dominant | None:
 def sustainable_deadlines(model: SystemModel, targets: Iterable[Target]) -> bool:
     """Every target is a response time, and every task is preemptive and released by time."""
     return (all(t.kind == "response" for t in targets)
-            and all(t.kind == "preemptive" and t.activation.gaps is not None for t in model.tasks))
+            and all(t.kind == "preemptive" and t.executor is None and t.activation.gaps is not None
+                    for t in model.tasks))
 
 
 def _as_timer(t: TaskModel) -> TaskModel:

@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING, Protocol, TypeAlias
 
 from ..model import ChainModel, LinkModel, SystemModel, TaskModel
 from ..sim import (DEFAULT_MAX_EVENTS, JobRecord, Message, Sample, ScenarioError, SimulationError,
-                   Trace)
+                   Trace, absorbs, snapshot_rank)
 from ..timebase import TimeBase
 
 if TYPE_CHECKING:
@@ -138,6 +138,7 @@ class IntSimulator:
         self.fresh: dict[int, set[str]] = {}
         self.prescaler: dict[int, int] = {}
         self.and_members: dict[int, frozenset[str]] = {}
+        self._init_executors(model, cores)
         self.now = self.events = self.seq = 0
         self.heap: list[_Event] = []
         self.jobs: list[list[_Job]] = [[] for _ in tasks]
@@ -150,6 +151,50 @@ class IntSimulator:
         self.arrivals: list[tuple[_Msg, int]] | None = [] if log else None  # (message, arrival) for ``trace``
         for i, t in enumerate(tasks):
             self._init_activation(i, t, phases, counters, interarrivals, base)
+
+    def _init_executors(self, model: SystemModel, cores: list[str]) -> None:
+        """ROS 2 executors (specs/timing.md §9), as in ``verify.sim._Executor``: per executor its
+        released, unstarted jobs (``ex_pending``, in release order), the snapshot of its last polling
+        point still to run, and the job it started (``ex_current``); per task its executor (or −1),
+        whether it absorbs activations while a job is pending and its kind's place in a snapshot."""
+        executors = model.executors
+        names = {e.name: n for n, e in enumerate(executors)}
+        self.executor_of = [names[t.executor] if t.executor is not None else -1 for t in model.tasks]
+        self.absorb = [t.executor is not None and absorbs(t, executors[names[t.executor]]) for t in model.tasks]
+        self.snap_rank = [snapshot_rank(t, executors[names[t.executor]]) if t.executor is not None else 0
+                          for t in model.tasks]
+        self.polls = [e.polls for e in executors]
+        self.ex_pending: list[list[_Job]] = [[] for _ in executors]
+        self.ex_snapshot: list[list[_Job]] = [[] for _ in executors]
+        self.ex_current: list[_Job | None] = [None] * len(executors)
+        self.threads: list[list[int]] = [[n for n, e in enumerate(executors) if e.core == core] for core in cores]
+        self.released = [0] * len(model.tasks)
+
+    def _head(self, e: int) -> _Job | None:
+        """The job executor ``e``'s thread runs when it gets its core (``verify.sim._Executor.head``)."""
+        current = self.ex_current[e]
+        if current is not None:
+            return current
+        pending = self.ex_pending[e]
+        if not pending:
+            return None
+        if not self.polls[e]:
+            return min(pending, key=lambda j: (j.release, j.task, j.index))
+        snapshot = self.ex_snapshot[e]
+        return snapshot[0] if snapshot else min(pending, key=self._snap_key)
+
+    def _snap_key(self, job: _Job) -> tuple[int, int, int]:
+        return self.snap_rank[job.task], job.task, job.index
+
+    def _take(self, e: int, job: _Job) -> None:
+        """Executor ``e`` starts ``job``, polling first if its snapshot is empty."""
+        if self.polls[e]:
+            snapshot = self.ex_snapshot[e]
+            if not snapshot:
+                snapshot.extend(sorted(self.ex_pending[e], key=self._snap_key))
+            snapshot.remove(job)
+        self.ex_pending[e].remove(job)
+        self.ex_current[e] = job
 
     @classmethod
     def of(cls, model: SystemModel, scenario: ConcreteScenario, max_events: int,
@@ -259,6 +304,8 @@ class IntSimulator:
         t = job.task
         job.finish = self.now  # (it leaves its core's heap once it reaches the top)
         self.running[self.core[t]] = None
+        if self.executor_of[t] >= 0:
+            self.ex_current[self.executor_of[t]] = None
         inst = self.instance[t]
         if self.holder.get(inst) is job:
             del self.holder[inst]
@@ -297,12 +344,13 @@ class IntSimulator:
                 self._release(task)
 
     def _timed_release(self, t: int) -> None:
-        job = self._release(t)
+        index = self.released[t]
+        self._release(t)
         period = self.period[t]
         if period is not None:
             self._push(self.now + period, _RELEASE, t)
             return
-        pattern, index = self.gap_pattern[t], job.index
+        pattern = self.gap_pattern[t]
         if pattern is None:
             gap = self.gap[t]
         else:
@@ -311,7 +359,11 @@ class IntSimulator:
                                               f"[{act.min_interarrival}, {act.max_interarrival}]")  # type: ignore[union-attr]
         self._push(self.now + gap, _RELEASE, t)  # type: ignore[operator]  # (a sporadic source has its gap)
 
-    def _release(self, t: int) -> _Job:
+    def _release(self, t: int) -> None:
+        self.released[t] += 1
+        e = self.executor_of[t]
+        if e >= 0 and self.absorb[t] and any(j.task == t for j in self.ex_pending[e]):
+            return  # absorbed by the pending job (specs/timing.md §9)
         jobs = self.jobs[t]
         index = len(jobs)
         pattern = self.exec_pattern[t]
@@ -324,8 +376,10 @@ class IntSimulator:
         key = (-self.prio[t], self.now, t, index)
         job = _Job(t, index, self.now, cost, key)
         jobs.append(job)
-        heapq.heappush(self.ready[self.core[t]], (key, job))
-        return job
+        if e >= 0:
+            self.ex_pending[e].append(job)
+        else:
+            heapq.heappush(self.ready[self.core[t]], (key, job))
 
     def _best(self, core: int) -> _Job | None:
         """The best-ranked eligible job of ``core`` (a cooperative job that has not started is not
@@ -367,11 +421,15 @@ class IntSimulator:
                 while heap and heap[0][1].finish is not None:
                     pop(heap)
                 if not heap:
-                    running[core] = None
-                    continue
-                best = heap[0][1]
-                if coop[best.task] and best.start is None and instance[best.task] in holder:
-                    best = self._best(core)
+                    best = None
+                else:
+                    best = heap[0][1]
+                    if coop[best.task] and best.start is None and instance[best.task] in holder:
+                        best = self._best(core)
+                for e in self.threads[core]:  # executor threads compete with their next job (§9)
+                    head = self._head(e)
+                    if head is not None and (best is None or head.key < best.key):
+                        best = head
                 running[core] = best
                 if best is not None and best.start is None and (starting is None or best.key < starting.key):
                     starting = best
@@ -382,14 +440,20 @@ class IntSimulator:
     def _start(self, job: _Job) -> None:
         t = job.task
         job.start = self.now
+        if self.executor_of[t] >= 0:
+            self._take(self.executor_of[t], job)
         regs = self.registers
         job.reads = tuple(map(regs.get, self.read_ports[t]))
         if self.coop[t]:
             self.holder[self.instance[t]] = job
 
     def pending(self, core: int) -> list[_Job]:
-        """The released, uncompleted jobs of ``core``."""
-        return [job for _key, job in self.ready[core] if job.finish is None]
+        """The released, uncompleted jobs of ``core`` (its executors' included)."""
+        jobs = [job for _key, job in self.ready[core] if job.finish is None]
+        for e in self.threads[core]:
+            current = self.ex_current[e]
+            jobs += self.ex_pending[e] + ([current] if current is not None else [])
+        return jobs
 
     def trace(self, horizon: Fraction, tasks: Iterable[str] | None = None) -> Trace:
         """The run so far as the reference simulator's ``Trace`` of a run over ``[0, horizon)``
@@ -436,7 +500,8 @@ class IntSimulator:
         back = tuple(sorted((k, v - at) for k, v in self.last_arrival.items() if v > at))
         counters = tuple(sorted(self.counter.items()))
         fresh = tuple(sorted((k, tuple(sorted(v))) for k, v in self.fresh.items()))
-        return ready, holders, heap, back, counters, fresh
+        snapshots = tuple(tuple((j.task, j.release - at) for j in snapshot) for snapshot in self.ex_snapshot)
+        return ready, holders, heap, back, counters, fresh, snapshots
 
 
 class _Pattern(tuple[int | None, ...]):

@@ -22,7 +22,7 @@ from typing import Any, TypeAlias, TypeVar
 
 from ..model import SystemModel
 from ..timebase import frac_lcm
-from ..sim import (DEFAULT_MAX_EVENTS, Sample, Scenario, Trace, _ARRIVAL, _RELEASE, _Simulator,
+from ..sim import (DEFAULT_MAX_EVENTS, Sample, Scenario, Trace, _ARRIVAL, _RELEASE, _Job, _Simulator,
                    chain_latencies, simulate)
 
 ZERO = Fraction(0)
@@ -319,7 +319,8 @@ def timing_state(sim: _Simulator, at: Fraction) -> TimingState:
     processing order, FIFO back-pressure, prescaler counters and AND freshness — all relative to
     ``at``. Execution times and delays are constants in the systems this is used on."""
     ready = tuple(sorted((core, tuple(sorted((j.task.id, j.release - at, j.remaining, j.start is not None)
-                                             for j in jobs))) for core, jobs in sim.ready.items()))
+                                             for j in jobs + _executor_jobs(sim, core))))
+                         for core, jobs in sim.ready.items()))
     holders = tuple(sorted((inst, j.task.id, j.release - at) for inst, j in sim.holder.items()))
     # entries of one instant and phase in canonical order: releases of different timers, and arrivals
     # on different connections, do not interact within an instant (specs/proof.md §4.3); the stable
@@ -331,7 +332,13 @@ def timing_state(sim: _Simulator, at: Fraction) -> TimingState:
     back = tuple(sorted((k, v - at) for k, v in sim.last_arrival.items() if v > at))
     counters = tuple(sorted(sim.counter.items()))
     fresh = tuple(sorted((k, tuple(sorted(v))) for k, v in sim.fresh.items()))
-    return ready, holders, heap, back, counters, fresh
+    snapshots = tuple(tuple((j.task.id, j.release - at) for j in ex.snapshot) for ex in sim.executors.values())
+    return ready, holders, heap, back, counters, fresh, snapshots
+
+
+def _executor_jobs(sim: _Simulator, core: str) -> list[_Job]:
+    """The released, uncompleted jobs of the executors of ``core`` (specs/timing.md §9)."""
+    return [j for ex in sim.threads.get(core, ()) for j in ex.pending + ([ex.current] if ex.current else [])]
 
 
 def _covered(trace: Trace, model: SystemModel, target: Target, mark: Fraction, period_end: Fraction) -> bool:

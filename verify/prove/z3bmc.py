@@ -50,6 +50,8 @@ def z3_applicable(model: SystemModel) -> str | None:
     for t in model.tasks:
         if t.kind != "preemptive":
             return f"`{t.id}` is cooperative"
+        if t.executor is not None:
+            return f"`{t.id}` is a callback of ROS 2 executor `{t.executor}`"
         act = t.activation
         if act.trigger_port is not None and act.single_port is None:
             return f"`{t.id}` is triggered by a compound port"

@@ -51,6 +51,7 @@ class TaskTiming:
     activation: ActivationInfo
     events: EventModel
     response: TaskResponse
+    executor: str | None = None  # the ROS 2 executor running it as a callback (specs/timing.md §9)
 
     @property
     def rate(self) -> RateInterval | None:
@@ -180,7 +181,7 @@ def diagnostics_of(result: AnalysisResult) -> list[Diagnostic]:
 
 def _task_timing(task: TaskModel, info: ActivationInfo, events: EventModel, response: TaskResponse) -> TaskTiming:
     return _new_task_timing(task.id, task.core, task.priority, task.kind, task.bcet, task.wcet, info, events,
-                            response)
+                            response, task.executor)
 
 
 def _fixed_point(system: SystemModel, infos: Mapping[str, ActivationInfo], order: tuple[str, ...]

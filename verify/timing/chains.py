@@ -550,6 +550,8 @@ def overtakes(t: Timing, task: TaskModel, j: TaskModel) -> bool:
     before that instant's first dispatch unless a job completing in no time at it triggers it)."""
     if task.kind == "cooperative" and j.kind == "cooperative" and j.instance == task.instance:
         return False
+    if task.executor is not None and j.executor == task.executor:
+        return False  # a started callback runs to completion in its executor's thread (§9)
     if j.priority != task.priority or (t.order[j.id] < t.order[task.id] and t.zero_time
                                        and not isinstance(j.activation, (Periodic, SporadicSource))):
         return True

@@ -45,6 +45,7 @@ from ..model import SystemModel
 from ..timebase import TimeBase
 from .pipeline import cases, upstream
 from .rates import EventModel
+from .executors import executor_responses
 from .rta import (MAX_JOBS, MAX_STEPS, ZERO, TaskResponse, bcrt, causes, deadline_of, ratio)
 
 _new_response = direct_constructor(TaskResponse)  # (``verify.construct``: one per task)
@@ -185,6 +186,9 @@ class Round:
         self.static = static
         system = static.system
         tasks = self.tasks = system.tasks
+        # callbacks of ROS 2 executors have their own analysis (specs/timing.md §9.3); the sweeps treat
+        # them as tasks of their executor's priority, which is how every other task of the core sees them
+        self.callbacks = executor_responses(system, events, estimates) if system.executors else {}
         self.events = [events[t.id] for t in tasks]
         self.estimates = [estimates.get(t.id) for t in tasks]
         kept = ([e is previous.events[n] for n, e in enumerate(self.events)]
@@ -642,7 +646,8 @@ class Round:
     # ------------------------------------------------------------------ results
     def wcrts(self) -> dict[str, Fraction | None]:
         """The WCRT every later step uses, per task (the user's bound if given)."""
-        return {t.id: (t.wcrt_bound if t.wcrt_bound is not None else self._computed(n))
+        return {t.id: (t.wcrt_bound if t.wcrt_bound is not None else
+                       self.callbacks[t.id].wcrt if t.id in self.callbacks else self._computed(n))
                 for n, t in enumerate(self.tasks)}
 
     def _computed(self, n: int) -> Fraction | None:
@@ -670,7 +675,7 @@ class Round:
                         names = ids.copy()
                         names.remove(self.tasks[n].id)
                         out[n] = self._task_response(n, tuple(names))
-        return {t.id: out[n] for n, t in enumerate(self.tasks)}
+        return {t.id: self.callbacks.get(t.id) or out[n] for n, t in enumerate(self.tasks)}
 
     def _task_response(self, n: int, hp_names: tuple[str, ...]) -> TaskResponse:
         task = self.tasks[n]

@@ -79,6 +79,7 @@ def _task(t: TaskTiming) -> dict[str, Any]:
     r = t.response
     return {
         "id": t.id, "core": t.core, "priority": t.priority, "kind": t.kind,
+        **({"executor": t.executor} if t.executor is not None else {}),
         "bcet": exact(t.bcet), "wcet": exact(t.wcet),
         "activation": _activation(t),
         "event_model": _events(t.events),
@@ -235,6 +236,8 @@ JSON_SCHEMA: dict[str, Any] = _obj({
     "diagnostics": {"type": "array", "items": _obj({"code": {"type": "string"}, "severity": {"type": "string"},
                                                     "message": {"type": "string"}},)},
 }, **{"$schema": "https://json-schema.org/draft/2020-12/schema", "title": SCHEMA})
+# a callback of a ROS 2 executor names it (specs/timing.md §9); other tasks have no such key
+JSON_SCHEMA["properties"]["tasks"]["items"]["properties"]["executor"] = {"type": "string"}
 
 
 # ================================================================== text
@@ -276,8 +279,10 @@ def _a_max_text(e: EventModel) -> str:
 
 def _task_line(t: TaskTiming) -> str:
     r = t.response
-    wcrt = _t(r.wcrt) + (f" ({r.rule}, §6.2)" if r.wcrt is not None else f" ({r.failure or 'unbounded'})")
-    line = (f"  {t.id}  [{t.core}, priority {t.priority}{', cooperative' if t.kind == 'cooperative' else ''}]"
+    section = "§9.3" if t.executor is not None else "§6.2"
+    wcrt = _t(r.wcrt) + (f" ({r.rule}, {section})" if r.wcrt is not None else f" ({r.failure or 'unbounded'})")
+    thread = f"executor {t.executor}, " if t.executor is not None else ""
+    line = (f"  {t.id}  [{t.core}, {thread}priority {t.priority}{', cooperative' if t.kind == 'cooperative' else ''}]"
             f"  {_rate_text(t)} (§5.1)\n"
             f"      C {_t(t.bcet)} .. {_t(t.wcet)}   R {_t(r.bcrt)} (§6.4 bcet) .. {wcrt}"
             f"   deadline {_t(r.deadline)} ({r.deadline_rule}, §6.2)"

@@ -517,8 +517,11 @@ def bcrt(task: TaskModel) -> Fraction:
 
 def response_times(system: SystemModel, events: Mapping[str, EventModel],
                    estimates: Mapping[str, Fraction | None]) -> dict[str, TaskResponse]:
-    """One round of RTA for every task (the façade iterates to the CPA fixed point)."""
-    return {t.id: response_time(system, t, events, estimates) for t in system.tasks}
+    """One round of RTA for every task (the façade iterates to the CPA fixed point); the callbacks of
+    ROS 2 executors by ``executors.callback_response`` (§9.3)."""
+    from .executors import callback_response  # (it builds on this module)
+    return {t.id: (callback_response(system, t, events, estimates) if t.executor is not None
+                   else response_time(system, t, events, estimates)) for t in system.tasks}
 
 
 # ================================================================== diagnostics

@@ -1,0 +1,90 @@
+"""Random systems with ROS 2 executors (specs/timing.md §9), as DSL text, for the property tests.
+
+Callbacks on one or two executors per core (single-threaded, static, events; distinct thread
+priorities), plain tasks of higher and lower priority beside them, timers (some with a fixed phase),
+sporadic sources, single-port data triggers and AND/OR compounds across executors and cores,
+connection delays, execution-time ranges, and chains along the connections.
+"""
+from __future__ import annotations
+
+import random
+from fractions import Fraction
+
+KINDS = ("single_threaded", "static_single_threaded", "events")
+PERIODS_MS = (10, 20, 25, 40, 50, 100)
+
+
+def _ms(value: Fraction) -> str:
+    return f"{value.numerator}/{value.denominator} ms" if value.denominator != 1 else f"{value.numerator} ms"
+
+
+def executor_system(rng: random.Random, kinds: tuple[str, ...] = KINDS, rigid: bool = False) -> str:
+    """One random valid system with executors, as DSL text; ``rigid``: in the exact class of ``prove``
+    (constant execution times and delays, no sporadic source)."""
+    cores = rng.choice([1, 1, 2])
+    threads: list[tuple[str, int, int]] = []  # (executor name, core, priority)
+    lines = ["system S {"] + [f"  core c{c}" for c in range(cores)]
+    for c in range(cores):
+        for e in range(rng.choice([1, 1, 2])):
+            name, prio = f"e{c}{e}", 10 + 10 * e
+            threads.append((name, c, prio))
+            lines.append(f"  executor {name} {rng.choice(kinds)} on c{c} priority {prio}")
+    n = rng.randint(3, 7)
+    components, bindings, connections, edges = [], [], [], {}
+    for i in range(n):
+        ins, reads, extra = [], [], []
+        if i == 0 or rng.random() < 0.45:
+            period = rng.choice(PERIODS_MS)
+            if rng.random() < 0.2 and not rigid:
+                act = f"sporadic {period} ms .. {_ms(Fraction(period * rng.randint(4, 8), 4))}"
+            else:
+                phase = f" phase {_ms(Fraction(rng.randrange(2 * period), 2))}" if rng.random() < 0.3 else ""
+                act = f"timer {period} ms{phase}"
+        else:
+            mode = rng.choice(["single", "single", "single", "and", "or"])
+            members = ["a"] if mode == "single" else ["a", "b"]
+            for m in members:
+                w = rng.randrange(i)
+                ins.append(m)
+                reads.append(m)
+                connections.append((w, i, m))
+                edges.setdefault(w, []).append(i)
+            port = "a" if mode == "single" else "ab"
+            if mode != "single":
+                extra.append(f"  in ab = a {'&' if mode == 'and' else '|'} b")
+            act = f"trigger {port}"
+        if i > 0 and rng.random() < 0.4:
+            w = rng.randrange(i)
+            ins.append("r")
+            reads.append("r")
+            connections.append((w, i, "r"))
+            edges.setdefault(w, []).append(i)
+        wcet = Fraction(rng.randint(1, 6), rng.choice([1, 2, 4]))
+        bcet = wcet if rigid else wcet * Fraction(rng.randint(0, 4), 4)
+        comp = [f"component C{i} {{"] + [f"  in {p} : T" for p in ins] + ["  out o : T"] + extra
+        comp += ["  task T {"] + [f"    reads {r}" for r in reads]
+        comp += ["    produces o", f"    bcet {_ms(bcet)}", f"    wcet {_ms(wcet)}", "  }", "}"]
+        components.append("\n".join(comp))
+        if rng.random() < 0.75:
+            name, _c, _p = rng.choice(threads)
+            bindings.append(f"  instance i{i} : C{i} {{ task T executor {name} {act} }}")
+        else:  # a plain thread above or below the executors of its core
+            core = rng.randrange(cores)
+            prio = rng.choice([5, 15, 25, 35])
+            bindings.append(f"  instance i{i} : C{i} on c{core} {{ task T priority {prio} {act} }}")
+    lines += bindings
+    for w, r, port in connections:
+        dmin = rng.choice([0, 0, 1, 2])
+        dmax = dmin + (0 if rigid else rng.choice([0, 0, 1, 3]))
+        delay = "" if dmax == 0 else f" delay {dmin} ms" if dmin == dmax else f" delay {dmin} ms .. {dmax} ms"
+        lines.append(f"  connect i{w}.o -> i{r}.{port}{delay}")
+    for c in range(rng.randint(1, 3)):
+        path = [rng.randrange(n)]
+        while len(path) < 5 and path[-1] in edges and rng.randrange(5) > 0:
+            nxt = rng.choice(sorted(set(edges[path[-1]])))
+            if nxt in path:
+                break
+            path.append(nxt)
+        lines.append(f"  chain ch{c}: " + " -> ".join(f"i{t}.o" for t in path))
+    lines.append("}")
+    return "\n\n".join(components) + "\n\n" + "\n".join(lines) + "\n"
