@@ -275,3 +275,43 @@ def test_the_exact_search_lies_between_runs_and_the_bound(seed):
         for m in runs:
             s = m.values[t].worst if m.complete else None
             assert s is None or s.value <= value, (t, s.value, value, text)
+
+
+def _with_holes(seed: int) -> str:
+    """A random executor system whose callbacks' unphased timers are period holes (at most two), with a
+    reaction-time spec on its first chain."""
+    rng = random.Random(seed)
+    holes = 0
+    while not holes:
+        text = executor_system(rng)
+        lines = []
+        for line in text.splitlines():
+            if "executor e" in line and " timer " in line and " phase " not in line and holes < 2:
+                head, tail = line.split(" timer ", 1)
+                line = head + " timer ? in 10 ms .. 40 ms step 10 ms " + tail.split(" ", 2)[2]
+                holes += 1
+            if line.startswith("  chain ch0:"):
+                line += f" {{ reaction_time <= {rng.choice([30, 60, 120])} ms }}"
+            lines.append(line)
+    return "\n".join(lines) + "\n"
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_synth_on_executors_agrees_with_brute_force(seed):
+    """Period holes on callbacks' timers: ``synth`` finds what enumerating every candidate finds (the
+    same status, the same optimal choices), and its configuration passes the analysis and the
+    simulator."""
+    from verify.synth import brute_force, synthesize
+
+    from .test_synth import accepted, simulated_within_bounds
+
+    text = _with_holes(seed)
+    loaded = verify.load_text(text, "holes.vfy")
+    assert loaded.ok, [(d.code, d.message) for d in loaded.diagnostics]
+    result = synthesize(loaded, objective="utilisation")
+    naive = brute_force(loaded, objective="utilisation")
+    assert result.status == naive.status, text
+    if result.status == "sat":
+        assert result.optimal and result.values == naive.values, text
+        assert accepted(result.model)
+        simulated_within_bounds(result.model, runs=1, horizon=F(1))

@@ -801,7 +801,9 @@ def first_job_bounds(model: SystemModel, choices: Mapping[str, Choice], *,
     an interferer that is a timer in every configuration (``T_max`` its longest candidate period) and
     1 otherwise (every interferer is activated at least once in a window, and a causal cap is at
     least 1), and 0 for a task on its pipeline path in some configuration (``_possible_upstream``:
-    the pipeline release offsets of §6.2 may leave it no job in the window). ``relaxed`` (tracked
+    the pipeline release offsets of §6.2 may leave it no job in the window). For a callback of an
+    executor, every bound of §9.3 counts each other callback of its executor and each higher thread at
+    least once: ``C + Σ C``. ``relaxed`` (tracked
     problems): an execution time may fall to ``bcet`` and a task may leave its core, so only the
     task's own ``bcet`` is certain."""
     if relaxed:
@@ -824,6 +826,11 @@ def first_job_bounds(model: SystemModel, choices: Mapping[str, Choice], *,
         per = [int(p * scale) if p is not None else None for p in periods]
         limit = max([p for p in per if p is not None], default=scale) * 1000
         for n, t in enumerate(tasks):
+            if t.executor is not None:  # a callback (§9.3): each other callback and higher thread once
+                others = [m for m, o in enumerate(tasks) if m != n and (o.priority > t.priority
+                                                                      or o.executor == t.executor)]
+                out[t.id] = Fraction(c[n] + sum(c[m] for m in others), scale)
+                continue
             # (a task upstream of t on a pipeline may have no job in the window: timing.pipeline)
             ahead = _possible_upstream(model, choices, t)
             hp = [m for m, o in enumerate(tasks) if m != n and o.priority >= t.priority and o.id not in ahead]

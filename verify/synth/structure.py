@@ -78,8 +78,9 @@ def dependency_graph(model: SystemModel, trigger: nx.DiGraph[str]) -> nx.DiGraph
     of t, ("r", t) for its response time, ("hp", core, priority) for "the event models of every task
     of that core at this priority or higher". Edges: em(w), r(w) → em(t) for every trigger writer w
     of t; em(t) → r(t); hp(core, p(t)) → r(t); em(t) → hp(core, p(t)); hp level → next lower level;
-    and r(j) → r(i) where i's analysis reads j's response time: a cooperative sibling, or a
-    cooperative task of higher priority (its suspension jitter)."""
+    and r(j) → r(i) where i's analysis reads j's response time: a cooperative sibling, a
+    cooperative task of higher priority (its suspension jitter), or a task above the thread of i's
+    executor (the polling-round bound of specs/timing.md §9.3)."""
     graph: nx.DiGraph[DepNode] = nx.DiGraph()
     for w, r in trigger.edges:
         graph.add_edge(("em", w), ("em", r))
@@ -95,6 +96,11 @@ def dependency_graph(model: SystemModel, trigger: nx.DiGraph[str]) -> nx.DiGraph
         for t in tasks:
             graph.add_edge(("em", t.id), ("hp", core, t.priority))
             graph.add_edge(("hp", core, t.priority), ("r", t.id))
+    for t in model.tasks:
+        if t.executor is not None:
+            for h in by_core[t.core]:
+                if h.priority > t.priority:
+                    graph.add_edge(("r", h.id), ("r", t.id))
     coop: dict[str, list[TaskModel]] = {}
     for t in model.tasks:
         if t.kind == "cooperative":

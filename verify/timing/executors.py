@@ -31,23 +31,14 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import replace
-from functools import partial
 from fractions import Fraction
 
 from ..model import ExecutorModel, SystemModel, TaskModel
 from .rates import EventModel
-from .rta import MAX_JOBS, MAX_STEPS, Interferer, TaskResponse, bcrt, deadline_of, interferer, least_fixed_point, ratio
+from ..timebase import TimeBase
+from .rta import MAX_JOBS, MAX_STEPS, TaskResponse, bcrt, deadline_of, interferer, least_fixed_point, ratio
 
 ZERO = Fraction(0)
-
-
-def closed_count(events: EventModel, window: Fraction) -> int | None:
-    """``η̄(Δ) = ⌊(Δ + J⁻)/P⁻⌋ + 1``: the most activations in a closed window of length Δ ≥ 0."""
-    if events.silent:
-        return 0
-    if events.period_min is None or events.jitter_min is None:
-        return None
-    return int((window + events.jitter_min) // events.period_min) + 1
 
 
 def higher_threads(system: SystemModel, executor: ExecutorModel) -> tuple[TaskModel, ...]:
@@ -72,10 +63,10 @@ def callback_response(system: SystemModel, task: TaskModel, events: Mapping[str,
     streams = [interferer(system, h, events[h.id], estimates.get(h.id), h.wcet) for h in hp]
     hold, _ = least_fixed_point(task.wcet, task.wcet, streams)
     computed: Fraction | None
-    computed, offsets, critical, failure = _wcrt(system, task, executor, members, hp, events, estimates)
+    rounds = round_bound(system, task, members, hp, events, estimates) if executor.polls else None
+    computed, offsets, critical, failure = _wcrt(system, task, executor, members, hp, events, estimates, rounds)
     rule = (f"{executor.kind} executor, {'FIFO' if not executor.polls else 'non-preemptive'} busy window, "
             f"{offsets} offset{'s' if offsets != 1 else ''}")
-    rounds = round_bound(system, task, members, hp, events, estimates) if executor.polls else None
     if rounds is not None and (computed is None or rounds < computed):
         computed, rule, failure = rounds, f"{executor.kind} executor, polling rounds", None
     used: Fraction | None = computed
@@ -88,41 +79,102 @@ def callback_response(system: SystemModel, task: TaskModel, events: Mapping[str,
                         ZERO, hold, offsets, critical, names, failure)
 
 
+class _Stream:
+    """A stream of jobs in integer ticks: cost C, least period P, jitter J; silent: never activated."""
+
+    __slots__ = ("cost", "period", "jitter", "silent")
+
+    def __init__(self, cost: int, period: int, jitter: int, silent: bool):
+        self.cost, self.period, self.jitter, self.silent = cost, period, jitter, silent
+
+    def closed(self, window: int) -> int:
+        """η̄(Δ) = ⌊(Δ + J)/P⌋ + 1: activations in a closed window of length Δ ≥ 0."""
+        return 0 if self.silent else (window + self.jitter) // self.period + 1
+
+    def open(self, window: int) -> int:
+        """η⁺(Δ) = ⌈(Δ + J)/P⌉: activations in a half-open window of length Δ (0 for Δ ≤ 0)."""
+        return 0 if self.silent or window <= 0 else -(-(window + self.jitter) // self.period)
+
+
 def _wcrt(system: SystemModel, task: TaskModel, executor: ExecutorModel, members: tuple[TaskModel, ...],
-          hp: tuple[TaskModel, ...], events: Mapping[str, EventModel], estimates: Mapping[str, Fraction | None]
-          ) -> tuple[Fraction | None, int | None, int | None, str | None]:
-    """(R, the number of offsets searched, the critical one (1-based), failure)."""
-    own = events[task.id]
-    unbounded = [m.id for m in members + hp if closed_count(events[m.id], ZERO) is None]
+          hp: tuple[TaskModel, ...], events: Mapping[str, EventModel], estimates: Mapping[str, Fraction | None],
+          cap: Fraction | None = None) -> tuple[Fraction | None, int | None, int | None, str | None]:
+    """(R, the number of offsets searched, the critical one (1-based), failure) of the busy-window bound;
+    with ``cap`` (a bound known already), the search stops as soon as it reaches it (R is then None).
+    Computed in integer ticks of the coarsest base in which every time involved is whole."""
+    flows = {t.id: interferer(system, t, events[t.id], estimates.get(t.id), t.wcet) for t in members + hp}
+    unbounded = [tid for tid, s in flows.items() if not s.silent and (s.period is None or s.jitter is None)]
     if unbounded:
         return None, None, None, f"the activations of `{unbounded[0]}` are not bounded"
-    load = sum((m.wcet / events[m.id].period_min for m in members + hp  # type: ignore[operator]  # (bounded)
-                if not events[m.id].silent), ZERO)
+    load = sum((s.cost / s.period for s in flows.values() if not s.silent), ZERO)  # type: ignore[operator]
     if load >= 1:
         return None, None, None, f"the utilisation of its executor's level is {ratio(load)} (at least 1)"
-    preempting = [interferer(system, h, events[h.id], estimates.get(h.id), h.wcet) for h in hp]
-    own_stream = [interferer(system, m, events[m.id], estimates.get(m.id), m.wcet) for m in members]
-    length, why = least_fixed_point(ZERO, sum((m.wcet for m in members), ZERO), own_stream + preempting)
+    times = [v for s in flows.values() if not s.silent for v in (s.cost, s.period, s.jitter)]
+    base = TimeBase.gcd_of(times + ([cap] if cap is not None else []))  # type: ignore[arg-type]  # (bounded)
+    ticks = base.ticks
+    streams = {tid: _Stream(ticks(s.cost), 1, 0, True) if s.silent else  # type: ignore[arg-type]
+               _Stream(ticks(s.cost), ticks(s.period), ticks(s.jitter), False)  # type: ignore[arg-type]
+               for tid, s in flows.items()}
+    own, cost = streams[task.id], streams[task.id].cost
+    others = [streams[m.id] for m in members if m.id != task.id]
+    above = [streams[h.id] for h in hp]
+    everyone = list(streams.values())
+    length = _fixed(lambda w: sum(s.open(w) * s.cost for s in everyone), sum(streams[m.id].cost for m in members))
     if length is None:
-        return None, None, None, why
-    best: tuple[Fraction, int] | None = None
+        return None, None, None, f"no fixed point within {MAX_STEPS} iteration steps"
     offsets = _offsets(own, length)
     if offsets is None:
         return None, None, None, f"the busy window holds more than {MAX_JOBS} jobs of `{task.id}`"
-    others = [m for m in members if m.id != task.id]
+    best: tuple[int, int] | None = None
+    bound = None if cap is None else ticks(cap)
+    last = 0  # F(A) grows with A (the right-hand sides do): each search starts at the last
     for n, offset in enumerate(offsets, 1):
-        if executor.polls:
-            finish = _finish(partial(_polled, task, others, events, offset, preempting),
-                             own_count(own, offset) * task.wcet)
-        else:
-            queued = sum((own_count(events[m.id], offset) * m.wcet for m in members), ZERO)
-            finish = _finish(partial(_queued, queued, preempting), queued)
+        limit = None if bound is None else offset + bound
+        if executor.polls:  # Eq. (6)
+            mine = own.closed(offset) * cost
+            finish = _fixed(lambda f: mine + sum(s.closed(f - cost) * s.cost for s in others)  # noqa: B023
+                            + sum(s.open(f) * s.cost for s in above), max(last, mine), limit)  # noqa: B023
+        else:  # FIFO
+            queued = own.closed(offset) * cost + sum(s.closed(offset) * s.cost for s in others)
+            finish = _fixed(lambda f: queued + sum(s.open(f) * s.cost for s in above),  # noqa: B023
+                            max(last, queued), limit)
         if finish is None:
             return None, n, None, f"no fixed point within {MAX_STEPS} iteration steps"
+        if limit is not None and finish >= limit:
+            return None, n, None, "not below the polling-round bound"
+        last = finish
         if best is None or finish - offset > best[0]:
             best = (finish - offset, n)
     assert best is not None  # (offset 0 is always searched)
-    return best[0], len(offsets), best[1], None
+    return base.seconds(best[0]), len(offsets), best[1], None
+
+
+def _fixed(step: Callable[[int], int], start: int, limit: int | None = None) -> int | None:
+    """The least fixed point of the monotone ``step`` from ``start`` (which must not exceed it), within
+    the step budget; with ``limit``, the first iterate at or above it once one is (the fixed point is
+    not below it)."""
+    value = start
+    for _ in range(MAX_STEPS):
+        new = step(value)
+        if new == value or (limit is not None and new >= limit):
+            return new
+        value = new
+    return None
+
+
+def _offsets(own: _Stream, length: int) -> list[int] | None:
+    """The steps of η̄ᵢ in ``[0, L)``: 0 and ``k·P − J`` for k ≥ 1 where positive; None beyond ``MAX_JOBS``."""
+    if own.silent:
+        return [0]
+    points = [0]
+    k = 1
+    while (a := k * own.period - own.jitter) < length:
+        if a > 0:
+            points.append(a)
+        k += 1
+        if len(points) > MAX_JOBS:
+            return None
+    return points
 
 
 def round_bound(system: SystemModel, task: TaskModel, members: tuple[TaskModel, ...], hp: tuple[TaskModel, ...],
@@ -143,65 +195,3 @@ def round_bound(system: SystemModel, task: TaskModel, members: tuple[TaskModel, 
                for h in hp for s in [interferer(system, h, events[h.id], estimates.get(h.id), h.wcet)]]
     value, _ = least_fixed_point(base, base, streams)
     return value
-
-
-def own_count(events: EventModel, offset: Fraction) -> int:
-    """η̄ᵢ(A): the analysed callback's jobs released in ``[0, A]`` (its job at A the last of them)."""
-    count = closed_count(events, offset)
-    assert count is not None  # (bounded: checked before)
-    return count
-
-
-def _work(task: TaskModel, others: list[TaskModel], events: Mapping[str, EventModel], offset: Fraction,
-          finish: Fraction) -> Fraction:
-    """Eq. (6)'s executor work up to ``finish``: i's jobs up to its job at ``offset``, and every job of
-    another callback released no later than i's job starts (at ``finish − Cᵢ`` at the latest)."""
-    start = finish - task.wcet
-    total = own_count(events[task.id], offset) * task.wcet
-    for j in others:
-        total += own_count(events[j.id], start) * j.wcet
-    return total
-
-
-def _polled(task: TaskModel, others: list[TaskModel], events: Mapping[str, EventModel], offset: Fraction,
-            preempting: list[Interferer], finish: Fraction) -> Fraction:
-    """The right-hand side of Eq. (6) at ``finish``."""
-    return _work(task, others, events, offset, finish) + _preemption(preempting, finish)
-
-
-def _queued(queued: Fraction, preempting: list[Interferer], finish: Fraction) -> Fraction:
-    """The right-hand side of the FIFO bound at ``finish``: the queued work and the preemption."""
-    return queued + _preemption(preempting, finish)
-
-
-def _preemption(streams: list[Interferer], window: Fraction) -> Fraction:
-    """The work of the higher threads released in ``[0, window)``."""
-    return sum((s.demand(window) or ZERO for s in streams), ZERO)  # (bounded: their activations were checked)
-
-
-def _finish(step: Callable[[Fraction], Fraction], start: Fraction) -> Fraction | None:
-    """The least fixed point of ``step`` from ``start`` (which must not exceed it), within the step budget."""
-    value = start
-    for _ in range(MAX_STEPS):
-        new = step(value)
-        if new == value:
-            return value
-        value = new
-    return None
-
-
-def _offsets(events: EventModel, length: Fraction) -> list[Fraction] | None:
-    """The steps of η̄ᵢ in ``[0, L)``: 0 and ``k·P⁻ − J⁻`` for k ≥ 1 where positive; None beyond ``MAX_JOBS``."""
-    if events.silent:
-        return [ZERO]
-    assert events.period_min is not None and events.jitter_min is not None
-    points = [ZERO]
-    k = 1
-    while (a := k * events.period_min - events.jitter_min) < length:
-        if a > 0:
-            points.append(a)
-        k += 1
-        if len(points) > MAX_JOBS:
-            return None
-    return points
-
