@@ -255,10 +255,10 @@ class TaskBinding:
     task: Name
     priority: Number | None = None
     core: Name | None = None
-    executor: Name | None = None  # the executor running it as a callback (then no priority, no core)
     activations: tuple[Activation, ...] = ()
     wcrt: Quantity | None = None
     deadline: Quantity | None = None
+    executor: Name | None = None  # the executor running it as a callback (then no priority, no core)
     span: Span = _span()
     repeated: tuple[Span, ...] = field(default=(), compare=False, repr=False)
 

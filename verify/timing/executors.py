@@ -116,7 +116,9 @@ def _wcrt(system: SystemModel, task: TaskModel, executor: ExecutorModel, members
                _Stream(ticks(s.cost), ticks(s.period), ticks(s.jitter), False)  # type: ignore[arg-type]
                for tid, s in flows.items()}
     own, cost = streams[task.id], streams[task.id].cost
-    others = [streams[m.id] for m in members if m.id != task.id]
+    caused = local_descendants(system, task, members)
+    others = [streams[m.id] for m in members if m.id != task.id and m.id not in caused]
+    downstream = [streams[m.id] for m in members if m.id in caused]
     above = [streams[h.id] for h in hp]
     everyone = list(streams.values())
     length = _fixed(lambda w: sum(s.open(w) * s.cost for s in everyone), sum(streams[m.id].cost for m in members))
@@ -130,12 +132,15 @@ def _wcrt(system: SystemModel, task: TaskModel, executor: ExecutorModel, members
     last = 0  # F(A) grows with A (the right-hand sides do): each search starts at the last
     for n, offset in enumerate(offsets, 1):
         limit = None if bound is None else offset + bound
+        jobs = own.closed(offset)
+        mine = jobs * cost
         if executor.polls:  # Eq. (6)
-            mine = own.closed(offset) * cost
             finish = _fixed(lambda f: mine + sum(s.closed(f - cost) * s.cost for s in others)  # noqa: B023
+                            + sum(min(s.closed(f - cost), jobs - 1) * s.cost for s in downstream)  # noqa: B023
                             + sum(s.open(f) * s.cost for s in above), max(last, mine), limit)  # noqa: B023
         else:  # FIFO
-            queued = own.closed(offset) * cost + sum(s.closed(offset) * s.cost for s in others)
+            queued = mine + sum(s.closed(offset) * s.cost for s in others)
+            queued += sum(min(s.closed(offset), jobs - 1) * s.cost for s in downstream)
             finish = _fixed(lambda f: queued + sum(s.open(f) * s.cost for s in above),  # noqa: B023
                             max(last, queued), limit)
         if finish is None:
@@ -147,6 +152,27 @@ def _wcrt(system: SystemModel, task: TaskModel, executor: ExecutorModel, members
             best = (finish - offset, n)
     assert best is not None  # (offset 0 is always searched)
     return base.seconds(best[0]), len(offsets), best[1], None
+
+
+def local_descendants(system: SystemModel, task: TaskModel, members: tuple[TaskModel, ...]) -> set[str]:
+    """The callbacks of ``task``'s executor whose every activation is caused by a completion of
+    ``task`` at that instant (§9.3, "causal caps"): triggered by one port alone, connected without
+    delay from ``task`` or from another such callback."""
+    on = {m.id for m in members}
+    found: set[str] = set()
+    grown = True
+    while grown:
+        grown = False
+        for m in members:
+            port = m.activation.single_port
+            if m.id == task.id or m.id in found or port is None:
+                continue
+            link = system.link_into(f"{m.instance}.{port}")
+            if (link is not None and link.delay_max == 0 and link.writer in on
+                    and (link.writer == task.id or link.writer in found)):
+                found.add(m.id)
+                grown = True
+    return found
 
 
 def _fixed(step: Callable[[int], int], start: int, limit: int | None = None) -> int | None:
