@@ -128,10 +128,13 @@ def run_example(section: Section, directory: Path):
 def gen_diagnostics(model, directory: Path):
     """What `verify gen ros1 main.vfy -o out` reports for the example (its other blocks may lie in out/):
     (diagnostics, the files they show)."""
-    from verify.commands.gen import refusals
+    from verify.commands.gen import refusals, unsupported_parts
     from verify.gen import ros1
     from verify.gen.tree import plan
 
+    unsupported = unsupported_parts(ros1, "ros1", model)
+    if unsupported:
+        return unsupported, {}
     out = str(directory / "out")
     return refusals(plan(ros1.generate(model), out, force=False), out)
 

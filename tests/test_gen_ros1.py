@@ -244,3 +244,14 @@ def test_a_fifo_or_junk_in_the_way_is_refused_without_blocking(models, tmp_path,
     assert "config/parameters.yaml was not written by verify gen" in err
     assert "user/Base.hpp is not a regular file" in err
     assert "\x1b" not in err and "\\x1b[31mred" in err
+
+
+def test_a_system_with_ros2_executors_is_refused_and_nothing_is_written(tmp_path, capsys):
+    """The ros1 target gives every task a thread of its own; executor callbacks share one (specs/timing.md
+    §9): E602 at every executor, exit 2, no file written."""
+    out = tmp_path / "out"
+    path = EXAMPLES / "autoware-reference" / "autoware-executors.vfy"
+    assert main(["gen", "ros1", str(path), "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("error[E602]: executor `") == 4 and "autoware-executors.vfy:16:3" in err
+    assert not out.exists()

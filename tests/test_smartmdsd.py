@@ -362,3 +362,14 @@ def test_the_commands_exit_codes_and_files(shared, tmp_path, capsys):
     assert "E218" in capsys.readouterr().err  # holes: synth first
     assert not (tmp_path / "x").exists()
     assert os.path.exists(out)
+
+
+def test_a_system_with_ros2_executors_is_not_exported(tmp_path, capsys):
+    """SmartMDSD's activities are threads; callbacks sharing an executor's thread have no counterpart
+    (specs/timing.md §9): E706 at each executor, nothing written."""
+    path = ROOT / "examples" / "autoware-reference" / "autoware-single-executor.vfy"
+    out = tmp_path / "out"
+    assert main(["export", "smartmdsd", str(path), "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("error[E706]: executor `main` is a ROS 2 executor") == 1
+    assert not out.exists() or not any(out.iterdir())

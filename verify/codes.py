@@ -89,6 +89,7 @@ _ALL = [
     Code("E503", "deadline miss"),
     # E6xx: code generation
     Code("E601", "file in the way of generated code"),
+    Code("E602", "system the code-generation target cannot run"),
     # E7xx: import and export of other tools' models
     Code("E701", "syntax error in an imported model"),
     Code("E702", "unresolved reference in an imported model", Severity.WARNING),

@@ -16,7 +16,7 @@ import os
 from ..diagnostics import DiagnosticSink
 from .common import EXIT_INVALID, EXIT_OK, cannot_write, load_configured, show_diagnostics, to_stderr
 
-HELP = "write a configured system as another tool's models (SmartMDSD)"
+HELP = "write a configured system as another tool's models (SmartMDSD, CARET)"
 RESULT = "diagnostics"
 MODEL, SYSTEM = True, True
 

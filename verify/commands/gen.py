@@ -22,7 +22,10 @@ from ..source import SourceFile, Span
 from .common import EXIT_INVALID, EXIT_OK, cannot_write, load_configured, show, show_diagnostics
 
 if TYPE_CHECKING:
+    from types import ModuleType
+
     from ..gen.tree import Outcome
+    from ..model import SystemModel
 
 HELP = "generate the code that runs a configured system (ROS 1 nodes)"
 RESULT = "generation"
@@ -68,6 +71,14 @@ def refusals(outcome: Outcome, directory: str) -> tuple[list[Diagnostic], dict[s
     return sink.items, sources
 
 
+def unsupported_parts(module: ModuleType, name: str, system: SystemModel) -> list[Diagnostic]:
+    """E602 for every part of ``system`` that target ``module`` cannot run as verified."""
+    sink = DiagnosticSink()
+    for span, what, help in getattr(module, "unsupported", lambda _model: [])(system):
+        sink.emit("E602", what, span, f"not supported by the {name} target", help=help)
+    return sink.items
+
+
 def run(args: argparse.Namespace) -> int:
     from ..gen import target
     from ..gen.tree import plan, write
@@ -76,10 +87,15 @@ def run(args: argparse.Namespace) -> int:
     if isinstance(loaded, int):
         return loaded
     result, system = loaded
+    module = target(args.target)
+    unsupported = unsupported_parts(module, args.target, system)
+    if unsupported:
+        show_diagnostics(args, unsupported, result.sources)
+        return EXIT_INVALID
     directory = args.output
     if os.path.exists(directory) and not os.path.isdir(directory):
         return cannot_write(directory, NotADirectoryError(20, "not a directory"))
-    tree = target(args.target).generate(system)
+    tree = module.generate(system)
     outcome = plan(tree, directory, args.force)
     if outcome.refused:
         diagnostics, files = refusals(outcome, directory)

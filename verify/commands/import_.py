@@ -22,7 +22,7 @@ from ..outputs import Report, render
 from ..source import SourceFile
 from .common import EXIT_INVALID, EXIT_OK, show, to_stderr, write_new_file
 
-HELP = "read another tool's model (SmartMDSD) into verify's language"
+HELP = "read another tool's model (SmartMDSD, CARET) into verify's language"
 RESULT = None
 MODEL, SYSTEM = False, False
 

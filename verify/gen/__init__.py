@@ -1,10 +1,12 @@
 """Code generators: from a configured system to the code that runs it (specs/codegen.md).
 
-A target is one module here (``ros1.py``) with ``TARGET`` (its name on the command line), ``HELP`` and
-``generate(model) -> Tree``: the files it makes, each owned either by the generator (``glue``: rewritten
-on every run, never to be edited) or by the user (``user``: written once, never overwritten: the
-generation gap). ``verify.gen.tree`` writes a tree into a directory without losing anything a user
-wrote. The registry is the set of target modules; a new target is one module.
+A target is one module here (``ros1.py``) with ``TARGET`` (its name on the command line), ``HELP``,
+optionally ``unsupported(model) -> [(span, what, help)]`` (what of a system it cannot run with the
+semantics verified: E602, and nothing is generated) and ``generate(model) -> Tree``: the files it
+makes, each owned either by the generator (``glue``: rewritten on every run, never to be edited) or by
+the user (``user``: written once, never overwritten: the generation gap). ``verify.gen.tree`` writes a
+tree into a directory without losing anything a user wrote. The registry is the set of target modules;
+a new target is one module.
 """
 from __future__ import annotations
 

@@ -22,6 +22,7 @@ from importlib import resources
 
 from ..activations import DataTriggered, Periodic, SporadicSource
 from ..model import ComponentModel, SystemModel, TaskDecl, TaskModel
+from ..source import Span
 from .tree import File, Tree, stamped
 
 TARGET = "ros1"
@@ -83,6 +84,15 @@ def human(seconds: Fraction) -> str:
 
 
 # ------------------------------------------------------------------ the tree
+
+
+def unsupported(model: SystemModel) -> list[tuple[Span, str, str]]:
+    """What ROS 1 cannot run as verified: an executor of ROS 2 (specs/timing.md §9) — roscpp's spinners
+    are not rclcpp's executors, and a node's callbacks here are threads of their own."""
+    return [(ex.span, f"executor `{ex.name}` is a ROS 2 executor, which the ros1 target cannot run",
+             "bind its callbacks with a priority and a core (each becomes a thread of the generated node), "
+             "or keep the executor for the analysis and write its ROS 2 code yourself")
+            for ex in model.executors]
 
 
 def generate(model: SystemModel) -> Tree:

@@ -10,9 +10,21 @@ import importlib
 from types import ModuleType
 
 #: the tools whose models ``verify import`` reads
-IMPORTERS = ("smartmdsd",)
+IMPORTERS = ("smartmdsd", "caret")
 #: the tools whose models ``verify export`` writes
-EXPORTERS = ("smartmdsd",)
+EXPORTERS = ("smartmdsd", "caret")
+
+
+def files_under(directory: str, suffixes: tuple[str, ...]) -> list[str]:
+    """The files under ``directory`` whose names end with one of ``suffixes``, searched recursively in
+    name order (symbolic links to directories are not followed)."""
+    import os
+
+    found: list[str] = []
+    for root, dirs, names in os.walk(directory):
+        dirs.sort()
+        found += [os.path.join(root, n) for n in sorted(names) if n.endswith(suffixes)]
+    return found
 
 
 def tool(name: str) -> ModuleType:

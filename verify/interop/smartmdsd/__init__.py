@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from ...diagnostics import DiagnosticSink
 from ...limits import DEFAULT_LIMITS, Limits
 from ...source import SourceFile, Span
+from .. import files_under
 from .read import KINDS, Files, read_text
 from .to_vfy import Imported, import_system
 
@@ -33,9 +34,7 @@ def model_files(paths: Sequence[str], sink: DiagnosticSink, limits: Limits = DEF
     found: list[str] = []
     for path in paths:
         if os.path.isdir(path):
-            for root, dirs, names in os.walk(path):
-                dirs.sort()
-                found += [os.path.join(root, n) for n in sorted(names) if n.endswith(KINDS)]
+            found += files_under(path, KINDS)
         elif path.endswith(KINDS) or os.path.exists(path):
             found.append(path)
         else:

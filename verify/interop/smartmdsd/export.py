@@ -263,6 +263,10 @@ class _Exporter:
 def export_system(model: SystemModel, origin: Files | None, origin_text: dict[str, str],
                   sink: DiagnosticSink) -> Exported | None:
     """The SmartMDSD files of a configured system (file name -> text), or None after an E706."""
+    for executor in model.executors:  # (SmartMDSD's activities are threads: timing.md §9 has no counterpart)
+        sink.emit("E706", f"executor `{executor.name}` is a ROS 2 executor, which SmartMDSD cannot hold: its "
+                  "activities are threads of their own", executor.span, "no SmartMDSD counterpart",
+                  help="bind the callbacks with a priority and a core to export the system")
     ex = _Exporter(model, origin, sink)
     files = {f"{model.name}.activityArch": ex.activity_arch(),
              f"{model.name}.componentArch": ex.component_arch(origin_text)}
