@@ -106,10 +106,8 @@ def test_one_executor_for_every_node_is_overloaded(capsys):
 
 @pytest.mark.parametrize("name", ["autoware-executors.vfy", "autoware-single-executor.vfy"])
 def test_the_executor_bounds_hold_against_the_simulator(name):
-    from .test_executors import _violations
-
     model = verify.load(str(AUTOWARE / name)).system()
     analysis = analyze(model)
     for run in range(3):
         trace = simulate(model, random_scenario(model, random.Random(f"autoware/{run}"), Fraction(2)))
-        assert _violations(model, trace, analysis) == []
+        assert bound_violations(model, trace, analysis) == []

@@ -21,7 +21,7 @@ from verify.timing import analyze
 from .executor_systems import executor_system
 from .test_intsim import _targets, concrete_scenario
 from .test_prove import KINDS as PROVE_KINDS
-from .test_timing import KINDS, MS
+from .test_timing import MS, bound_violations
 
 SENSOR = """
 component Timer { out o : T  task Run { produces o wcet @C@ bcet @C@ } }
@@ -186,30 +186,6 @@ system S {
     assert _times(trace, "i.Run")[0] == (F(1, 2), 6, 7)
 
 
-def _violations(model, trace, analysis):
-    """Simulated response times, least activation distances and chain latencies outside the bounds.
-    (A callback's jobs may lie further apart than its activations, which it absorbs: §9.1.)"""
-    from verify.sim import chain_latencies
-
-    bad = []
-    for t in analysis.tasks:
-        for j in trace.finished(t.id):
-            if t.wcrt is not None and j.finish - j.release > t.wcrt or j.finish - j.release < t.bcrt:
-                bad.append(("response", t.id, j.index))
-        jobs = trace.jobs[t.id]
-        bad += [("activation distance", t.id, y.index) for x, y in zip(jobs, jobs[1:])
-                if t.a_min is not None and y.release - x.release < t.a_min]
-    for ch in model.chains:
-        bounds, lat = analysis.chain(ch.name), chain_latencies(trace, ch)
-        for kind in KINDS:
-            bound, worst, best = bounds.bound(kind), lat.worst(kind), lat.best(kind)
-            if worst is not None and bound.worst is not None and worst.value > bound.worst:
-                bad.append((kind, ch.name, worst.explain(ch), bound.worst))
-            if best is not None and best.value < bound.best:
-                bad.append((kind + " best", ch.name, best.explain(ch), bound.best))
-    return bad
-
-
 @pytest.mark.parametrize("seed", range(40))
 def test_no_simulated_latency_beyond_the_bounds(seed):
     """Random systems with executors of every kind: no run exceeds a response-time or chain bound."""
@@ -220,7 +196,7 @@ def test_no_simulated_latency_beyond_the_bounds(seed):
         scenario = random_scenario(model, random.Random(f"{seed}/{run}"), F(1))
         if run == 0:  # every job at its wcet, every message at its least delay
             scenario = Scenario(scenario.horizon, scenario.phases, None, None, None, scenario.counter_phase)
-        assert _violations(model, simulate(model, scenario), analysis) == [], text
+        assert bound_violations(model, simulate(model, scenario), analysis) == [], text
 
 
 @pytest.mark.parametrize("seed", range(40))
