@@ -61,6 +61,18 @@ def test_svg_and_png_are_laid_out_by_graphviz(tmp_path):
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
+@pytest.mark.parametrize("name", ["autoware.vfy", "autoware-executors.vfy"])
+def test_every_autoware_diagram_is_laid_out(tmp_path, name):
+    """Fusions (compound in-ports beside the in-ports: one table per label cell) and executor callbacks
+    (named with their executor) are drawn by Graphviz."""
+    require_graphviz()
+    svg = tmp_path / "autoware.svg"
+    assert main(["graph", str(EXAMPLES / "autoware-reference" / name), "-o", str(svg)]) == 0
+    text = svg.read_text(encoding="utf-8")
+    assert "point_cloud_fusion" in text and "both = input0 &amp; input1" in text
+    assert ("executor inner · priority 10" in text) == (name == "autoware-executors.vfy")
+
+
 def test_an_existing_file_is_not_overwritten(tmp_path, capsys):
     out = tmp_path / "nav.dot"
     out.write_text("mine", encoding="utf-8")

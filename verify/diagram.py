@@ -53,7 +53,8 @@ def _activation_text(task: TaskModel, analysis: AnalysisResult | None) -> str:
 
 
 def _task_cell(task: TaskModel, analysis: AnalysisResult | None) -> str:
-    detail = f"priority {task.priority}" + (" · cooperative" if task.kind == "cooperative" else "")
+    detail = (f"executor {task.executor} · " if task.executor is not None else "") + f"priority {task.priority}"
+    detail += " · cooperative" if task.kind == "cooperative" else ""
     detail += f" · C ≤ {fmt_time(task.wcet)}"
     if analysis is not None:
         wcrt = analysis.task(task.id).wcrt
@@ -74,14 +75,23 @@ def _instance_node(model: SystemModel, name: str, analysis: AnalysisResult | Non
     tasks = [model.task(t) for t in inst.tasks]
     cores = sorted({t.core for t in tasks}) or ([inst.core] if inst.core else [])
     task_rows = "".join(f"<TR>{_task_cell(t, analysis)}</TR>" for t in tasks)
+    inputs = _stack(_port_column([p.name for p in comp.in_ports], "in"), _compounds(comp.compounds))
     label = (f'<TABLE BORDER="1" CELLBORDER="0" CELLSPACING="0" CELLPADDING="4" BGCOLOR="#f7f7f7">'
              f'<TR><TD COLSPAN="3" BGCOLOR="#dfe6f0"><B>{_e(name)}</B> : {_e(comp.name)}'
              f'<BR/><FONT POINT-SIZE="9">{_e(", ".join(cores))}</FONT></TD></TR>'
-             f'<TR><TD VALIGN="MIDDLE">{_port_column([p.name for p in comp.in_ports], "in")}'
-             f'{_compounds(comp.compounds)}</TD>'
+             f'<TR><TD VALIGN="MIDDLE">{inputs}</TD>'
              f'<TD><TABLE BORDER="0" CELLBORDER="1" CELLSPACING="2">{task_rows}</TABLE></TD>'
              f'<TD VALIGN="MIDDLE">{_port_column([p.name for p in comp.out_ports], "out")}</TD></TR></TABLE>')
     return f"  {_id(name)} [shape=plain, label=<{label}>];"
+
+
+def _stack(*tables: str) -> str:
+    """The non-empty ``tables`` one above the other (a cell of an HTML label holds one table)."""
+    parts = [t for t in tables if t]
+    if len(parts) <= 1:
+        return "".join(parts)
+    rows = "".join(f"<TR><TD>{t}</TD></TR>" for t in parts)
+    return f'<TABLE BORDER="0" CELLBORDER="0" CELLSPACING="0">{rows}</TABLE>'
 
 
 def _compounds(compounds: Iterable[CompoundDecl]) -> str:
