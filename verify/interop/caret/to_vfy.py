@@ -18,6 +18,7 @@ counterpart (multi-threaded executors, callback groups, other message contexts) 
 """
 from __future__ import annotations
 
+import functools
 import re
 from dataclasses import dataclass, field
 from fractions import Fraction
@@ -36,6 +37,7 @@ class Imported:
     system: str
 
 
+@functools.lru_cache(maxsize=1)
 def _reserved() -> frozenset[str]:
     from ...larkparse import _keyword_terminals
 
