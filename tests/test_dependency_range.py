@@ -15,10 +15,10 @@ import pytest
 from .conftest import ROOT, in_ci
 
 #: the tests that exercise the ranged libraries: Lark (the parser, its recovery, fmt, the front end),
-#: networkx (validation, the synthesis structure), end to end on the examples, and pygls (the language
-#: server, with a real client)
+#: networkx (validation, the synthesis structure), end to end on the examples, pygls (the language
+#: server, with a real client) and PyYAML (CARET's architecture files)
 SUBSET = ("tests/test_parse.py", "tests/test_fmt.py", "tests/test_frontend.py", "tests/test_examples.py",
-          "tests/test_lsp.py")
+          "tests/test_lsp.py", "tests/test_caret.py")
 VENV = ROOT / "tests" / "out" / "lowest-venv"
 
 
@@ -40,7 +40,7 @@ def _python() -> str:
 @pytest.mark.slow
 def test_the_lowest_allowed_versions_pass():
     bounds = lower_bounds()
-    assert set(bounds) == {"lark", "networkx", "pygls"}
+    assert set(bounds) == {"lark", "networkx", "pygls", "PyYAML"}
     venv.create(VENV, system_site_packages=True, with_pip=True, clear=not VENV.exists())
     pins = [f"{name}=={version}" for name, version in sorted(bounds.items())]
     install = subprocess.run([_python(), "-m", "pip", "install", "-q", "--no-deps", *pins],
@@ -50,10 +50,11 @@ def test_the_lowest_allowed_versions_pass():
         if in_ci():
             pytest.fail(message)
         pytest.skip(message)  # (no package index outside CI: CI runs it)
-    versions = subprocess.run([_python(), "-c", "import lark, networkx; from importlib.metadata import version; "
-                               "print(lark.__version__, networkx.__version__, version('pygls'))"],
+    versions = subprocess.run([_python(), "-c", "import lark, networkx, yaml; from importlib.metadata import "
+                               "version; print(lark.__version__, networkx.__version__, version('pygls'), "
+                               "yaml.__version__)"],
                               capture_output=True, text=True, check=True).stdout.split()
-    assert versions == [bounds["lark"], bounds["networkx"], bounds["pygls"]]
+    assert versions == [bounds["lark"], bounds["networkx"], bounds["pygls"], bounds["PyYAML"]]
     env = dict(os.environ, PYTHONPATH=str(ROOT))
     run = subprocess.run([_python(), "-m", "pytest", "-q", "-p", "no:cacheprovider", "-x", *SUBSET], cwd=ROOT,
                          env=env, capture_output=True, text=True, check=False)
