@@ -494,12 +494,15 @@ class Component {
 // Every connection of the node established (specs/timing.md §2 has every value written delivered: a
 // message published before its subscriber is connected would be lost). At most 30 s, then a warning.
 inline void Component::await_connections() {
-  for (int i = 0; i < 3000 && ros::ok(); ++i) {
+  for (int i = 0; i < 3000 && ros::ok() && !stop_requested(); ++i) {
     bool all = std::all_of(connected_.begin(), connected_.end(), [](const auto& c) { return c.second(); });
     if (all) {
       return;
     }
     ros::WallDuration(0.01).sleep();
+  }
+  if (stop_requested()) {
+    return;  // (asked to stop while starting: nothing to warn about)
   }
   for (const auto& c : connected_) {
     if (!c.second()) {
@@ -521,7 +524,7 @@ inline Nanos Component::agree_on_start() {
   self = self.substr(self.rfind('/') + 1);
   const std::string ready = "/verify/ready/" + run + "/";
   ros::param::set(ready + self, std::to_string(now_ns()));
-  for (int i = 0; i < 3000 && ros::ok(); ++i) {
+  for (int i = 0; i < 3000 && ros::ok() && !stop_requested(); ++i) {
     Nanos last = 0;
     bool all = true;
     for (const std::string& node : nodes) {
@@ -537,7 +540,9 @@ inline Nanos Component::agree_on_start() {
     }
     ros::WallDuration(0.01).sleep();
   }
-  ROS_WARN("%s: not every node of the launch was ready after 30 s; starting anyway", name().c_str());
+  if (!stop_requested()) {
+    ROS_WARN("%s: not every node of the launch was ready after 30 s; starting anyway", name().c_str());
+  }
   return now_ns();
 }
 
@@ -810,13 +815,13 @@ inline int Component::run() {
     return 1;
   }
   if (trace_) {  // a trace is for a recorder: wait (up to 10 s) until one listens, so that it sees every job
-    for (int i = 0; i < 1000 && jobs_.getNumSubscribers() == 0 && ros::ok(); ++i) {
+    for (int i = 0; i < 1000 && jobs_.getNumSubscribers() == 0 && ros::ok() && !stop_requested(); ++i) {
       ros::WallDuration(0.01).sleep();
     }
   }
   await_connections();
   const Nanos start = agree_on_start();
-  while (now_ns() < start && ros::ok()) {
+  while (now_ns() < start && ros::ok() && !stop_requested()) {
     ros::WallDuration(static_cast<double>(std::min<Nanos>(start - now_ns(), kSecond / 100)) / 1e9).sleep();
   }
   std::vector<std::thread> threads;
