@@ -163,3 +163,17 @@ def test_a_damaged_architecture_file_never_crashes_the_import(tmp_path_factory, 
     path = tmp_path_factory.mktemp("damaged") / "architecture.yaml"
     path.write_text("\n".join(lines) + "\n")
     assert main(["import", "caret", str(path), "-o", str(path.with_suffix(".vfy")), "--force"]) in (0, 2)
+
+
+def test_a_topic_named_like_a_callback_gets_a_name_of_its_own(tmp_path):
+    """A component's tasks and ports share one namespace: `/callback_0` the topic and `/a/callback_0` the
+    callback do not become two members `callback_0` (E102)."""
+    path = tmp_path / "architecture.yaml"
+    path.write_text("named_paths: []\nexecutors: []\nnodes:\n- node_name: /a\n  callbacks:\n"
+                    "  - callback_name: /a/callback_0\n    callback_type: subscription_callback\n"
+                    "    topic_name: /callback_0\n    symbol: s\n  subscribes:\n  - topic_name: /callback_0\n"
+                    "    callback_name: /a/callback_0\n")
+    text, _ = _import(path)
+    assert "in callback_0_2 : Message" in text and "task callback_0 trigger callback_0_2" in text
+    checked = verify.load_text(text, "a.vfy")
+    assert "E102" not in {d.code for d in checked.diagnostics}

@@ -72,7 +72,7 @@ class _Node:
     component: str
     instance: str
     tasks: dict[str, str] = field(default_factory=dict)  # callback -> task
-    ports: _Names = field(default_factory=_Names)
+    ports: _Names = field(default_factory=_Names)  # the names of the component's members
     topic_in: dict[str, str] = field(default_factory=dict)  # topic -> in-port
     topic_out: dict[str, str] = field(default_factory=dict)  # topic -> out-port
     passing: dict[tuple[str, str], tuple[str, str]] = field(default_factory=dict)  # (w, r) -> (out, in)
@@ -92,7 +92,7 @@ class _Importer:
 
     def build_nodes(self) -> None:
         for n in self.nodes.values():
-            tasks = _Names()
+            tasks = n.ports  # (a component's tasks and ports share one namespace)
             for cb in n.node.callbacks:
                 if cb.kind not in ("timer", "subscription"):
                     self.sink.emit("E703", f"callback `{cb.name}` of node `{n.node.name}` is a {cb.kind}, which has "
