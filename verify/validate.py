@@ -280,22 +280,26 @@ def _check_callback_activation(act: s.Activation, executor: s.Executor, who: str
 def _check_executors(scope: SystemScope, sink: DiagnosticSink) -> None:
     """E219: an executor needs a core and a priority; E309: a non-negative integer priority; E222: its
     thread has a priority of its own on its core (no task or other executor of the core shares it)."""
-    threads: dict[tuple[str, int], tuple[str, Span]] = {}
+    threads: dict[tuple[str, int], s.Executor] = {}
     for ex in scope.system.executors:
         _check_repeated(ex.repeated, f"executor `{ex.name.text}`", sink)
-        missing = [what for what, clause in (("core", ex.core), ("priority", ex.priority)) if clause is None]
-        if missing:
+        if ex.core is None or ex.priority is None:
+            missing = [what for what, clause in (("core", ex.core), ("priority", ex.priority)) if clause is None]
             sink.emit("E219", f"executor `{ex.name.text}` has no {' and no '.join(missing)}", ex.name.span,
                       "no " + " and no ".join(missing),
                       help=f"write `executor {ex.name.text} {ex.kind.text} on CORE priority N`: its thread runs "
                            "on that core at that priority")
-        elif not ex.priority.is_integer or ex.priority.value < 0:  # type: ignore[union-attr]  # (not missing)
+        elif not ex.priority.is_integer or ex.priority.value < 0:
             sink.emit("E309", f"priority of executor `{ex.name.text}` must be a non-negative integer, found "
-                      f"{fmt_number(ex.priority.value)}", ex.priority.span, "not a priority",  # type: ignore[union-attr]
+                      f"{fmt_number(ex.priority.value)}", ex.priority.span, "not a priority",
                       help="use a whole number such as `priority 3`")
+        elif (key := (ex.core.text, int(ex.priority.value))) in threads:
+            sink.emit("E222", f"executors `{threads[key].name.text}` and `{ex.name.text}` share priority "
+                      f"{key[1]} on core `{key[0]}`", ex.priority.span, "shared with another executor",
+                      secondary=(Label(threads[key].span, "the other executor"),),
+                      help="give each executor thread of a core its own priority")
         else:
-            assert ex.core is not None and ex.priority is not None
-            threads.setdefault((ex.core.text, int(ex.priority.value)), (f"executor `{ex.name.text}`", ex.span))
+            threads[key] = ex
     if not threads:
         return
     for inst, _comp, task, b in _instance_tasks(scope):
@@ -303,24 +307,12 @@ def _check_executors(scope: SystemScope, sink: DiagnosticSink) -> None:
         if b is None or b.executor is not None or core is None or b.priority is None or not b.priority.is_integer:
             continue
         other = threads.get((core.text, int(b.priority.value)))
-        if other is not None and other[0].startswith("executor"):
-            sink.emit("E222", f"task `{inst.name.text}.{task.name.text}` has the priority of {other[0]} on core "
-                      f"`{core.text}`", b.priority.span, "shared with an executor's thread",
-                      secondary=(Label(other[1], "the executor"),),
+        if other is not None:
+            sink.emit("E222", f"task `{inst.name.text}.{task.name.text}` has the priority of executor "
+                      f"`{other.name.text}` on core `{core.text}`", b.priority.span, "shared with an executor's thread",
+                      secondary=(Label(other.span, "the executor"),),
                       help="give the task or the executor another priority: a thread's priority on a core is "
                            "its own, so that which of them runs first is defined")
-    seen: dict[tuple[str, int], s.Executor] = {}
-    for ex in scope.system.executors:
-        if ex.core is None or ex.priority is None or not ex.priority.is_integer:
-            continue
-        key = (ex.core.text, int(ex.priority.value))
-        if key in seen:
-            sink.emit("E222", f"executors `{seen[key].name.text}` and `{ex.name.text}` share priority "
-                      f"{key[1]} on core `{key[0]}`", ex.priority.span, "shared with another executor",
-                      secondary=(Label(seen[key].span, "the other executor"),),
-                      help="give each executor thread of a core its own priority")
-        else:
-            seen[key] = ex
 
 
 def _check_user_bound(b: s.TaskBinding, task: s.Task, who: str, sink: DiagnosticSink) -> None:

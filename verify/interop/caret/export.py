@@ -14,7 +14,7 @@ import os
 import re
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any
+from typing import Any, Protocol
 
 import yaml
 
@@ -50,7 +50,7 @@ def export_system(model: SystemModel, origin: list[Architecture] | None, origin_
             return None
         text = replace_named_paths(origin_text[arch.path], paths)
         return Exported({os.path.basename(arch.path): text})
-    generated = _Generated(model)
+    generated = _Generated()
     paths = [p for c in model.chains if (p := _named_path(model, c, generated, sink)) is not None]
     if any(d.code == "E706" for d in sink.items):
         return None
@@ -74,19 +74,16 @@ def replace_named_paths(text: str, paths: list[dict[str, Any]]) -> str:
 # ------------------------------------------------------------------ names
 
 
-class _Names:
+class _Names(Protocol):
     """The node of an instance and the topic of an out-port (instance, port)."""
 
-    def node(self, instance: str) -> str:
-        raise NotImplementedError
+    def node(self, instance: str) -> str: ...
 
-    def topic(self, instance: str, port: str) -> str | None:
-        raise NotImplementedError
+    def topic(self, instance: str, port: str) -> str | None: ...
 
 
-class _Generated(_Names):
-    def __init__(self, model: SystemModel):
-        self.model = model
+class _Generated:
+    """The names of a whole architecture written from the model: ``/INSTANCE``, ``/INSTANCE/PORT``."""
 
     def node(self, instance: str) -> str:
         return f"/{instance}"
@@ -95,7 +92,9 @@ class _Generated(_Names):
         return f"/{instance}/{port}"
 
 
-class _Origin(_Names):
+class _Origin:
+    """The names of the --from file, as its import gave them."""
+
     def __init__(self, nodes: dict[str, str], topics: dict[tuple[str, str], str]):
         self.nodes, self.topics = nodes, topics
 

@@ -132,6 +132,11 @@ class _Importer:
                 n.produces[write].append(out)
                 n.reads[read_].append(into)
             self._contexts(n)
+            if n.tasks:
+                self.sink.emit("E704", f"the execution times of node `{n.node.name}`'s callbacks are not in the "
+                               "architecture file", n.node.span, "no execution times",
+                               help="add `wcet` (and `bcet`) to each task of the imported component, e.g. from "
+                                    "CARET's callback durations")
 
     def _contexts(self, n: _Node) -> None:
         for ctx in n.node.contexts:
@@ -279,11 +284,6 @@ class _Importer:
                 lines.append("    produces " + ", ".join(dict.fromkeys(n.produces[cb.name])))
             lines.append("  }")
         lines.append("}")
-        if n.tasks:
-            self.sink.emit("E704", f"the execution times of node `{n.node.name}`'s callbacks are not in the "
-                           "architecture file", n.node.span, "no execution times",
-                           help="add `wcet` (and `bcet`) to each task of the imported component, e.g. from CARET's "
-                                "callback durations")
         return lines
 
     def _binding(self, n: _Node, cb: Callback) -> str:
