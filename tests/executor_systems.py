@@ -88,3 +88,73 @@ def executor_system(rng: random.Random, kinds: tuple[str, ...] = KINDS, rigid: b
         lines.append(f"  chain ch{c}: " + " -> ".join(f"i{t}.o" for t in path))
     lines.append("}")
     return "\n\n".join(components) + "\n\n" + "\n".join(lines) + "\n"
+
+
+def mt_system(rng: random.Random, rigid: bool = False) -> str:
+    """One random valid system with a multi-threaded executor (specs/timing.md §9.4), as DSL text:
+    nodes of one to three callbacks in declared mutually exclusive or reentrant groups or in their
+    default group, on a multi-threaded executor with two or three cores of its own, beside a core with
+    a single-threaded executor and plain tasks; timers, sporadic sources, data triggers across nodes,
+    delays, execution-time ranges and chains. ``rigid`` as for ``executor_system``."""
+    workers = rng.choice([2, 2, 3])
+    threads = workers + rng.choice([0, 0, 1])
+    lines = ["system S {"] + [f"  core c{c}" for c in range(workers + 1)]
+    cores = ", ".join(f"c{c}" for c in range(workers))
+    lines.append(f"  executor mt multi_threaded {threads} threads on {cores} priority 10")
+    lines.append(f"  executor st single_threaded on c{workers} priority 10")
+    nodes = rng.randint(2, 4)
+    outputs: list[tuple[int, int]] = []  # (node, task) of every callback so far
+    components, bindings, connections, edges = [], [], [], {}
+    for i in range(nodes):
+        ntasks = rng.choice([1, 2, 2, 3])
+        groups = [g for g in ("g", "h") if rng.random() < 0.5]
+        kinds = {g: rng.choice(["reentrant", "mutually_exclusive"]) for g in groups}
+        comp, body = [f"component N{i} {{"], [f"    group {g} {k}" for g, k in kinds.items()]
+        tasks = []
+        for k in range(ntasks):
+            reads = []
+            if not outputs or rng.random() < 0.4:
+                period = rng.choice(PERIODS_MS)
+                if rng.random() < 0.2 and not rigid:
+                    act = f"sporadic {period} ms .. {_ms(Fraction(period * rng.randint(4, 8), 4))}"
+                else:
+                    phase = f" phase {_ms(Fraction(rng.randrange(2 * period), 2))}" if rng.random() < 0.3 else ""
+                    act = f"timer {period} ms"
+                    act += phase
+            else:
+                w = rng.choice(outputs)
+                comp.append(f"  in a{k} : T")
+                reads.append(f"a{k}")
+                connections.append((w, (i, k), f"a{k}"))
+                edges.setdefault(w, []).append((i, k))
+                act = f"trigger a{k}"
+            comp.append(f"  out o{k} : T")
+            wcet = Fraction(rng.randint(1, 8), rng.choice([1, 2]))
+            bcet = wcet if rigid else wcet * Fraction(rng.randint(0, 4), 4)
+            tasks += [f"  task T{k} {{"] + [f"    reads {r}" for r in reads]
+            tasks += [f"    produces o{k}", f"    bcet {_ms(bcet)}", f"    wcet {_ms(wcet)}", "  }"]
+            where = "mt" if rng.random() < 0.85 else "st"
+            group = f" group {rng.choice(groups)}" if groups and where == "mt" and rng.random() < 0.7 else ""
+            body.append(f"    task T{k} executor {where}{group} {act}")
+        outputs += [(i, k) for k in range(ntasks)]
+        components.append("\n".join(comp + tasks + ["}"]))
+        bindings.append(f"  instance n{i} : N{i} {{\n" + "\n".join(body) + "\n  }")
+    if rng.random() < 0.5:  # a plain task beside the single-threaded executor
+        components.append("component P {\n  out o : T\n  task T {\n    produces o\n    wcet 1 ms\n  }\n}")
+        bindings.append(f"  instance p : P on c{workers} {{ task T priority {rng.choice([5, 15])} timer 20 ms }}")
+    lines += bindings
+    for (wi, wk), (ri, _rk), port in connections:
+        dmin = rng.choice([0, 0, 1])
+        dmax = dmin + (0 if rigid else rng.choice([0, 0, 2]))
+        delay = "" if dmax == 0 else f" delay {dmin} ms" if dmin == dmax else f" delay {dmin} ms .. {dmax} ms"
+        lines.append(f"  connect n{wi}.o{wk} -> n{ri}.{port}{delay}")
+    for c in range(rng.randint(1, 3)):
+        path = [rng.choice(outputs)]
+        while len(path) < 4 and path[-1] in edges and rng.randrange(4) > 0:
+            nxt = rng.choice(sorted(set(edges[path[-1]])))
+            if nxt in path:
+                break
+            path.append(nxt)
+        lines.append(f"  chain ch{c}: " + " -> ".join(f"n{a}.o{b}" for a, b in path))
+    lines.append("}")
+    return "\n\n".join(components) + "\n\n" + "\n".join(lines) + "\n"

@@ -103,13 +103,16 @@ component A {
 system S {
   core c policy fp
   executor e events on c priority 2
+  executor m multi_threaded 2 threads on d, f priority 2
+  executor n multi_threaded 1 thread on g priority 2
   instance x : A on c {
     task T1 priority 1 on c wcrt 5 ms deadline 10 ms timer 10 ms phase 1 ms
     task T2 trigger c every 2
     task T3 sporadic 1 ms .. 2 ms
   }
   instance y : A {
-    task T1 executor e activation ?
+    group g reentrant
+    task T1 executor e group g activation ?
     task T2 timer ? in 10 ms .. 20 ms step 5 ms
     task T3 trigger a every ? in 1 .. 3
   }

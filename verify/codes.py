@@ -38,7 +38,7 @@ _ALL = [
     Code("E105", "no such system"),
     Code("E106", "unknown scheduling policy"),
     Code("E107", "wrong kind of port or member"),
-    Code("E108", "unknown executor kind"),
+    Code("E108", "unknown executor or callback-group kind"),
     # E2xx: structure
     Code("E201", "connection type mismatch"),
     Code("E202", "out-port produced by no task"),
@@ -62,6 +62,8 @@ _ALL = [
     Code("E220", "priority or core given for a task bound to an executor"),
     Code("E221", "activation a ROS 2 executor callback cannot have"),
     Code("E222", "two threads share a priority on a core with an executor"),
+    Code("E223", "callback group that does not fit its callbacks"),
+    Code("E224", "executor's threads that do not fit its kind or cores"),
     # E3xx: timing
     Code("E301", "best-case execution time exceeds worst case"),
     Code("E302", "time where a frequency is expected, or vice versa"),

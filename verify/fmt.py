@@ -176,6 +176,7 @@ def _binding(b: s.TaskBinding) -> str:
         f"priority {format_number(b.priority.value)}" if b.priority is not None else None,
         f"on {b.core}" if b.core is not None else None,
         f"executor {b.executor}" if b.executor is not None else None,
+        f"group {b.group}" if b.group is not None else None,
         f"wcrt {format_quantity(b.wcrt)}" if b.wcrt is not None else None,
         f"deadline {format_quantity(b.deadline)}" if b.deadline is not None else None,
         *(_activation(a) for a in b.activations),
@@ -184,7 +185,8 @@ def _binding(b: s.TaskBinding) -> str:
 
 
 def _executor(e: s.Executor) -> str:
-    clauses = [f"on {e.core}" if e.core is not None else None,
+    clauses = [f"{format_number(e.threads.value)} threads" if e.threads is not None else None,
+               f"on {', '.join(c.text for c in e.cores)}" if e.core is not None else None,
                f"priority {format_number(e.priority.value)}" if e.priority is not None else None]
     return " ".join([f"executor {e.name} {e.kind}", *(c for c in clauses if c)])
 
@@ -298,7 +300,9 @@ def _print_system(p: _Printer, system: s.System) -> None:
         p.line(1, _executor(ex), ex.span)
     for inst in system.instances:
         header = f"instance {inst.name} : {inst.component}" + (f" on {inst.core}" if inst.core else "")
-        _print_block(p, header, inst.span, inst.end, [(_binding(b), b.span) for b in inst.bindings])
+        members = [(_binding(b), b.span) for b in inst.bindings]
+        members += [(f"group {g.name} {g.kind}", g.span) for g in inst.groups]
+        _print_block(p, header, inst.span, inst.end, sorted(members, key=lambda m: (m[1].line, m[1].column)))
     for conn in system.connections:
         p.line(1, _connection(conn), conn.span)
     for chain in system.chains:
@@ -452,8 +456,9 @@ def format_text(text: str, path: str = "<text>") -> tuple[str | None, list[Diagn
 
 
 def _report_repeated(module: s.Module, sink: DiagnosticSink) -> bool:
-    nodes: list[s.Task | s.TaskBinding] = [t for c in module.components for t in c.tasks]
+    nodes: list[s.Task | s.TaskBinding | s.Executor] = [t for c in module.components for t in c.tasks]
     nodes += [b for system in module.systems for inst in system.instances for b in inst.bindings]
+    nodes += [e for system in module.systems for e in system.executors]
     spans = sorted(span for node in nodes for span in node.repeated)
     for span in spans:
         sink.emit("E212", "clause given more than once; formatting would drop it", span, "given again here",

@@ -72,6 +72,7 @@ class TaskModel:
     span: Span = _span()  # the binding in the system
     definition_span: Span = _span()  # the task in its component
     executor: str | None = None  # the ROS 2 executor running it as a callback (core, priority: the executor's)
+    group: str | None = None  # a callback's group (``GroupModel.id``)
 
     def reads_port(self, port: str) -> bool:
         return any(r.port == port for r in self.reads)
@@ -234,25 +235,66 @@ class CoreModel:
     span: Span = _span()
 
 
-ExecutorKind = Literal["single_threaded", "static_single_threaded", "events"]
+ExecutorKind = Literal["single_threaded", "static_single_threaded", "events", "multi_threaded"]
+GroupKind = Literal["mutually_exclusive", "reentrant"]
 
 
 @dataclass(frozen=True)
 class ExecutorModel:
     """A ROS 2 executor (specs/timing.md §9): one thread of ``priority`` on ``core`` that runs the
-    callbacks bound to it one at a time, in the order its ``kind`` defines."""
+    callbacks bound to it one at a time, in the order its ``kind`` defines; a multi-threaded one has
+    ``threads`` threads over its ``cores`` (§9.4: one worker per core, the cores its own)."""
 
     name: str
     kind: ExecutorKind
-    core: str
+    core: str  # its first core
     priority: int
     span: Span = _span()
+    cores: tuple[str, ...] = ()  # every core (empty: ``core`` alone)
+    threads: int = 1
+
+    @property
+    def workers(self) -> tuple[str, ...]:
+        """The cores on which it runs callbacks at once: one callback per core (§9.4)."""
+        return self.cores or (self.core,)
+
+    @property
+    def multi_threaded(self) -> bool:
+        return self.kind == "multi_threaded"
+
+    def kind_rank(self, task: TaskModel) -> int:
+        """The position of a callback's kind in a wait-set executor's processing order (§9.2): timers
+        before subscriptions, except on the static executor, which processes subscriptions first."""
+        timer = task.activation.kind == "timer"
+        return int(timer) if self.kind == "static_single_threaded" else int(not timer)
 
     @property
     def polls(self) -> bool:
         """A wait-set executor: it takes a snapshot of the ready callbacks at polling points (the events
         executor runs its events in FIFO order instead)."""
         return self.kind != "events"
+
+
+@dataclass(frozen=True)
+class GroupModel:
+    """A ROS 2 callback group (specs/timing.md §9.4): a declared ``group NAME KIND`` of an instance, or
+    the default group (``name`` None, mutually exclusive) of the instance's callbacks on one executor
+    that name no group."""
+
+    id: str
+    instance: str
+    name: str | None
+    kind: GroupKind
+    executor: str
+    span: Span = _span()
+
+    @property
+    def exclusive(self) -> bool:
+        return self.kind == "mutually_exclusive"
+
+    def describe(self) -> str:
+        what = f"group `{self.name}`" if self.name is not None else "the default group"
+        return f"{what} of `{self.instance}` ({self.kind.replace('_', ' ')})"
 
 
 class _Index(TypedDict):
@@ -287,6 +329,7 @@ class SystemModel:
     components: tuple[ComponentModel, ...] = ()
     ports: tuple[PortModel, ...] = ()
     executors: tuple[ExecutorModel, ...] = ()
+    groups: tuple[GroupModel, ...] = ()  # the callback groups with callbacks, in system order
 
     def task(self, task_id: str) -> TaskModel:
         return self._index()["tasks"][task_id]
@@ -320,7 +363,7 @@ class SystemModel:
     def _with_chains(self, chains: tuple[ChainModel, ...]) -> SystemModel:
         """This system with ``chains``; it shares the lookup tables, which do not depend on the chains."""
         other = SystemModel(self.name, self.cores, self.tasks, self.links, chains, self.span, self.compounds,
-                            self.instances, self.components, self.ports, self.executors)
+                            self.instances, self.components, self.ports, self.executors, self.groups)
         if "_lookup" in self.__dict__:
             object.__setattr__(other, "_lookup", self.__dict__["_lookup"])
         return other
@@ -350,6 +393,9 @@ class SystemModel:
 
     def executor(self, name: str) -> ExecutorModel:
         return next(e for e in self.executors if e.name == name)
+
+    def group(self, group_id: str) -> GroupModel:
+        return next(g for g in self.groups if g.id == group_id)
 
     def callbacks(self, executor: str) -> tuple[TaskModel, ...]:
         """The tasks bound to ``executor``, in system order (its registration order, §9)."""
@@ -438,7 +484,9 @@ def build_system(scope: SystemScope) -> SystemModel:
     """The semantic model of a system that resolved and validated without errors."""
     system = scope.system
     executors = tuple(ExecutorModel(e.name.text, cast(ExecutorKind, e.kind.text), e.core.text,  # type: ignore[union-attr]
-                                    int(e.priority.value), e.span)  # type: ignore[union-attr]  # (validated)
+                                    int(e.priority.value), e.span,  # type: ignore[union-attr]  # (validated)
+                                    tuple(c.text for c in e.cores) if e.more_cores else (),
+                                    int(e.threads.value) if e.threads is not None else len(e.cores))
                       for e in system.executors)
     threads = {e.name: e for e in executors}
     tasks: list[TaskModel] = []
@@ -447,6 +495,7 @@ def build_system(scope: SystemScope) -> SystemModel:
         for task in component.tasks:
             binding = scope.bindings[(inst.name.text, task.name.text)]
             tasks.append(_task_model(inst, task, binding, component, threads))
+    groups = _groups(system, tasks)
     producers = {f"{t.instance}.{p}": t.id for t in tasks for p in t.produces}
     readers: dict[str, list[TaskId]] = {}
     for t in tasks:
@@ -460,9 +509,31 @@ def build_system(scope: SystemScope) -> SystemModel:
     compounds = tuple(cm for inst in system.instances
                       for cm in _compound_models(inst, scope.component_of[inst.name.text].component))
     model = SystemModel(system.name.text, cores, tuple(tasks), links, (), system.span, compounds, instances,
-                        components, ports, executors)
+                        components, ports, executors, groups)
     chains = tuple(_chain_model(ch, model, scope) for ch in system.chains)
     return model._with_chains(chains)
+
+
+def group_id(instance: str, group: str | None, executor: str) -> str:
+    """A callback group's ``GroupModel.id``: ``instance.group``, or ``instance@executor`` for the
+    instance's default group on ``executor``."""
+    return f"{instance}.{group}" if group is not None else f"{instance}@{executor}"
+
+
+def _groups(system: s.System, tasks: list[TaskModel]) -> tuple[GroupModel, ...]:
+    """The callback groups of the callbacks, in order of their first callback (§9.4)."""
+    declared = {f"{inst.name.text}.{g.name.text}": g for inst in system.instances for g in inst.groups}
+    found: dict[str, GroupModel] = {}
+    for t in tasks:
+        if t.group is None or t.group in found:
+            continue
+        assert t.executor is not None  # (a callback has a group)
+        decl = declared.get(t.group)
+        found[t.group] = (GroupModel(t.group, t.instance, None, "mutually_exclusive", t.executor, t.span)
+                          if decl is None else
+                          GroupModel(t.group, t.instance, decl.name.text, cast(GroupKind, decl.kind.text), t.executor,
+                                     decl.span))
+    return tuple(found.values())
 
 
 def _task_model(inst: s.Instance, task: s.Task, binding: s.TaskBinding, component: s.Component,
@@ -501,6 +572,8 @@ def _task_model(inst: s.Instance, task: s.Task, binding: s.TaskBinding, componen
         span=binding.span,
         definition_span=task.span,
         executor=None if executor is None else executor.name,
+        group=None if executor is None else group_id(inst.name.text, binding.group.text if binding.group else None,
+                                                     executor.name),
     )
 
 

@@ -504,11 +504,22 @@ class _Builder:
         fields: dict[str, Any] = {}
         repeated: list[Span] = []
         for tag, value, where in clauses:
-            if tag in fields:
+            if tag in fields or (tag == "cores" and "core" in fields):
                 repeated.append(self._span(*where))
+            elif tag == "cores":
+                fields["core"], fields["more_cores"] = value[0], tuple(value[1:])
             else:
                 fields[tag] = value
         return s.Executor(name, kind, span=self._span(start, end), repeated=tuple(repeated), **fields)
+
+    def executor_cores(self, start: _Pos, end: _Pos, children: _Children) -> tuple[str, list[s.Name], _Where]:
+        return ("cores", list(children), (start, end))
+
+    def threads(self, start: _Pos, end: _Pos, children: _Children) -> tuple[str, s.Number, _Where]:
+        return ("threads", self._number(children[0]), (start, end))
+
+    def callback_group(self, start: _Pos, end: _Pos, children: _Children) -> s.CallbackGroup:
+        return s.CallbackGroup(children[0], children[1], self._span(start, end))
 
     def core(self, start: _Pos, end: _Pos, children: _Children) -> s.Core:
         policy = children[1] if len(children) > 1 else None
@@ -518,17 +529,20 @@ class _Builder:
         name, comp, *rest = children
         core: s.Name | None = None
         bindings: tuple[s.TaskBinding, ...] = ()
+        groups: tuple[s.CallbackGroup, ...] = ()
         body_end = None
         for r in rest:
             if isinstance(r, s.Name):
                 core = r
             else:
-                bindings, body_end = r
-        return s.Instance(name, comp, core, bindings, self._span(start, end), body_end)
+                bindings, groups, body_end = r
+        return s.Instance(name, comp, core, bindings, self._span(start, end), body_end, groups)
 
-    def instance_body(self, start: _Pos, end: _Pos, children: _Children) -> tuple[tuple[s.TaskBinding, ...], Span]:
-        *bindings, rbrace = children
-        return tuple(bindings), rbrace
+    def instance_body(self, start: _Pos, end: _Pos, children: _Children
+                      ) -> tuple[tuple[s.TaskBinding, ...], tuple[s.CallbackGroup, ...], Span]:
+        *members, rbrace = children
+        return (tuple(m for m in members if isinstance(m, s.TaskBinding)),
+                tuple(m for m in members if isinstance(m, s.CallbackGroup)), rbrace)
 
     def binding(self, start: _Pos, end: _Pos, children: _Children) -> s.TaskBinding:
         name, *clauses = children
@@ -552,6 +566,9 @@ class _Builder:
 
     def task_executor(self, start: _Pos, end: _Pos, children: _Children) -> tuple[str, s.Name, _Where]:
         return ("executor", children[0], (start, end))
+
+    def task_group(self, start: _Pos, end: _Pos, children: _Children) -> tuple[str, s.Name, _Where]:
+        return ("group", children[0], (start, end))
 
     def wcrt(self, start: _Pos, end: _Pos, children: _Children) -> tuple[str, s.Quantity, _Where]:
         return ("wcrt", children[0], (start, end))

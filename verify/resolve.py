@@ -18,9 +18,11 @@ MemberKind = Literal["in-port", "out-port", "compound in-port", "task"]
 MemberNode = s.InPort | s.OutPort | s.CompoundPort | s.Task
 _Node = TypeVar("_Node")
 KNOWN_POLICIES = ("fixed_priority",)
-#: the executor kinds of specs/timing.md §9 (rclcpp's SingleThreadedExecutor, StaticSingleThreadedExecutor
-#: and EventsExecutor)
-KNOWN_EXECUTORS = ("single_threaded", "static_single_threaded", "events")
+#: the executor kinds of specs/timing.md §9 (rclcpp's SingleThreadedExecutor, StaticSingleThreadedExecutor,
+#: EventsExecutor and MultiThreadedExecutor)
+KNOWN_EXECUTORS = ("single_threaded", "static_single_threaded", "events", "multi_threaded")
+#: the callback-group kinds of specs/timing.md §9.4 (rclcpp's CallbackGroupType)
+KNOWN_GROUPS = ("mutually_exclusive", "reentrant")
 
 
 @dataclass(frozen=True)
@@ -198,14 +200,22 @@ def _scope_executors(system: s.System, cores: dict[str, s.Core], sink: Diagnosti
             hint = suggest(ex.kind.text, KNOWN_EXECUTORS)
             sink.emit("E108", f"unknown executor kind `{ex.kind.text}`", ex.kind.span, "not a known executor kind",
                       help=f"did you mean `{hint}`?" if hint else "supported: " + ", ".join(KNOWN_EXECUTORS))
-        if ex.core is not None and ex.core.text not in cores:
-            _unknown(sink, "core", ex.core, cores)
+        for core in ex.cores:
+            if core.text not in cores:
+                _unknown(sink, "core", core, cores)
     return executors
 
 
 def _resolve_bindings(inst: s.Instance, scope: ComponentScope, cores: dict[str, s.Core],
                       executors: dict[str, s.Executor], bindings: dict[tuple[str, str], s.TaskBinding],
                       sink: DiagnosticSink) -> None:
+    groups = _unique(inst.groups, lambda g: g.name, "callback group", sink)
+    for group in inst.groups:
+        if group.kind.text not in KNOWN_GROUPS:
+            hint = suggest(group.kind.text, KNOWN_GROUPS)
+            sink.emit("E108", f"unknown callback-group kind `{group.kind.text}`", group.kind.span,
+                      "not a known callback-group kind",
+                      help=f"did you mean `{hint}`?" if hint else "supported: " + ", ".join(KNOWN_GROUPS))
     for binding in inst.bindings:
         if not _expect_member(scope, binding.task, ("task",), "E101", sink, "task"):
             continue
@@ -220,6 +230,8 @@ def _resolve_bindings(inst: s.Instance, scope: ComponentScope, cores: dict[str, 
             _unknown(sink, "core", binding.core, cores)
         if binding.executor is not None and binding.executor.text not in executors:
             _unknown(sink, "executor", binding.executor, executors)
+        if binding.group is not None and binding.group.text not in groups:
+            _unknown(sink, "callback group", binding.group, groups, f" in instance `{inst.name.text}`")
         for act in binding.activations:
             if isinstance(act, s.Trigger):
                 _expect_member(scope, act.port, ("in-port", "compound in-port"), "E101", sink, "trigger port")

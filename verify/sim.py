@@ -207,6 +207,7 @@ class _Job:
     start: Fraction | None = None
     finish: Fraction | None = None
     reads: dict[str, Message | None] = field(default_factory=dict)
+    core: str = ""  # a callback's worker core, once started
 
     def key(self) -> tuple[int, Fraction, int, int]:
         """Dispatch rank (§1): higher priority, then earlier release, then task order."""
@@ -227,41 +228,84 @@ def absorbs(task: TaskModel, executor: ExecutorModel) -> bool:
     return executor.polls or task.activation.kind != "timer"
 
 
+def executor_cores(system: SystemModel) -> list[str]:
+    """The cores of the tasks and of the executors' workers, in order of first use (tasks first)."""
+    return list(dict.fromkeys([t.core for t in system.tasks] + [c for e in system.executors for c in e.workers]))
+
+
+def exclusive_groups(system: SystemModel, executor: ExecutorModel) -> dict[str, str]:
+    """The callbacks of a multi-threaded ``executor`` in a mutually exclusive group, with the group
+    (§9.4; on the other kinds one thread runs one callback at a time anyway)."""
+    if not executor.multi_threaded:
+        return {}
+    exclusive = {g.id for g in system.groups if g.exclusive}
+    return {t.id: t.group for t in system.callbacks(executor.name) if t.group in exclusive}
+
+
 def snapshot_rank(task: TaskModel, executor: ExecutorModel) -> int:
-    """The position of a callback's kind in a wait-set executor's processing order (§9): timers before
-    subscriptions, except on the static executor, which processes subscriptions first."""
-    timer = task.activation.kind == "timer"
-    return int(not timer) if executor.kind == "single_threaded" else int(timer)
+    """``ExecutorModel.kind_rank``: a callback's kind's place in a snapshot (§9.2)."""
+    return executor.kind_rank(task)
 
 
 @dataclass(eq=False)
 class _Executor:
     """One executor's jobs: released and not started (``pending``, in release order), the snapshot of
-    its last polling point still to run, and the job it started and has not completed."""
+    its last polling point still to run, and per worker core the job it started and has not completed
+    (one core for every kind but ``multi_threaded``, §9.4). ``exclusive``: the tasks whose callback
+    group is mutually exclusive, by group."""
 
     model: ExecutorModel
+    exclusive: dict[str, str] = field(default_factory=dict)  # task id -> its mutually exclusive group
     pending: list[_Job] = field(default_factory=list)
     snapshot: list[_Job] = field(default_factory=list)
-    current: _Job | None = None
+    running: dict[str, _Job | None] = field(default_factory=dict)
 
-    def head(self) -> _Job | None:
-        """The job the thread runs when it gets its core (a polling point first if the snapshot is empty)."""
-        if self.current is not None:
-            return self.current
+    def __post_init__(self) -> None:
+        self.running = dict.fromkeys(self.model.workers)
+
+    def head(self, core: str) -> _Job | None:
+        """The job the worker of ``core`` runs when it gets its core: its started one, else the first
+        takeable entry of the snapshot, else the first of a new snapshot (a polling point)."""
+        current = self.running[core]
+        if current is not None:
+            return current
         if not self.model.polls:
             return min(self.pending, key=lambda j: (j.release, j.order, j.index), default=None)
-        return self.snapshot[0] if self.snapshot else min(self.pending, key=self._rank, default=None)
+        return next((j for j in self.snapshot if self.takeable(j)), None) or min(
+            (j for j in self.pending if self.takeable(j)), key=self._rank, default=None)
+
+    def takeable(self, job: _Job) -> bool:
+        """Not held back by its mutually exclusive group, which has a started job (§9.4)."""
+        group = self.exclusive.get(job.task.id)
+        return group is None or not any(j is not None and self.exclusive.get(j.task.id) == group
+                                        for j in self.running.values())
 
     def _rank(self, job: _Job) -> tuple[int, int, int]:
         return snapshot_rank(job.task, self.model), job.order, job.index
 
-    def start(self, job: _Job) -> None:
-        if self.model.polls and not self.snapshot:  # the polling point
-            self.snapshot = sorted(self.pending, key=self._rank)
+    def start(self, job: _Job, core: str) -> None:
+        if self.model.polls and job not in self.snapshot:  # the polling point
+            self.snapshot = sorted((j for j in self.pending if self.takeable(j)), key=self._rank)
         if self.model.polls:
             self.snapshot.remove(job)
         self.pending.remove(job)
-        self.current = job
+        self.running[core] = job
+        job.core = core
+
+    def settle(self) -> None:
+        """After dispatch: a free worker with nothing to take polls and finds nothing, so the snapshot
+        keeps no entry held back by a busy group (§9.4; a worker always has its core there, E224)."""
+        if self.snapshot and any(self.running[c] is None and self.head(c) is None for c in self.running):
+            self.snapshot = []
+
+    def worker_for(self, job: _Job, choice: dict[str, _Job | None]) -> str:
+        """The worker that starts ``job``: the first free one in the executor's core order that chose it."""
+        return next(c for c in self.model.workers if self.running[c] is None and choice.get(c) is job)
+
+    def jobs_on(self, core: str) -> list[_Job]:
+        """Its released, uncompleted jobs on ``core``: the pending ones with its first core."""
+        current = self.running[core]
+        return (self.pending if core == self.model.workers[0] else []) + ([current] if current is not None else [])
 
 
 def _check(ok: bool, what: str) -> None:
@@ -278,13 +322,14 @@ class _Simulator:
         self.heap: list[tuple[Fraction, int, int, object]] = []
         self.order = {t.id: i for i, t in enumerate(system.tasks)}
         self.jobs: dict[str, list[_Job]] = {t.id: [] for t in system.tasks}
-        self.ready: dict[str, list[_Job]] = {t.core: [] for t in system.tasks}
+        self.ready: dict[str, list[_Job]] = {c: [] for c in executor_cores(system)}
         self.running: dict[str, _Job | None] = dict.fromkeys(self.ready)
         self.holder: dict[str, _Job] = {}  # instance -> started, uncompleted cooperative job
-        self.executors = {e.name: _Executor(e) for e in system.executors}
+        self.executors = {e.name: _Executor(e, exclusive_groups(system, e)) for e in system.executors}
         self.threads: dict[str, list[_Executor]] = {}
         for ex in self.executors.values():
-            self.threads.setdefault(ex.model.core, []).append(ex)
+            for core in ex.model.workers:
+                self.threads.setdefault(core, []).append(ex)
         self.releases: dict[str, int] = {t.id: 0 for t in system.tasks}
         self.registers: dict[str, Message] = {}
         self.messages: list[Message] = []
@@ -386,7 +431,7 @@ class _Simulator:
 
     def _complete_due(self) -> None:
         due = [j for j in self.running.values() if j is not None and j.remaining == 0]
-        for job in sorted(due, key=lambda j: j.order):
+        for job in sorted(due, key=lambda j: (j.order, j.index)):
             self._count()
             self._complete(job)
 
@@ -394,10 +439,11 @@ class _Simulator:
         t = job.task
         job.finish = self.now
         if t.executor is not None:
-            self.executors[t.executor].current = None
+            self.executors[t.executor].running[job.core] = None
+            self.running[job.core] = None
         else:
             self.ready[t.core].remove(job)
-        self.running[t.core] = None
+            self.running[t.core] = None
         if self.holder.get(t.instance) is job:
             del self.holder[t.instance]
         for port in t.produces:
@@ -462,7 +508,7 @@ class _Simulator:
 
     def _pick(self, core: str) -> _Job | None:
         """The best eligible task job, or the job an executor thread of the core runs (§9)."""
-        heads = [h for ex in self.threads.get(core, ()) if (h := ex.head()) is not None]
+        heads = [h for ex in self.threads.get(core, ()) if (h := ex.head(core)) is not None]
         return min([j for j in self.ready[core] if self._eligible(j)] + heads, key=_Job.key, default=None)
 
     def _dispatch(self) -> None:
@@ -473,15 +519,18 @@ class _Simulator:
             starting = [j for j in choice.values() if j is not None and j.start is None]
             if not starting:
                 self.running = choice
+                for ex in self.executors.values():
+                    ex.settle()
                 return
-            self._start(min(starting, key=_Job.key))
+            self._start(min(starting, key=_Job.key), choice)
 
-    def _start(self, job: _Job) -> None:
+    def _start(self, job: _Job, choice: dict[str, _Job | None]) -> None:
         """Read all inputs at start (§2) and take the instance's cooperative token (§1)."""
         t = job.task
         job.start = self.now
         if t.executor is not None:
-            self.executors[t.executor].start(job)
+            ex = self.executors[t.executor]
+            ex.start(job, ex.worker_for(job, choice))
         for r in t.reads:
             port = f"{t.instance}.{r.port}"
             job.reads[port] = self.registers.get(port)

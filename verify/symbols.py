@@ -20,7 +20,7 @@ from .resolve import ComponentScope, Resolution, SystemScope
 from .source import Span
 
 SymbolKind = Literal["component", "system", "in-port", "out-port", "compound in-port", "task", "core", "instance",
-                     "chain", "executor"]
+                     "chain", "executor", "group"]
 
 
 @dataclass(frozen=True)
@@ -126,8 +126,8 @@ def _system(scope: SystemScope, components: dict[str, tuple[Symbol, dict[str, Sy
     symbols.extend(executors.values())
     symbols.extend(instances.values())
     for ex in scope.system.executors:
-        if ex.core is not None:
-            _use(references, ex.core, cores)
+        for core in ex.cores:
+            _use(references, core, cores)
     chains: dict[str, Symbol] = {}
     for chain in scope.system.chains:
         chains.setdefault(chain.name.text, Symbol("chain", chain.name.text, system, chain.name.span, chain))
@@ -138,12 +138,18 @@ def _system(scope: SystemScope, components: dict[str, tuple[Symbol, dict[str, Sy
         if inst.core is not None:
             _use(references, inst.core, cores)
         members = _members_of(scope, inst.name.text, components)
+        groups: dict[str, Symbol] = {}
+        for group in inst.groups:
+            groups.setdefault(group.name.text, Symbol("group", group.name.text, system, group.name.span, group))
+        symbols.extend(groups.values())
         for binding in inst.bindings:
             _use(references, binding.task, members, ("task",))
             if binding.core is not None:
                 _use(references, binding.core, cores)
             if binding.executor is not None:
                 _use(references, binding.executor, executors)
+            if binding.group is not None:
+                _use(references, binding.group, groups)
             for act in binding.activations:
                 if isinstance(act, s.Trigger):
                     _use(references, act.port, members, ("in-port", "compound in-port"))

@@ -240,14 +240,29 @@ class Core:
 
 @dataclass(frozen=True)
 class Executor:
-    """``executor NAME KIND on CORE priority N``: a ROS 2 executor thread (specs/timing.md §9)."""
+    """``executor NAME KIND [N threads] on CORE, … priority N``: a ROS 2 executor (specs/timing.md §9)."""
 
     name: Name
     kind: Name
-    core: Name | None = None
+    core: Name | None = None  # the first core it lists
     priority: Number | None = None
     span: Span = _span()
     repeated: tuple[Span, ...] = field(default=(), compare=False, repr=False)
+    more_cores: tuple[Name, ...] = ()  # the cores after the first (a multi-threaded executor's)
+    threads: Number | None = None  # ``N threads`` (multi-threaded)
+
+    @property
+    def cores(self) -> tuple[Name, ...]:
+        return () if self.core is None else (self.core, *self.more_cores)
+
+
+@dataclass(frozen=True)
+class CallbackGroup:
+    """``group NAME KIND`` in an instance body: a ROS 2 callback group of the instance's node (§9)."""
+
+    name: Name
+    kind: Name
+    span: Span = _span()
 
 
 @dataclass(frozen=True)
@@ -259,6 +274,7 @@ class TaskBinding:
     wcrt: Quantity | None = None
     deadline: Quantity | None = None
     executor: Name | None = None  # the executor running it as a callback (then no priority, no core)
+    group: Name | None = None  # its callback group (of its instance), with an executor
     span: Span = _span()
     repeated: tuple[Span, ...] = field(default=(), compare=False, repr=False)
 
@@ -275,6 +291,7 @@ class Instance:
     bindings: tuple[TaskBinding, ...] = ()
     span: Span = _span()
     end: Span | None = field(default=None, compare=False, repr=False)
+    groups: tuple[CallbackGroup, ...] = ()
 
 
 @dataclass(frozen=True)

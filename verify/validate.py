@@ -16,6 +16,7 @@ from .model import SystemModel, chain_path, quantity_base, quantity_hertz, quant
 from .resolve import ComponentScope, MemberNode, Resolution, SystemScope
 from .source import Span
 from .units import fmt_number, fmt_quantity, fmt_rate, fmt_time
+from .validate_executors import check_executors
 
 if TYPE_CHECKING:  # (networkx is imported where a cycle of triggers is reported: it costs start-up time)
     import networkx as nx
@@ -188,7 +189,7 @@ def validate_system(scope: SystemScope, sink: DiagnosticSink) -> None:
             continue
         executor = scope.executors.get(binding.executor.text) if binding.executor else None
         _check_binding(inst, task, binding, comp, sink, executor)
-    _check_executors(scope, sink)
+    check_executors(scope, [(inst, task, b) for inst, _c, task, b in _instance_tasks(scope)], sink)
     _check_connections(scope, sink)
     _check_trigger_sources(scope, sink)
     for chain in scope.system.chains:
@@ -275,44 +276,6 @@ def _check_callback_activation(act: s.Activation, executor: s.Executor, who: str
                   help="drop `every …`: a subscription runs its callback on every message it takes "
                        "(a callback that works on every k-th message is modelled as a timer reading the port, "
                        "or bound with a priority instead of an executor)")
-
-
-def _check_executors(scope: SystemScope, sink: DiagnosticSink) -> None:
-    """E219: an executor needs a core and a priority; E309: a non-negative integer priority; E222: its
-    thread has a priority of its own on its core (no task or other executor of the core shares it)."""
-    threads: dict[tuple[str, int], s.Executor] = {}
-    for ex in scope.system.executors:
-        _check_repeated(ex.repeated, f"executor `{ex.name.text}`", sink)
-        if ex.core is None or ex.priority is None:
-            missing = [what for what, clause in (("core", ex.core), ("priority", ex.priority)) if clause is None]
-            sink.emit("E219", f"executor `{ex.name.text}` has no {' and no '.join(missing)}", ex.name.span,
-                      "no " + " and no ".join(missing),
-                      help=f"write `executor {ex.name.text} {ex.kind.text} on CORE priority N`: its thread runs "
-                           "on that core at that priority")
-        elif not ex.priority.is_integer or ex.priority.value < 0:
-            sink.emit("E309", f"priority of executor `{ex.name.text}` must be a non-negative integer, found "
-                      f"{fmt_number(ex.priority.value)}", ex.priority.span, "not a priority",
-                      help="use a whole number such as `priority 3`")
-        elif (key := (ex.core.text, int(ex.priority.value))) in threads:
-            sink.emit("E222", f"executors `{threads[key].name.text}` and `{ex.name.text}` share priority "
-                      f"{key[1]} on core `{key[0]}`", ex.priority.span, "shared with another executor",
-                      secondary=(Label(threads[key].span, "the other executor"),),
-                      help="give each executor thread of a core its own priority")
-        else:
-            threads[key] = ex
-    if not threads:
-        return
-    for inst, _comp, task, b in _instance_tasks(scope):
-        core = b.core or inst.core if b is not None else None
-        if b is None or b.executor is not None or core is None or b.priority is None or not b.priority.is_integer:
-            continue
-        other = threads.get((core.text, int(b.priority.value)))
-        if other is not None:
-            sink.emit("E222", f"task `{inst.name.text}.{task.name.text}` has the priority of executor "
-                      f"`{other.name.text}` on core `{core.text}`", b.priority.span, "shared with an executor's thread",
-                      secondary=(Label(other.span, "the executor"),),
-                      help="give the task or the executor another priority: a thread's priority on a core is "
-                           "its own, so that which of them runs first is defined")
 
 
 def _check_user_bound(b: s.TaskBinding, task: s.Task, who: str, sink: DiagnosticSink) -> None:

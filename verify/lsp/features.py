@@ -176,6 +176,8 @@ def outline(module: s.Module, lines: Lines, analyses: Mapping[str, AnalysisResul
         for inst in system.instances:
             tasks = [_symbol(b.task.text, lsp.SymbolKind.Method, b.span, b.task.span, lines,
                              task_summary(analysis, f"{inst.name.text}.{b.task.text}")) for b in inst.bindings]
+            tasks += [_symbol(g.name.text, lsp.SymbolKind.Namespace, g.span, g.name.span, lines,
+                              f"{g.kind.text.replace('_', ' ')} callback group") for g in inst.groups]
             kids.append(_symbol(inst.name.text, lsp.SymbolKind.Object, _whole(inst), inst.name.span, lines,
                                 inst.component.text, tasks))
         kids += [_symbol(ch.name.text, lsp.SymbolKind.Event, _whole(ch), ch.name.span, lines,
@@ -332,6 +334,8 @@ def name_items(result: LoadResult | None, before: str) -> list[lsp.CompletionIte
         kinds = {"core"}
     elif re.search(r"\bexecutor\s*$", before):
         kinds = {"executor"}
+    elif re.search(r"\bgroup\s*$", before):
+        kinds = {"group"}
     else:
         kinds = {"instance"}
     seen: dict[str, lsp.CompletionItem] = {}

@@ -90,7 +90,8 @@ def restrict(model: SystemModel, tasks: frozenset[str], chains: set[str]) -> Sys
                                                                    lk.delay_min, lk.delay_max, lk.span,
                                                                    lk.message_type))
     instances = {t.instance for t in kept}
-    cores = {t.core for t in kept}
+    executors = tuple(e for e in model.executors if any(t.executor == e.name for t in kept))
+    cores = {t.core for t in kept} | {c for e in executors for c in e.workers}
     used = tuple(i for i in model.instances if i.name in instances)
     components = {i.component for i in used}
     return SystemModel(model.name, tuple(c for c in model.cores if c.name in cores), tuple(kept), tuple(links),
@@ -98,7 +99,7 @@ def restrict(model: SystemModel, tasks: frozenset[str], chains: set[str]) -> Sys
                        tuple(c for c in model.compounds if c.instance in instances), used,
                        tuple(c for c in model.components if c.name in components),
                        tuple(p for p in model.ports if p.instance in instances),
-                       tuple(e for e in model.executors if any(t.executor == e.name for t in kept)))
+                       executors, tuple(g for g in model.groups if g.executor in {e.name for e in executors}))
 
 
 def slices(model: SystemModel, targets: list[Target]) -> list[tuple[SystemModel, list[Target]]]:

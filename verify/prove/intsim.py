@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING, Protocol, TypeAlias
 
 from ..model import ChainModel, LinkModel, SystemModel, TaskModel
 from ..sim import (DEFAULT_MAX_EVENTS, JobRecord, Message, Sample, ScenarioError, SimulationError,
-                   Trace, absorbs, snapshot_rank)
+                   Trace, absorbs, exclusive_groups, executor_cores, snapshot_rank)
 from ..timebase import TimeBase
 
 if TYPE_CHECKING:
@@ -46,7 +46,7 @@ IntSample: TypeAlias = "tuple[int, int, int, int, int, int]"
 
 
 class _Job:
-    __slots__ = ("task", "index", "release", "remaining", "start", "finish", "reads", "key", "cost")
+    __slots__ = ("task", "index", "release", "remaining", "start", "finish", "reads", "key", "cost", "core")
 
     task: int
     index: int
@@ -64,6 +64,7 @@ class _Job:
         self.start = self.finish = None
         self.reads = None
         self.key = key
+        self.core = -1  # a callback's worker core, once started
 
 
 
@@ -110,7 +111,7 @@ class IntSimulator:
         self.model, self.max_events = model, max_events
         self.ids = [t.id for t in tasks]
         self.index_of: dict[str, int] = {t.id: i for i, t in enumerate(tasks)}
-        cores = list(dict.fromkeys(t.core for t in tasks))
+        cores = executor_cores(model)
         self.core = [cores.index(t.core) for t in tasks]
         self.ncores = len(cores)
         self.coop = [t.kind == "cooperative" for t in tasks]
@@ -155,8 +156,9 @@ class IntSimulator:
     def _init_executors(self, model: SystemModel, cores: list[str]) -> None:
         """ROS 2 executors (specs/timing.md §9), as in ``verify.sim._Executor``: per executor its
         released, unstarted jobs (``ex_pending``, in release order), the snapshot of its last polling
-        point still to run, and the job it started (``ex_current``); per task its executor (or −1),
-        whether it absorbs activations while a job is pending and its kind's place in a snapshot."""
+        point still to run, its worker cores and the job each started (``ex_running``), and its
+        callbacks in mutually exclusive groups (``ex_exclusive``, task -> group); per task its executor
+        (or −1), whether it absorbs activations while a job is pending and its kind's place in a snapshot."""
         executors = model.executors
         names = {e.name: n for n, e in enumerate(executors)}
         self.executor_of = [names[t.executor] if t.executor is not None else -1 for t in model.tasks]
@@ -166,13 +168,18 @@ class IntSimulator:
         self.polls = [e.polls for e in executors]
         self.ex_pending: list[list[_Job]] = [[] for _ in executors]
         self.ex_snapshot: list[list[_Job]] = [[] for _ in executors]
-        self.ex_current: list[_Job | None] = [None] * len(executors)
-        self.threads: list[list[int]] = [[n for n, e in enumerate(executors) if e.core == core] for core in cores]
+        self.ex_workers = [[cores.index(c) for c in e.workers] for e in executors]
+        self.ex_running: list[dict[int, _Job | None]] = [dict.fromkeys(w) for w in self.ex_workers]
+        self.ex_exclusive = [{self.index_of[tid]: g for tid, g in exclusive_groups(model, e).items()}
+                             for e in executors]
+        self.threads: list[list[int]] = [[n for n, w in enumerate(self.ex_workers) if core in w]
+                                         for core in range(len(cores))]
         self.released = [0] * len(model.tasks)
 
-    def _head(self, e: int) -> _Job | None:
-        """The job executor ``e``'s thread runs when it gets its core (``verify.sim._Executor.head``)."""
-        current = self.ex_current[e]
+    def _head(self, e: int, core: int) -> _Job | None:
+        """The job executor ``e``'s worker on ``core`` runs when it gets its core
+        (``verify.sim._Executor.head``)."""
+        current = self.ex_running[e][core]
         if current is not None:
             return current
         pending = self.ex_pending[e]
@@ -181,20 +188,38 @@ class IntSimulator:
         if not self.polls[e]:
             return min(pending, key=lambda j: (j.release, j.task, j.index))
         snapshot = self.ex_snapshot[e]
-        return snapshot[0] if snapshot else min(pending, key=self._snap_key)
+        if not self.ex_exclusive[e]:
+            return snapshot[0] if snapshot else min(pending, key=self._snap_key)
+        return next((j for j in snapshot if self._takeable(e, j)), None) or min(
+            (j for j in pending if self._takeable(e, j)), key=self._snap_key, default=None)
+
+    def _takeable(self, e: int, job: _Job) -> bool:
+        exclusive = self.ex_exclusive[e]
+        group = exclusive.get(job.task)
+        return group is None or not any(j is not None and exclusive.get(j.task) == group
+                                        for j in self.ex_running[e].values())
 
     def _snap_key(self, job: _Job) -> tuple[int, int, int]:
         return self.snap_rank[job.task], job.task, job.index
 
-    def _take(self, e: int, job: _Job) -> None:
-        """Executor ``e`` starts ``job``, polling first if its snapshot is empty."""
+    def _take(self, e: int, job: _Job, core: int) -> None:
+        """Executor ``e``'s worker on ``core`` starts ``job``, polling first if no entry of its snapshot
+        can be taken."""
         if self.polls[e]:
             snapshot = self.ex_snapshot[e]
-            if not snapshot:
-                snapshot.extend(sorted(self.ex_pending[e], key=self._snap_key))
+            if not any(j is job for j in snapshot):
+                snapshot[:] = sorted((j for j in self.ex_pending[e] if self._takeable(e, j)), key=self._snap_key)
             snapshot.remove(job)
         self.ex_pending[e].remove(job)
-        self.ex_current[e] = job
+        self.ex_running[e][core] = job
+        job.core = core
+
+    def _settle(self) -> None:
+        """``verify.sim._Executor.settle`` for every executor with mutually exclusive groups."""
+        for e, exclusive in enumerate(self.ex_exclusive):
+            if exclusive and self.ex_snapshot[e] and any(
+                    job is None and self._head(e, c) is None for c, job in self.ex_running[e].items()):
+                self.ex_snapshot[e] = []
 
     @classmethod
     def of(cls, model: SystemModel, scenario: ConcreteScenario, max_events: int,
@@ -278,7 +303,7 @@ class IntSimulator:
             self.now = nxt
             if due is not None:
                 if len(due) > 1:
-                    due.sort(key=lambda j: j.task)
+                    due.sort(key=lambda j: (j.task, j.index))
                 for job in due:
                     self._count()
                     self._complete(job)
@@ -303,9 +328,11 @@ class IntSimulator:
     def _complete(self, job: _Job) -> None:
         t = job.task
         job.finish = self.now  # (it leaves its core's heap once it reaches the top)
-        self.running[self.core[t]] = None
         if self.executor_of[t] >= 0:
-            self.ex_current[self.executor_of[t]] = None
+            self.ex_running[self.executor_of[t]][job.core] = None
+            self.running[job.core] = None
+        else:
+            self.running[self.core[t]] = None
         inst = self.instance[t]
         if self.holder.get(inst) is job:
             del self.holder[inst]
@@ -427,21 +454,24 @@ class IntSimulator:
                     if coop[best.task] and best.start is None and instance[best.task] in holder:
                         best = self._best(core)
                 for e in self.threads[core]:  # executor threads compete with their next job (§9)
-                    head = self._head(e)
+                    head = self._head(e, core)
                     if head is not None and (best is None or head.key < best.key):
                         best = head
                 running[core] = best
                 if best is not None and best.start is None and (starting is None or best.key < starting.key):
                     starting = best
             if starting is None:
+                self._settle()
                 return
             self._start(starting)
 
     def _start(self, job: _Job) -> None:
         t = job.task
         job.start = self.now
-        if self.executor_of[t] >= 0:
-            self._take(self.executor_of[t], job)
+        e = self.executor_of[t]
+        if e >= 0:  # on the first free worker that chose it (``verify.sim._Executor.worker_for``)
+            running = self.ex_running[e]
+            self._take(e, job, next(c for c in self.ex_workers[e] if running[c] is None and self.running[c] is job))
         regs = self.registers
         job.reads = tuple(map(regs.get, self.read_ports[t]))
         if self.coop[t]:
@@ -451,8 +481,9 @@ class IntSimulator:
         """The released, uncompleted jobs of ``core`` (its executors' included)."""
         jobs = [job for _key, job in self.ready[core] if job.finish is None]
         for e in self.threads[core]:
-            current = self.ex_current[e]
-            jobs += self.ex_pending[e] + ([current] if current is not None else [])
+            current = self.ex_running[e][core]
+            jobs += (self.ex_pending[e] if core == self.ex_workers[e][0] else []) + (
+                [current] if current is not None else [])
         return jobs
 
     def trace(self, horizon: Fraction, tasks: Iterable[str] | None = None) -> Trace:

@@ -338,7 +338,7 @@ def timing_state(sim: _Simulator, at: Fraction) -> TimingState:
 
 def _executor_jobs(sim: _Simulator, core: str) -> list[_Job]:
     """The released, uncompleted jobs of the executors of ``core`` (specs/timing.md §9)."""
-    return [j for ex in sim.threads.get(core, ()) for j in ex.pending + ([ex.current] if ex.current else [])]
+    return [j for ex in sim.threads.get(core, ()) for j in ex.jobs_on(core)]
 
 
 def _covered(trace: Trace, model: SystemModel, target: Target, mark: Fraction, period_end: Fraction) -> bool:

@@ -241,7 +241,7 @@ def configured_model(model: SystemModel, activations: Mapping[str, object],
             known.add(t.core)
     chains = tuple(_configured_chain(c, off) for c in model.chains) if off else model.chains
     return SystemModel(model.name, tuple(cores), tasks, model.links, chains, model.span, model.compounds,
-                       model.instances, model.components, model.ports, model.executors)
+                       model.instances, model.components, model.ports, model.executors, model.groups)
 
 
 class _TaskChanges(TypedDict, total=False):

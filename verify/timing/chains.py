@@ -42,6 +42,7 @@ from ..activations import Activation, DataTriggered, Periodic, SporadicSource
 from ..model import ChainModel, HopModel, LinkModel, SystemModel, TaskModel
 from ..units import fmt_time
 from .rates import ActivationInfo, EventModel, arrival_model, combine_and, exact_sum
+from .multithreaded import may_overlap
 from .rta import TaskResponse, cooperative_counts, interferer, least_fixed_point
 
 ZERO = Fraction(0)
@@ -801,6 +802,10 @@ def chain_bounds(t: Timing, chain: ChainModel, variant: str = "reduced") -> Chai
     if missing or not chain.tasks or len(chain.hops) != len(chain.tasks) - 1:
         return _broken(chain, variant, f"the chain refers to unknown tasks {missing}" if missing
                        else "the chain's hops do not match its tasks")
+    overlapping = [x for x in chain.tasks if may_overlap(t.system, t.system.task(x), t.R(x), t.events[x])]
+    if overlapping:
+        return _broken(chain, variant, f"`{overlapping[0]}` may run two jobs at once and complete them out of "
+                       "order (a reentrant callback group of a multi-threaded executor, specs/timing.md §9.4)")
     first, last = chain.tasks[0], chain.tasks[-1]
     steps = (first_step(t, first),) + tuple(hop_step(t, h) for h in chain.hops) + (last_step(t, last),)
     steps = _with_read_time_ages(t, chain, steps)

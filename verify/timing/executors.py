@@ -34,6 +34,7 @@ from dataclasses import replace
 from fractions import Fraction
 
 from ..model import ExecutorModel, SystemModel, TaskModel
+from .multithreaded import multi_threaded_response
 from .rates import EventModel
 from ..timebase import TimeBase
 from .rta import MAX_JOBS, MAX_STEPS, TaskResponse, bcrt, deadline_of, interferer, least_fixed_point, ratio
@@ -57,6 +58,8 @@ def callback_response(system: SystemModel, task: TaskModel, events: Mapping[str,
     """WCRT (§9.3) and BCRT (``bcet``) of callback ``task``."""
     assert task.executor is not None
     executor = system.executor(task.executor)
+    if executor.multi_threaded:
+        return multi_threaded_response(system, task, executor, events, estimates)
     deadline, deadline_rule = deadline_of(task, events[task.id])
     members = system.callbacks(executor.name)
     hp = higher_threads(system, executor)

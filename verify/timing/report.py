@@ -279,7 +279,7 @@ def _a_max_text(e: EventModel) -> str:
 
 def _task_line(t: TaskTiming) -> str:
     r = t.response
-    section = "§9.3" if t.executor is not None else "§6.2"
+    section = "§6.2" if t.executor is None else "§9.4" if r.rule.startswith("multi_threaded") else "§9.3"
     wcrt = _t(r.wcrt) + (f" ({r.rule}, {section})" if r.wcrt is not None else f" ({r.failure or 'unbounded'})")
     thread = f"executor {t.executor}, " if t.executor is not None else ""
     line = (f"  {t.id}  [{t.core}, {thread}priority {t.priority}{', cooperative' if t.kind == 'cooperative' else ''}]"

@@ -84,10 +84,13 @@ class TaskResponse:
 
 
 def core_loads(system: SystemModel, infos: Mapping[str, ActivationInfo]) -> tuple[CoreLoad, ...]:
-    """Per core: ``U = Σ Cᵢ · fᵢ⁺`` with fᵢ⁺ the upper end of the task's rate interval (§6.1)."""
+    """Per core: ``U = Σ Cᵢ · fᵢ⁺`` with fᵢ⁺ the upper end of the task's rate interval (§6.1); the
+    cores of a multi-threaded executor share its callbacks' load evenly (§9.4)."""
     loads = []
+    shared = {c: e for e in system.executors if e.multi_threaded for c in e.workers}
     for core in _cores(system):
-        tasks = system.tasks_on(core)
+        owner = shared.get(core)
+        tasks = system.tasks_on(core) if owner is None else system.callbacks(owner.name)
         rates = [infos[t.id].rate for t in tasks]
         if any(r is None for r in rates):
             total = None
@@ -95,6 +98,8 @@ def core_loads(system: SystemModel, infos: Mapping[str, ActivationInfo]) -> tupl
             total = ratio_sum(_times(t.wcet.as_integer_ratio(),
                                      r.high.as_integer_ratio())  # type: ignore[union-attr]  # no None (checked)
                               for t, r in zip(tasks, rates))
+            if owner is not None:
+                total /= len(owner.workers)
         loads.append(CoreLoad(core, total, tuple(t.id for t in tasks)))
     return tuple(loads)
 
@@ -104,7 +109,7 @@ def _times(a: tuple[int, int], b: tuple[int, int]) -> tuple[int, int]:
 
 
 def _cores(system: SystemModel) -> list[str]:
-    names = [c.name for c in system.cores]
+    names = [c.name for c in system.cores] + [c for e in system.executors for c in e.workers]
     names += [t.core for t in system.tasks if t.core not in names and not names.count(t.core)]
     return list(dict.fromkeys(names))
 
@@ -527,6 +532,14 @@ def response_times(system: SystemModel, events: Mapping[str, EventModel],
 # ================================================================== diagnostics
 
 
+def _unbounded_help(system: SystemModel, task: TaskModel) -> str:
+    """What would give a task without a bound one (E312)."""
+    if task.executor is not None and system.executor(task.executor).multi_threaded:
+        return ("put it in a callback group of its own (`group NAME mutually_exclusive` in its instance, "
+                "`group NAME` on the task) or in a reentrant group, or lower the load of its executor")
+    return "give it a higher priority, move higher-priority tasks to another core, or lower the load of its core"
+
+
 def check_response_times(system: SystemModel, responses: Mapping[str, TaskResponse],
                          sink: DiagnosticSink) -> None:
     """E312: no response-time bound; E316: a bound above the deadline, which it does not prove (tasks with a
@@ -541,10 +554,10 @@ def check_response_times(system: SystemModel, responses: Mapping[str, TaskRespon
             notes.append(f"cooperative blocking (the longest wait for the token): {fmt_time(r.blocking)}")
         interferers = tuple(Label(system.task(t).span, "interferes") for t in r.interferers[:3])
         if r.wcrt is None:
-            sink.emit("E312", f"no response-time bound for `{task.id}` on core `{r.core}`: "
+            where = f"on executor `{task.executor}`" if task.executor is not None else f"on core `{r.core}`"
+            sink.emit("E312", f"no response-time bound for `{task.id}` {where}: "
                       f"{r.failure or 'no bound'}", task.span, "no bound", secondary=interferers, notes=tuple(notes),
-                      help="give it a higher priority, move higher-priority tasks to another core, or lower "
-                           "the load of its core")
+                      help=_unbounded_help(system, task))
         elif r.deadline is not None and r.wcrt > r.deadline:
             sink.emit("E316", f"the response-time bound of `{task.id}` on core `{r.core}`, {fmt_time(r.wcrt)}, is "
                       f"above its deadline {fmt_time(r.deadline)} ({r.deadline_rule}): the bound does not prove the "

@@ -1,0 +1,285 @@
+"""The multi-threaded executor and callback groups (specs/timing.md §9.4): what a run does, job by
+job, in both simulators; the bounds against runs of random systems and against ``prove``'s exact
+search; ``synth`` against brute force; the language around them."""
+from __future__ import annotations
+
+import random
+from fractions import Fraction as F
+
+import pytest
+
+import verify
+from verify.prove import Target
+from verify.prove.exact import Budget, count_representatives, enumerate_exact, exact_class, grid_of, scenario_of
+from verify.prove.intsim import run_trace
+from verify.prove.scenario import measure, measure_periodic, measure_periodic_reference, measure_reference, replay
+from verify.sim import Scenario, random_scenario, simulate
+from verify.timing import analyze
+
+from .executor_systems import mt_system
+from .test_executors import _model, _times
+from .test_intsim import _targets, concrete_scenario
+from .test_prove import KINDS as PROVE_KINDS
+from .test_timing import MS, bound_violations
+
+
+def _two(group_x: str, group_y: str, groups: str = "") -> str:
+    """Two timer callbacks of one node released at 0 (x, 3 ms) and 1 ms (y, 1 ms) on two workers."""
+    return f"""
+component N {{
+  task X {{ wcet 3 ms bcet 3 ms }}
+  task Y {{ wcet 1 ms bcet 1 ms }}
+}}
+system S {{
+  core c0
+  core c1
+  executor e multi_threaded on c0, c1 priority 5
+  instance n : N {{
+    {groups}
+    task X executor e {group_x} timer 10 ms phase 0 ms
+    task Y executor e {group_y} timer 10 ms phase 1 ms
+  }}
+}}
+"""
+
+
+@pytest.mark.parametrize("groups, x, y, start", [
+    ("", "", "", 3),  # the node's default group is mutually exclusive: y waits for x
+    ("group a mutually_exclusive group b mutually_exclusive", "group a", "group b", 1),
+    ("group r reentrant", "group r", "group r", 1),
+])
+def test_workers_run_callbacks_of_different_groups_at_once(groups, x, y, start):
+    model = _model(_two(x, y, groups))
+    trace = simulate(model, Scenario(F(10, 1000)))
+    assert _times(trace, "n.X")[0] == (0, 0, 3)
+    assert _times(trace, "n.Y")[0] == (1, start, start + 1)
+    scenario = concrete_scenario(model, random.Random(0), F(10, 1000))
+    assert run_trace(model, scenario, 1000) == replay(model, scenario, 1000)
+
+
+STARVING = """
+component N {
+  task X { wcet 3 ms bcet 3 ms }
+  task Y { wcet 1 ms bcet 1 ms }
+}
+component B { task Run { wcet 1 ms bcet 1 ms } }
+system S {
+  core c0
+  core c1
+  executor e multi_threaded on c0, c1 priority 5
+  instance n : N {
+    task X executor e timer 3 ms phase 0 ms
+    task Y executor e @Y@ timer 4 ms phase 1 ms
+  }
+  instance z : B { task Run executor e timer 2 ms phase 1/2 ms }
+}
+"""
+
+
+def test_a_callback_behind_another_of_its_mutually_exclusive_group_can_starve():
+    """Teper et al., EMSOFT 2024: every poll with the node's group free finds x pending again and runs
+    it first, and every poll while x runs leaves y out; y never starts though a worker idles half the
+    time. The analysis gives y no bound and says why; a group of its own gives it one."""
+    model = _model(STARVING.replace("@Y@", ""))
+    trace = simulate(model, Scenario(F(60, 1000)))
+    assert [j.start for j in trace.jobs["n.Y"]] == [None]
+    assert [(j.release, j.start) for j in trace.jobs["n.X"]] == [(3 * k * MS, 3 * k * MS) for k in range(20)]
+    result = verify.load_text(STARVING.replace("@Y@", ""), "starve.vfy")
+    analysis = analyze(result.system())
+    assert analysis.task("n.Y").wcrt is None
+    assert "may starve: `n.X` comes before it" in analysis.task("n.Y").response.failure
+    own = _model(STARVING.replace("@Y@", "group own").replace("instance n : N {",
+                                                                "instance n : N {\n    group own mutually_exclusive"))
+    bound = analyze(own).task("n.Y").wcrt
+    assert bound is not None
+    worst = max(j.finish - j.release for j in simulate(own, Scenario(F(60, 1000))).finished("n.Y"))
+    assert worst <= bound
+
+
+def test_the_unbounded_callback_is_reported_with_the_remedy():
+    from verify.diagnostics import DiagnosticSink
+    from verify.timing.rta import check_response_times
+
+    model = _model(STARVING.replace("@Y@", ""))
+    analysis = analyze(model)
+    sink = DiagnosticSink()
+    check_response_times(model, {t.id: t.response for t in analysis.tasks}, sink)
+    [diag] = [d for d in sink.items if d.code == "E312"]
+    assert "`n.Y` on executor `e`" in diag.message and "callback group of its own" in diag.help
+
+
+def test_a_reentrant_callback_runs_two_jobs_at_once_and_its_chains_have_no_bound():
+    text = """
+component N {
+  out o : T
+  task X { produces o wcet 5 ms bcet 5 ms }
+}
+component R {
+  in i : T
+  task Use { reads i wcet 1 ms bcet 1 ms }
+}
+system S {
+  core c0
+  core c1
+  executor e multi_threaded on c0, c1 priority 5
+  instance n : N {
+    group r reentrant
+    task X executor e group r timer 3 ms phase 0 ms
+  }
+  instance u : R { task Use executor e trigger i }
+  connect n.o -> u.i
+  chain c: n.o -> u.Use
+}
+"""
+    model = _model(text)
+    trace = simulate(model, Scenario(F(12, 1000)))
+    x = _times(trace, "n.X")
+    assert x[:2] == [(0, 0, 5), (3, 3, 8)]  # two jobs at once, on the two workers
+    analysis = analyze(model)
+    assert analysis.task("n.X").wcrt is not None
+    chain = analysis.chain("c")
+    assert chain.bound("reaction_time").worst is None
+    assert "`n.X` may run two jobs at once" in chain.problem
+
+
+def test_known_answers_of_the_multi_threaded_bound():
+    """§9.4 by hand: x (3 ms) and y (1 ms) in groups of their own on two workers. For y: B = 1 ms
+    (its own group), carry-in 3 + 1 ms, x a timer before y (at most 1 + η̄(w) jobs): w = 1 + (4 + 2·3)/2
+    = 6 ms, R = 7 ms. For x: B = 3 ms, carry 4 ms, y behind x: w = 3 + (4 + 2·1)/2 = 6 ms, R = 9 ms."""
+    model = _model(_two("group a", "group b", "group a mutually_exclusive group b mutually_exclusive"))
+    analysis = analyze(model)
+    assert analysis.task("n.Y").wcrt == 7 * MS
+    assert analysis.task("n.X").wcrt == 9 * MS
+    reentrant = analyze(_model(_two("group r", "group r", "group r reentrant")))
+    # no blocking; y: carry 3 + 3 (x reentrant on both workers), x ahead once or twice: (6 + 2·3)/2 + 1
+    assert reentrant.task("n.Y").wcrt == 7 * MS
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_the_integer_run_is_the_reference_run_on_multi_threaded_executors(seed):
+    """``prove``'s integer simulator runs a multi-threaded executor's workers, its shared snapshot and
+    its mutually exclusive groups job by job as ``verify.sim`` does."""
+    model = _model(mt_system(random.Random(seed)))
+    rng = random.Random(seed)
+    scenario = concrete_scenario(model, rng, F(rng.randrange(20, 400), 1000))
+    trace = replay(model, scenario, 20_000)
+    assert run_trace(model, scenario, 20_000) == trace
+    targets = _targets(model)
+    assert measure(model, scenario, targets, 20_000) == measure_reference(model, scenario, targets, 20_000)
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_no_simulated_latency_beyond_the_multi_threaded_bounds(seed):
+    text = mt_system(random.Random(seed))
+    model = _model(text)
+    analysis = analyze(model)
+    for run in range(3):
+        scenario = random_scenario(model, random.Random(f"{seed}/{run}"), F(1))
+        if run == 0:  # every job at its wcet, every message at its least delay
+            scenario = Scenario(scenario.horizon, scenario.phases, None, None, None, scenario.counter_phase)
+        assert bound_violations(model, simulate(model, scenario), analysis) == [], text
+
+
+def _rigid(seed: int):
+    rng = random.Random(seed)
+    while True:
+        text = mt_system(rng, rigid=True)
+        model = _model(text)
+        if exact_class(model) is None and count_representatives(grid_of(model), 300) <= 300:
+            return model, text
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_the_exact_search_on_multi_threaded_executors_lies_between_runs_and_the_bound(seed):
+    model, text = _rigid(seed)
+    targets = [Target(k, c.name) for c in model.chains for k in PROVE_KINDS]
+    targets += [Target("response", t.id) for t in model.tasks if t.executor is not None]
+    exact = enumerate_exact(model, targets, Budget(5000))
+    assert exact is not None and exact.complete, text
+    analysis = analyze(model)
+    grid = grid_of(model)
+    rng = random.Random(seed)
+    for _ in range(2):
+        phases = {a: F(rng.randrange(p * 97), 97) * grid.tick for a, p in zip(grid.timers, grid.periods)}
+        scenario = scenario_of(phases, {})
+        run = measure_periodic(model, scenario, targets, grid.hyper)
+        assert run == measure_periodic_reference(model, scenario, targets, grid.hyper), text
+        for t in targets:
+            value = exact.worst[t].value
+            s = run.values[t].worst if run.complete else None
+            assert s is None or value is None or s.value <= value, (t, text)
+    for t in targets:
+        value = exact.worst[t].value
+        if value is None:
+            continue
+        bound = (analysis.task(t.name).wcrt if t.kind == "response" else analysis.chain(t.name).bound(t.kind).worst)
+        assert bound is None or value <= bound, (t, value, bound, text)
+
+
+LASER = """
+component Laser { task Scan { wcet 2 ms } }
+component Log { task Write { wcet 1 ms } }
+system S {
+  core c1
+  core c2
+  core c3
+  @EXECUTORS@
+  instance laser : Laser { task Scan @SCAN@ timer 25 ms }
+  instance log : Log { task Write @WRITE@ timer 100 ms }
+}
+"""
+
+
+def _codes(executors: str, scan: str = "executor e", write: str = "priority 1 on c3") -> list[tuple[str, int, int]]:
+    text = LASER.replace("@EXECUTORS@", executors).replace("@SCAN@", scan).replace("@WRITE@", write)
+    result = verify.load_text(text, "s.vfy")
+    return [(d.code, d.span.line, d.span.column) for d in result.diagnostics]
+
+
+@pytest.mark.parametrize("executors, scan, write, expected", [
+    ("executor e multi_threaded 2 threads on c1, c2 priority 5", "executor e", "priority 1 on c3", []),
+    ("executor e multi_threaded on c1, c2 priority 5", "executor e", "priority 1 on c3", []),
+    # several cores or threads on a single-threaded executor
+    ("executor e single_threaded on c1, c2 priority 5", "executor e", "priority 1 on c3", [("E224", 8, 37)]),
+    ("executor e events 2 threads on c1 priority 5", "executor e", "priority 1 on c3", [("E224", 8, 21)]),
+    # fewer threads than cores, a core listed twice
+    ("executor e multi_threaded 1 thread on c1, c2 priority 5", "executor e", "priority 1 on c3",
+     [("E224", 8, 29)]),
+    ("executor e multi_threaded on c1, c1 priority 5", "executor e", "priority 1 on c3", [("E224", 8, 36)]),
+    # a task or another executor on a multi-threaded executor's core
+    ("executor e multi_threaded on c1, c2 priority 5", "executor e", "priority 1 on c2", [("E224", 10, 49)]),
+    ("executor e multi_threaded on c1, c2 priority 5\n  executor f single_threaded on c2 priority 4",
+     "executor e", "executor f", [("E224", 9, 33)]),
+    # a group clause without an executor, an unknown group, an unknown group kind
+    ("executor e multi_threaded on c1, c2 priority 5", "executor e", "priority 1 on c3 group g",
+     [("E101", 10, 58)]),
+])
+def test_the_threads_and_groups_of_an_executor_are_checked(executors, scan, write, expected):
+    assert _codes(executors, scan, write) == expected
+
+
+def test_a_group_needs_an_executor_and_a_known_kind():
+    text = LASER.replace("@EXECUTORS@", "executor e multi_threaded on c1, c2 priority 5")
+    text = text.replace("instance log : Log {", "instance log : Log {\n    group g exclusive\n    group h reentrant\n")
+    text = text.replace("@SCAN@", "executor e").replace("@WRITE@", "priority 1 on c3 group h")
+    codes = [(d.code, d.message) for d in verify.load_text(text, "s.vfy").diagnostics]
+    assert codes[0] == ("E108", "unknown callback-group kind `exclusive`")
+    text = text.replace("group g exclusive", "group g mutually_exclusive")
+    codes = [(d.code, d.message) for d in verify.load_text(text, "s.vfy").diagnostics]
+    assert codes == [("E223", "task `log.Write` names callback group `h` but no executor")]
+
+
+def test_groups_and_threads_keep_their_meaning_through_fmt():
+    from verify.fmt import format_text
+
+    text = _two("group r", "group r", "group r reentrant").replace("multi_threaded on", "multi_threaded 3 threads on")
+    formatted, diags = format_text(text)
+    assert diags == [] and formatted is not None
+    assert "executor e multi_threaded 3 threads on c0, c1 priority 5" in formatted
+    assert "    group r reentrant\n    task X executor e group r timer 10 ms phase 0 ms" in formatted
+    before, after = _model(text), _model(formatted)
+    assert [(t.id, t.group) for t in before.tasks] == [(t.id, t.group) for t in after.tasks]
+    assert before.executors[0].workers == after.executors[0].workers == ("c0", "c1")
+    assert before.executors[0].threads == 3 and before.groups == tuple(
+        type(g)(g.id, g.instance, g.name, g.kind, g.executor, g.span) for g in before.groups)
+    assert [(g.id, g.kind) for g in before.groups] == [("n.r", "reentrant")]

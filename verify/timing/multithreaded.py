@@ -1,0 +1,140 @@
+"""Response times of the callbacks of a multi-threaded ROS 2 executor (specs/timing.md §9.4).
+
+The executor has ``m`` workers, one per core of its own (E224); its callbacks share one snapshot and
+a callback in a mutually exclusive group waits while another callback of the group runs. For a job
+``J`` of callback ``i`` released at ``r`` and started at ``s``, every instant of ``[r, s)`` at which a
+worker is idle has ``i``'s group busy (a free worker with nothing to take polls, and the poll would
+collect ``J``). The time the group can be busy before ``J`` starts is ``B``; in the rest of the window
+every worker runs a callback, so
+
+    s − r ≤ B + W / m,    W = Σ_{m largest} C (jobs started before r) + Σ_{j ≠ i} nⱼ·Cⱼ,
+
+``nⱼ`` the jobs of ``j`` started in ``[r, s)``: at most ``1 + η̄ⱼ(s − r)`` (one pending at ``r``, by
+absorption, and the activations after it); when ``i``'s group never holds ``J`` back, at most one
+from the snapshot in progress at ``r`` and, for a callback before ``i`` in the processing order (kind,
+then system order), one ahead of ``J`` in the snapshot that collects it.
+``Rᵢ = (s − r) + Cᵢ``: a started callback runs on a core no other thread shares.
+
+``B``: 0 for a reentrant group; ``Cᵢ`` for a mutually exclusive group of ``i`` alone (its previous job
+still running at ``r``); for a mutually exclusive group in which ``i`` comes first in the processing
+order, the job running at ``r`` and one job of each other member taken from the snapshot in progress
+at ``r`` (a poll with the group free collects ``J``, and ``J`` then precedes every other member). A
+member with another member before it can starve: at every poll with the group free, the earlier
+member may be pending again and run first, and every poll while it runs leaves ``J`` out (Teper, Kuhse,
+Ueter, von der Brüggen and Chen, *Thread Carefully: Preventing Starvation in the ROS 2 Multithreaded
+Executor*, EMSOFT 2024); the analysis then gives no bound.
+
+A reentrant callback may run two jobs at once and complete them out of order, which the chain rules
+of §7 do not allow for (``may_overlap``): a chain through it gets no bound unless ``Rᵢ ≤ δ⁻ᵢ(2)``, when
+a job completes before the next can be released (the bound ``Rᵢ`` holds either way: the jobs started
+before ``r`` count in ``W`` on every worker they may occupy).
+"""
+from __future__ import annotations
+
+from collections.abc import Mapping
+from fractions import Fraction
+
+from ..model import ExecutorModel, SystemModel, TaskModel
+from .rates import EventModel
+from .rta import MAX_STEPS, Interferer, TaskResponse, bcrt, deadline_of, interferer, ratio
+
+ZERO = Fraction(0)
+
+
+def multi_threaded_response(system: SystemModel, task: TaskModel, executor: ExecutorModel,
+                            events: Mapping[str, EventModel], estimates: Mapping[str, Fraction | None]) -> TaskResponse:
+    """WCRT (§9.4) and BCRT of callback ``task`` of the multi-threaded ``executor``."""
+    deadline, deadline_rule = deadline_of(task, events[task.id])
+    members = system.callbacks(executor.name)
+    others = [m for m in members if m.id != task.id]
+    group = system.group(task.group)  # type: ignore[arg-type]  # (a callback has a group)
+    computed, failure = _window(system, task, executor, members, events, estimates)
+    if computed is not None:
+        computed += task.wcet
+    rule = f"multi_threaded executor, {len(executor.workers)} workers, {group.describe()}"
+    used: Fraction | None = computed
+    if task.wcrt_bound is not None:
+        used, rule = task.wcrt_bound, "user bound"
+    elif computed is None:
+        rule = "unbounded"
+    return TaskResponse(task.id, task.core, task.priority, bcrt(task), used, computed, rule, deadline, deadline_rule,
+                        ZERO, task.wcet, None, None, tuple(m.id for m in others), failure)
+
+
+def may_overlap(system: SystemModel, task: TaskModel, wcrt: Fraction | None, events: EventModel) -> bool:
+    """Whether two jobs of callback ``task`` (response bound ``wcrt``) may run at once (§9.4): on a
+    multi-threaded executor in a reentrant group, unless ``wcrt ≤ δ⁻(2)``."""
+    if task.executor is None or task.group is None or system.group(task.group).exclusive:
+        return False
+    if not system.executor(task.executor).multi_threaded:
+        return False
+    distance = events.delta_min(2)
+    return wcrt is None or distance is None or wcrt > distance
+
+
+def group_blocking(system: SystemModel, task: TaskModel, executor: ExecutorModel) -> tuple[Fraction | None, str]:
+    """``B`` of §9.4, and "siblings" when other members of a mutually exclusive group hold the job back
+    (then the counts ``nⱼ`` follow the activations); None, with the reason, when a member before
+    ``task`` can starve it."""
+    group = system.group(task.group)  # type: ignore[arg-type]  # (a callback has a group)
+    if not group.exclusive:
+        return ZERO, ""
+    siblings = [m for m in system.callbacks(executor.name) if m.group == task.group and m.id != task.id]
+    if not siblings:
+        return task.wcet, ""
+    order = {t.id: n for n, t in enumerate(system.tasks)}
+    place = (executor.kind_rank(task), order[task.id])
+    ahead = [m for m in siblings if (executor.kind_rank(m), order[m.id]) < place]
+    if ahead:
+        return None, (f"it may starve: `{ahead[0].id}` comes before it in {group.describe()} "
+                      "(Teper et al., EMSOFT 2024)")
+    return max(m.wcet for m in (task, *siblings)) + sum((m.wcet for m in siblings), ZERO), "siblings"
+
+
+def _window(system: SystemModel, task: TaskModel, executor: ExecutorModel, members: tuple[TaskModel, ...],
+            events: Mapping[str, EventModel], estimates: Mapping[str, Fraction | None]
+            ) -> tuple[Fraction | None, str | None]:
+    """The least ``w = B + W(w)/m`` of §9.4 (the longest ``s − r``), or None and why."""
+    blocking, why = group_blocking(system, task, executor)
+    if blocking is None:
+        return None, why
+    held = blocking > 0 and why == "siblings"  # (its own previous job alone: the counts stay capped)
+    order = {t.id: n for n, t in enumerate(system.tasks)}
+    place = (executor.kind_rank(task), order[task.id])
+    flows = [interferer(system, m, events[m.id], estimates.get(m.id), m.wcet) for m in members if m.id != task.id]
+    ahead = {m.id for m in members if (executor.kind_rank(m), order[m.id]) < place}
+    live = [f for f in flows if not f.silent]
+    if held and any(f.period is None or f.jitter is None for f in live):
+        unbounded = next(f for f in live if f.period is None or f.jitter is None)
+        return None, f"the activations of `{unbounded.task}` are not bounded"
+    workers = len(executor.workers)
+    if held and (load := sum((f.cost / f.period for f in live), ZERO)) >= workers:  # type: ignore[operator]
+        return None, f"the other callbacks' utilisation is {ratio(load)}, not below its {workers} workers"
+    carry = _carry_in(system, members, workers)
+    caps = [None if held else 2 if f.task in ahead else 1 for f in live]
+    w = blocking + (carry + sum((_jobs(f, ZERO, c) * f.cost for f, c in zip(live, caps)), ZERO)) / workers  # type: ignore[operator]
+    for _ in range(MAX_STEPS):
+        new = blocking + (carry + sum((_jobs(f, w, c) * f.cost for f, c in zip(live, caps)), ZERO)) / workers  # type: ignore[operator]
+        if new == w:
+            return w, None
+        w = new
+    return None, f"no fixed point within {MAX_STEPS} iteration steps"
+
+
+def _jobs(flow: Interferer, window: Fraction, cap: int | None) -> int:
+    """``nⱼ``: the jobs of a callback started in a window of length ``window`` (§9.4), at most ``cap``."""
+    if flow.period is None or flow.jitter is None:
+        assert cap is not None  # (only where the group never holds the job back)
+        return cap
+    arrivals = int(1 + (window + flow.jitter) // flow.period + 1)
+    return arrivals if cap is None else min(cap, arrivals)
+
+
+def _carry_in(system: SystemModel, members: tuple[TaskModel, ...], workers: int) -> Fraction:
+    """The most work the workers still have of jobs started before the window: the ``m`` largest
+    execution times, a reentrant callback's up to ``m`` times (it may run on several workers)."""
+    costs: list[Fraction] = []
+    for m in members:
+        copies = 1 if system.group(m.group).exclusive else workers  # type: ignore[arg-type]
+        costs += [m.wcet] * copies
+    return sum(sorted(costs, reverse=True)[:workers], ZERO)
