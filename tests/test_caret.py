@@ -125,6 +125,28 @@ def test_the_autoware_executors_example_goes_to_caret_and_back(tmp_path):
     assert back.chains[0].tasks == model.chains[0].tasks  # the hot path enters its fusion by its first port
 
 
+def test_a_multi_threaded_executor_comes_back_with_its_callback_groups(tmp_path):
+    """The reference system on one multi-threaded executor (specs/timing.md §9.4) through CARET and back:
+    the executor is multi-threaded again, and every callback is in a group of the same kind with the
+    same members (a default group comes back as a declared mutually exclusive group)."""
+    source = EXAMPLES / "autoware-reference" / "autoware-multi-threaded.vfy"
+    model = verify.load(str(source)).system()
+    assert main(["export", "caret", str(source), "-o", str(tmp_path / "out")]) == 0
+    text, diags = _import(tmp_path / "out" / "architecture.yaml")
+    assert "E703" not in [d.code for d in diags]
+    assert "    group detection mutually_exclusive  // /euclidean_cluster_detector/detection" in text
+    back = verify.load_text(_complete(text).replace("core cpu0", "core cpu0\n  core cpu1").replace(
+        "multi_threaded on cpu0 priority 10", "multi_threaded on cpu0, cpu1 priority 10"), "back.vfy").system()
+    assert [(e.kind, e.workers) for e in back.executors] == [("multi_threaded", ("cpu0", "cpu1"))]
+
+    def members(m):
+        return sorted(sorted(t.id for t in m.tasks if t.group == g.id and t.id in ours) + [g.kind]
+                      for g in m.groups)
+
+    ours = {t.id for t in model.tasks}
+    assert members(back) == members(model)
+
+
 @pytest.mark.parametrize("text, code, line", [
     ("nodes: [\n", "E701", 2),
     ("named_paths: []\nexecutors: []\n", "E701", 1),
@@ -134,7 +156,7 @@ def test_the_autoware_executors_example_goes_to_caret_and_back(tmp_path):
     ("a: &x [1, 2]\nb: *x\n", "E701", 1),
     ("named_paths: []\nexecutors: []\nnodes:\n- node_name: /a\n  subscribes:\n  - topic_name: /t\n"
      "    callback_name: /a/nothing\n", "E705", 6),
-    ("named_paths: []\nexecutors:\n- executor_type: multi_threaded_executor\n  executor_name: e\n"
+    ("named_paths: []\nexecutors:\n- executor_type: custom_executor\n  executor_name: e\n"
      "  callback_group_names: []\nnodes: []\n", "E703", 3),
 ])
 def test_bad_architecture_files_are_located_diagnostics(tmp_path, text, code, line):

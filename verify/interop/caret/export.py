@@ -26,7 +26,7 @@ from .read import UNDEFINED, Architecture
 
 #: our executor kinds as CARET's executor types
 TYPES = {"single_threaded": "single_threaded_executor", "static_single_threaded": "static_single_threaded_executor",
-         "events": "single_threaded_executor"}
+         "events": "single_threaded_executor", "multi_threaded": "multi_threaded_executor"}
 
 
 @dataclass
@@ -166,7 +166,7 @@ def _executors(model: SystemModel, sink: DiagnosticSink) -> list[dict[str, Any]]
             sink.emit("E707", f"executor `{ex.name}` is an events executor, which CARET's architecture file has no "
                       "type for: written as a single-threaded executor", ex.span, "approximated",
                       help="CARET groups callbacks by executor; its measurements do not depend on the type")
-        groups = sorted({f"/{t.instance}/{ex.name}" for t in model.callbacks(ex.name)})
+        groups = sorted({_group(model, t)[0] for t in model.callbacks(ex.name)})
         out.append({"executor_type": TYPES[ex.kind], "executor_name": ex.name, "callback_group_names": groups})
     plain = [t for t in model.tasks if t.executor is None]
     if plain:
@@ -179,8 +179,13 @@ def _executors(model: SystemModel, sink: DiagnosticSink) -> list[dict[str, Any]]
     return sorted(out, key=lambda e: e["executor_name"])
 
 
-def _group(task: TaskModel) -> str:
-    return f"/{task.instance}/{task.executor}" if task.executor is not None else f"/{task.instance}/threads"
+def _group(model: SystemModel, task: TaskModel) -> tuple[str, str]:
+    """The CARET name and type of a task's callback group: a declared group by its name, a default group
+    by its executor's, a task with a priority in its node's ``threads``."""
+    if task.executor is None or task.group is None:
+        return f"/{task.instance}/threads", "mutually_exclusive"
+    group = model.group(task.group)
+    return f"/{task.instance}/{group.name or task.executor}", group.kind
 
 
 def _nodes(model: SystemModel, names: _Names, sink: DiagnosticSink) -> list[dict[str, Any]]:
@@ -274,14 +279,15 @@ class _NodeWriter:
                         "callback_names": [f"{self.name}/{self.model.task(writer).name}"] if writer else [UNDEFINED]})
         return sorted(out, key=lambda p: p["topic_name"])
 
-    def groups(self) -> dict[str, list[str]]:
-        groups: dict[str, list[str]] = {}
+    def groups(self) -> dict[tuple[str, str], list[str]]:
+        """(name, type) -> callbacks."""
+        groups: dict[tuple[str, str], list[str]] = {}
         for t in self.tasks:
-            groups.setdefault(_group(t), []).append(f"{self.name}/{t.name}")
+            groups.setdefault(_group(self.model, t), []).append(f"{self.name}/{t.name}")
         for port, keeper in self.stores.items():  # (a storing callback runs where its reader does)
             reader = next(t for t in self.tasks if any(r.port == port for r in t.reads)
                           or port in t.activation.trigger_members)
-            groups[_group(reader)].append(keeper)
+            groups[_group(self.model, reader)].append(keeper)
         return groups
 
     def node(self) -> dict[str, Any]:
@@ -289,8 +295,8 @@ class _NodeWriter:
             self.callback(t)
         entry: dict[str, Any] = {
             "node_name": self.name,
-            "callback_groups": [{"callback_group_type": "mutually_exclusive", "callback_group_name": g,
-                                 "callback_names": sorted(cbs)} for g, cbs in self.groups().items()],
+            "callback_groups": [{"callback_group_type": kind, "callback_group_name": g,
+                                 "callback_names": sorted(cbs)} for (g, kind), cbs in self.groups().items()],
         }
         if self.callbacks:
             entry["callbacks"] = sorted(self.callbacks, key=lambda c: c["callback_name"])

@@ -9,12 +9,14 @@
 - a ``use_latest_message`` **message context** makes the publishing callbacks read the subscribed
   topic (the latest message when they start); ``callback_chain`` is what the callbacks and passings
   already say;
-- a single-threaded (or static single-threaded) **executor** is an executor, its callbacks bound to
-  it; a **named path** a chain through the ports of its nodes.
+- an **executor** (single-threaded, static single-threaded or multi-threaded) is an executor, its
+  callbacks bound to it; a multi-threaded executor's **callback groups** are groups of their nodes'
+  instances (specs/timing.md §9.4); a **named path** a chain through the ports of its nodes.
 
 What the file does not hold — execution times, the executors' cores and priorities — is reported
 (E704) and left for the user to write, so ``verify check`` of the output lists it; what has no
-counterpart (multi-threaded executors, callback groups, other message contexts) is reported (E703).
+counterpart (other executor types, callback groups of a single-threaded executor, which change
+nothing there, other message contexts) is reported (E703).
 """
 from __future__ import annotations
 
@@ -25,10 +27,13 @@ from fractions import Fraction
 
 from ...diagnostics import DiagnosticSink
 from ...units import fmt_time
-from .read import Architecture, Callback, NamedPath, Node
+from .read import Architecture, Callback, Group, NamedPath, Node
 
 #: CARET executor types and the kinds of specs/timing.md §9
-KINDS = {"single_threaded_executor": "single_threaded", "static_single_threaded_executor": "static_single_threaded"}
+KINDS = {"single_threaded_executor": "single_threaded", "static_single_threaded_executor": "static_single_threaded",
+         "multi_threaded_executor": "multi_threaded"}
+#: CARET's callback-group types, which are ours (specs/timing.md §9.4)
+GROUP_KINDS = ("mutually_exclusive", "reentrant")
 
 
 @dataclass
@@ -78,6 +83,8 @@ class _Node:
     passing: dict[tuple[str, str], tuple[str, str]] = field(default_factory=dict)  # (w, r) -> (out, in)
     reads: dict[str, list[str]] = field(default_factory=dict)  # callback -> in-ports it reads
     produces: dict[str, list[str]] = field(default_factory=dict)  # callback -> out-ports it produces
+    groups: list[tuple[str, str, str]] = field(default_factory=list)  # (name, kind, CARET name), declared
+    group_of: dict[str, str] = field(default_factory=dict)  # callback -> its declared group
 
 
 class _Importer:
@@ -170,10 +177,12 @@ class _Importer:
                 continue
             name = names(ex.name)
             self.executors.append((name, kind, ex.name))
-            self.sink.emit("E704", f"the core and priority of executor `{ex.name}`'s thread are not in the "
+            threads = "threads" if kind == "multi_threaded" else "thread"
+            self.sink.emit("E704", f"the cores and priority of executor `{ex.name}`'s {threads} are not in the "
                            "architecture file", ex.span, "no core, no priority",
-                           help=f"complete `executor {name} {kind}` with `on CORE priority N`")
-            if ex.groups:
+                           help=f"complete `executor {name} {kind}` with `on CORE"
+                                f"{', …' if kind == 'multi_threaded' else ''} priority N`")
+            if ex.groups and kind != "multi_threaded":
                 self.sink.emit("E703", f"the callback groups of executor `{ex.name}` have no counterpart: in a "
                                "single-threaded executor its callbacks run one at a time whatever their group",
                                ex.groups_span, "no counterpart", help="nothing to do: the groups change nothing here")
@@ -187,12 +196,26 @@ class _Importer:
                 for member in group.callbacks:
                     if member in n.tasks:
                         self.executor_of.setdefault((n.node.name, member), name)
+                if kind == "multi_threaded":
+                    self._declare_group(n, group)
         for n in self.nodes.values():
             for callback in n.node.callbacks:
                 if callback.name in n.tasks and (n.node.name, callback.name) not in self.executor_of:
                     self.sink.emit("E704", f"callback `{callback.name}` of node `{n.node.name}` runs on no executor "
                                    "of the file", callback.span, "no executor",
                                    help="bind the imported task to an executor, or give it a priority and a core")
+
+    def _declare_group(self, n: _Node, group: Group) -> None:
+        """A callback group of a multi-threaded executor, declared in its node's instance (§9.4)."""
+        if group.kind not in GROUP_KINDS:
+            self.sink.emit("E701", f"callback group `{group.name}` has type `{group.kind}`", group.span,
+                           "not a callback-group type", help="CARET writes `mutually_exclusive` or `reentrant`")
+            return
+        local = n.ports(group.name.rsplit("/", 1)[-1] or "group")
+        n.groups.append((local, group.kind, group.name))
+        for member in group.callbacks:
+            if member in n.tasks:
+                n.group_of.setdefault(member, local)
 
     # ------------------------------------------------------------ paths
 
@@ -259,6 +282,7 @@ class _Importer:
         lines += [f"  executor {name} {kind}  // {source}" for name, kind, source in self.executors]
         for n in self.nodes.values():
             lines.append(f"  instance {n.instance} : {n.component} {{")
+            lines += [f"    group {name} {kind}  // {source}" for name, kind, source in n.groups]
             for cb in n.node.callbacks:
                 if cb.name in n.tasks:
                     lines.append(f"    task {n.tasks[cb.name]}" + self._binding(n, cb))
@@ -289,6 +313,8 @@ class _Importer:
     def _binding(self, n: _Node, cb: Callback) -> str:
         executor = self.executor_of.get((n.node.name, cb.name))
         text = f" executor {executor}" if executor else ""
+        if executor and cb.name in n.group_of:
+            text += f" group {n.group_of[cb.name]}"
         if cb.kind == "timer":
             assert cb.period_ns is not None
             return text + f" timer {fmt_time(Fraction(cb.period_ns, 10**9))}"
