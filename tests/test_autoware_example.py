@@ -61,7 +61,8 @@ def test_the_executor_set_ups_have_the_reference_systems_shape():
     """The same 24 nodes and chains, every callback bound to an executor: four in the prioritized
     set-up (front, rear and inner hot path, the rest), one in the single-threaded set-up."""
     base = _model()
-    for name, executors in (("autoware-executors.vfy", 4), ("autoware-single-executor.vfy", 1)):
+    for name, executors in (("autoware-executors.vfy", 4), ("autoware-single-executor.vfy", 1),
+                            ("autoware-multi-threaded.vfy", 1)):
         model = verify.load(str(AUTOWARE / name)).system()
         assert [t.id for t in model.tasks] == [t.id for t in base.tasks]
         assert [c.tasks for c in model.chains] == [c.tasks for c in base.chains]
@@ -104,7 +105,48 @@ def test_one_executor_for_every_node_is_overloaded(capsys):
     assert "chain control: reaction time                        violated" in out
 
 
-@pytest.mark.parametrize("name", ["autoware-executors.vfy", "autoware-single-executor.vfy"])
+def test_one_multi_threaded_executor_bounds_every_callback(capsys):
+    """The multi-threaded set-up (specs/timing.md §9.4): four workers, every node in its default
+    (mutually exclusive) group, the cluster detector's two subscriptions in a group each. Every callback
+    has a bound (the work of one job of every other callback, and one more of those before it, over four
+    workers); the chains' bounds do not prove their specs, and ``prove`` cannot decide them (execution
+    times are ranges), though no run comes near."""
+    model = verify.load(str(AUTOWARE / "autoware-multi-threaded.vfy")).system()
+    analysis = analyze(model)
+    assert [d.code for d in diagnostics_of(analysis) if d.severity.value == "error"] == []
+    assert analysis.core("cpu2").utilisation == Fraction(379175, 1000000)
+    assert analysis.task("object_collision_estimator.Process").wcrt == Fraction(8785, 100000)
+    hot = analysis.chain("hot_path")
+    assert (hot.bound("reaction_time").worst, hot.bound("data_age").worst) == (Fraction(782875, 1000000),
+                                                                              Fraction(486825, 1000000))
+    assert main(["prove", "--budget", "20", str(AUTOWARE / "autoware-multi-threaded.vfy")]) == 3
+    assert "25 proved, 0 violated, 4 undecided" in capsys.readouterr().out
+
+
+def test_in_the_default_group_the_second_subscription_of_a_node_can_starve(tmp_path):
+    """With the reference system's own groups (each node's default group) the cluster detector's
+    settings subscription comes after its detection subscription in one mutually exclusive group: it
+    can starve (Teper et al., EMSOFT 2024), and it is reported without a bound, with the remedy."""
+    text = (AUTOWARE / "autoware-multi-threaded.vfy").read_text()
+    grouped = """    group detection mutually_exclusive
+    group settings mutually_exclusive
+    task Process0 executor mt group detection trigger input0
+    task Process1 executor mt group settings trigger input1"""
+    assert grouped in text
+    (tmp_path / "components.vfy").write_text((AUTOWARE / "components.vfy").read_text())
+    path = tmp_path / "default-groups.vfy"
+    path.write_text(text.replace(grouped, "    task Process0 executor mt trigger input0\n"
+                                          "    task Process1 executor mt trigger input1"))
+    analysis = analyze(verify.load(str(path)).system())
+    settings = analysis.task("euclidean_cluster_detector.Process1").response
+    assert settings.wcrt is None and "may starve: `euclidean_cluster_detector.Process0` comes before it" in (
+        settings.failure)
+    [diag] = [d for d in diagnostics_of(analysis) if "Process1" in d.message]
+    assert diag.code == "E312" and "callback group of its own" in diag.help
+
+
+@pytest.mark.parametrize("name", ["autoware-executors.vfy", "autoware-single-executor.vfy",
+                                  "autoware-multi-threaded.vfy"])
 def test_the_executor_bounds_hold_against_the_simulator(name):
     model = verify.load(str(AUTOWARE / name)).system()
     analysis = analyze(model)
