@@ -272,3 +272,43 @@ async def test_an_incremental_change_is_applied_at_its_utf16_range(client: Langu
     found = await _diagnostics(client, uri, 2)
     unknown = next(d for d in found if d.code == "E101")
     assert unknown.range.start == start and "unknown component `Lazer`" in unknown.message
+
+
+GROUPS = """component Node {
+  in data : M
+  out r : M
+  task Tick { produces r wcet 2 ms }
+  task Sub { reads data wcet 3 ms }
+}
+system S {
+  core c1
+  core c2
+  executor mt multi_threaded 2 threads on c1, c2 priority 5
+  instance n : Node {
+    group fast reentrant
+    task Tick executor mt timer 20 ms
+    task Sub executor mt group fast trigger data
+  }
+  connect n.r -> n.data
+}
+"""
+
+
+async def test_callback_groups_in_the_outline_definition_and_completion(client: LanguageClient):
+    """A callback group is a member of its instance in the outline, `group NAME` on a task leads to its
+    declaration, and completion after `group` offers the groups."""
+    uri = _open(client, "groups.vfy", GROUPS)
+    assert await _diagnostics(client, uri, 1) == []
+    system = next(k for k in await _outline(client, uri) if k.name == "S")
+    instance = next(k for k in system.children if k.name == "n")
+    group = next(k for k in instance.children if k.name == "fast")
+    assert group.detail == "reentrant callback group" and group.kind == lsp.SymbolKind.Namespace
+    at = _position(GROUPS, "group fast trigger", len("group "))
+    where = await client.text_document_definition_async(lsp.DefinitionParams(lsp.TextDocumentIdentifier(uri), at))
+    assert where.range.start == _position(GROUPS, "group fast reentrant", len("group "))
+    text = GROUPS.replace("task Tick executor mt timer", "task Tick executor mt group \n    timer")
+    _change(client, uri, text, 2)
+    await _diagnostics(client, uri, 2)
+    items = await client.text_document_completion_async(lsp.CompletionParams(
+        lsp.TextDocumentIdentifier(uri), _position(text, "executor mt group ", len("executor mt group "))))
+    assert "fast" in {i.label for i in items}

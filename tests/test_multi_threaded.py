@@ -144,12 +144,12 @@ system S {
 
 def test_known_answers_of_the_multi_threaded_bound():
     """§9.4 by hand: x (3 ms) and y (1 ms) in groups of their own on two workers. For y: B = 1 ms
-    (its own group), carry-in 3 + 1 ms, x a timer before y (at most 1 + η̄(w) jobs): w = 1 + (4 + 2·3)/2
-    = 6 ms, R = 7 ms. For x: B = 3 ms, carry 4 ms, y behind x: w = 3 + (4 + 2·1)/2 = 6 ms, R = 9 ms."""
+    (its previous job), carry-in 3 + 1 ms, x before y (two jobs): w = 1 + (4 + 2·3)/2 = 6 ms, R = 7 ms.
+    For x: B = 3 ms, carry-in 4 ms, y after x (one job): w = 3 + (4 + 1)/2 = 5.5 ms, R = 8.5 ms."""
     model = _model(_two("group a", "group b", "group a mutually_exclusive group b mutually_exclusive"))
     analysis = analyze(model)
     assert analysis.task("n.Y").wcrt == 7 * MS
-    assert analysis.task("n.X").wcrt == 9 * MS
+    assert analysis.task("n.X").wcrt == F(17, 2) * MS
     reentrant = analyze(_model(_two("group r", "group r", "group r reentrant")))
     # no blocking; y: carry 3 + 3 (x reentrant on both workers), x ahead once or twice: (6 + 2·3)/2 + 1
     assert reentrant.task("n.Y").wcrt == 7 * MS
@@ -283,3 +283,57 @@ def test_groups_and_threads_keep_their_meaning_through_fmt():
     assert before.executors[0].threads == 3 and before.groups == tuple(
         type(g)(g.id, g.instance, g.name, g.kind, g.executor, g.span) for g in before.groups)
     assert [(g.id, g.kind) for g in before.groups] == [("n.r", "reentrant")]
+
+
+def _with_holes(seed: int) -> str:
+    """A random multi-threaded system in which no callback can starve, whose unphased callback timers
+    are period holes (at most two), with a reaction-time spec on its first chain."""
+    from verify.synth.problem import starvation
+
+    rng = random.Random(seed)
+    holes = 0
+    while not holes:
+        text = mt_system(rng)
+        if starvation(_model(text)) is not None:
+            continue
+        lines = []
+        for line in text.splitlines():
+            if "executor mt" in line and " timer " in line and " phase " not in line and holes < 2:
+                head, tail = line.split(" timer ", 1)
+                line = head + " timer ? in 10 ms .. 40 ms step 10 ms" + tail.split(" ms", 1)[1]
+                holes += 1
+            if line.startswith("  chain ch0:"):
+                line += f" {{ reaction_time <= {rng.choice([60, 120, 240])} ms }}"
+            lines.append(line)
+    return "\n".join(lines) + "\n"
+
+
+def test_synth_reports_a_callback_that_starves_in_every_configuration():
+    """A callback behind another of its mutually exclusive group has no bound whatever the periods:
+    ``synth`` says so at once (E401 naming it and the remedy) instead of trying configurations."""
+    from verify.synth import synthesize
+
+    text = STARVING.replace("@Y@", "").replace("timer 2 ms phase 1/2 ms", "timer ? in 2 ms .. 8 ms step 2 ms")
+    result = synthesize(verify.load_text(text, "s.vfy"), objective="utilisation")
+    assert result.status == "unsat" and result.stats["core_analyses"] <= 2
+    [diag] = result.diagnostics
+    assert diag.code == "E401" and "callback `n.Y` has no bound in any configuration (E312)" in diag.message
+    assert "a callback group of its own" in diag.message
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_synth_on_multi_threaded_executors_agrees_with_brute_force(seed):
+    from verify.synth import brute_force, synthesize
+
+    from .test_synth import accepted, simulated_within_bounds
+
+    text = _with_holes(seed)
+    loaded = verify.load_text(text, "holes.vfy")
+    assert loaded.ok, [(d.code, d.message) for d in loaded.diagnostics]
+    result = synthesize(loaded, objective="utilisation")
+    naive = brute_force(loaded, objective="utilisation")
+    assert result.status == naive.status, text
+    if result.status == "sat":
+        assert result.optimal and result.values == naive.values, text
+        assert accepted(result.model)
+        simulated_within_bounds(result.model, runs=1, horizon=F(1))

@@ -394,6 +394,11 @@ class SystemModel:
     def executor(self, name: str) -> ExecutorModel:
         return next(e for e in self.executors if e.name == name)
 
+    def capacity(self, core: str) -> int:
+        """How many jobs the tasks of ``core`` (``TaskModel.core``) run at once: the workers of the
+        multi-threaded executor whose first core it is (its callbacks' core, §9.4), else 1."""
+        return next((len(e.workers) for e in self.executors if e.multi_threaded and e.core == core), 1)
+
     def group(self, group_id: str) -> GroupModel:
         return next(g for g in self.groups if g.id == group_id)
 

@@ -61,6 +61,9 @@ def problem_times(model: SystemModel, choices: Mapping[str, Choice]) -> list[Fra
         times += [lk.delay_min, lk.delay_max]
     for ch in model.chains:
         times += [ch.reaction_time, ch.data_age, ch.jitter]
+    for ex in model.executors:  # (a multi-threaded executor's bounds divide work by its workers, §9.4)
+        if ex.multi_threaded:
+            times += [c / len(ex.workers) for t in model.callbacks(ex.name) for c in (t.wcet, t.bcet)]
     for choice in choices.values():
         for c in choice.candidates:
             times += [c.period, c.phase]
@@ -524,7 +527,8 @@ class Encoding:
                 self.guard(key, c, *cond)
 
     def _utilisation(self) -> None:
-        """Σ C·fh ≤ M per core (E311); a task whose core assignment is relaxed runs alone."""
+        """Σ C·fh ≤ M per core (E311; ≤ m·M over the m workers of a multi-threaded executor, §9.4); a task
+        whose core assignment is relaxed runs alone."""
         by_core: dict[str, list[TaskModel]] = {}
         for t in sorted(self.model.tasks, key=lambda t: t.id):
             by_core.setdefault(t.core, []).append(t)
@@ -541,7 +545,7 @@ class Encoding:
                     parts.append(demand)
             total = self.t.add(*parts)
             self.util_terms[core] = total
-            self.add(self.t.le(total, self.M))
+            self.add(self.t.le(total, self.M * self.model.capacity(core)))
         self.utilisation = self.t.add(*(self._demand(t) for t in sorted(self.model.tasks, key=lambda t: t.id)))
 
     def utilisation_floor(self) -> int | None:
@@ -803,7 +807,7 @@ def first_job_bounds(model: SystemModel, choices: Mapping[str, Choice], *,
     least 1), and 0 for a task on its pipeline path in some configuration (``_possible_upstream``:
     the pipeline release offsets of §6.2 may leave it no job in the window). For a callback of an
     executor, every bound of §9.3 counts each other callback of its executor and each higher thread at
-    least once: ``C + Σ C``. ``relaxed`` (tracked
+    least once: ``C + Σ C``; of a multi-threaded one, ``multi_threaded_floor``. ``relaxed`` (tracked
     problems): an execution time may fall to ``bcet`` and a task may leave its core, so only the
     task's own ``bcet`` is certain."""
     if relaxed:
@@ -826,6 +830,9 @@ def first_job_bounds(model: SystemModel, choices: Mapping[str, Choice], *,
         per = [int(p * scale) if p is not None else None for p in periods]
         limit = max([p for p in per if p is not None], default=scale) * 1000
         for n, t in enumerate(tasks):
+            if t.executor is not None and model.executor(t.executor).multi_threaded:
+                out[t.id] = multi_threaded_floor(model, t)
+                continue
             if t.executor is not None:  # a callback (§9.3): each other callback and higher thread once
                 others = [m for m, o in enumerate(tasks) if m != n and (o.priority > t.priority
                                                                       or o.executor == t.executor)]
@@ -842,6 +849,18 @@ def first_job_bounds(model: SystemModel, choices: Mapping[str, Choice], *,
                 w = new
             out[t.id] = Fraction(max(w, c[n]), scale)
     return out
+
+
+def multi_threaded_floor(model: SystemModel, task: TaskModel) -> Fraction:
+    """A lower bound of the bound of §9.4 for a callback of a multi-threaded executor, in every
+    configuration: ``Cᵢ + B + (the m largest C)/m`` (the jobs of the window's other callbacks are not
+    certain: a callback may be silent)."""
+    from ..timing.multithreaded import carry_in, group_blocking
+
+    executor = model.executor(task.executor)  # type: ignore[arg-type]  # (a callback)
+    blocking, _ = group_blocking(model, task, executor)
+    workers = len(executor.workers)
+    return task.wcet + (blocking or Fraction(0)) + carry_in(model, model.callbacks(executor.name), workers) / workers
 
 
 def _possible_upstream(model: SystemModel, choices: Mapping[str, Choice], task: TaskModel) -> set[str]:

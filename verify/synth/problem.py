@@ -133,6 +133,21 @@ def relaxed_problem(problem: Problem, off: frozenset[str]) -> Problem:
     return problem_of(model, problem.scope, problem.statements, choices, tracked=False, prune=True)
 
 
+def starvation(model: SystemModel) -> str | None:
+    """Why no configuration is accepted when a callback can starve in its mutually exclusive group
+    (specs/timing.md §9.4): its group, not a choice, decides that it has no bound (E312)."""
+    from ..timing.multithreaded import group_blocking
+
+    for ex in model.executors:
+        if ex.multi_threaded:
+            for t in model.callbacks(ex.name):
+                blocking, why = group_blocking(model, t, ex)
+                if blocking is None:
+                    return (f"callback `{t.id}` has no bound in any configuration (E312): {why}; give it a "
+                            "callback group of its own or a reentrant one")
+    return None
+
+
 def problem_of(model: SystemModel, scope: SystemScope | None, statements: tuple[Statement, ...],
                choices: dict[str, Choice], *, tracked: bool, prune: bool) -> Problem:
     pruned, infeasible, culprit = 0, None, None
@@ -144,6 +159,8 @@ def problem_of(model: SystemModel, scope: SystemScope | None, statements: tuple[
         pruned, infeasible, culprit = pruner.removed, pruner.infeasible, pruner.culprit
     if infeasible is None and any(not ch.candidates for ch in choices.values()):
         infeasible = "a hole has no candidate"
+    if infeasible is None:
+        infeasible = starvation(model)
     atoms, bits = _atoms(model, choices, statements, tracked)
     structure = analyse_structure(model, choices, bits)
     return Problem(model, scope, statements, choices, structure, atoms, tracked, pruned, infeasible, culprit)

@@ -266,11 +266,14 @@ class Pruner:
                 if b.fh is not None:
                     demands.append(t.wcet * b.fh[0])
             floor = exact_sum(demands)
-            if floor > 1:
-                self._blame(f"core `{core}` is above 100 % utilisation even at the slowest candidates",
+            capacity = self.model.capacity(core)  # (a multi-threaded executor's workers, §9.4)
+            if floor > capacity:
+                self._blame(f"core `{core}` is above 100 % utilisation even at the slowest candidates"
+                            if capacity == 1 else f"the {capacity} workers of core `{core}`'s multi-threaded "
+                            "executor are above 100 % utilisation even at the slowest candidates",
                             ((), tuple(t.id for t in by_core[core])))
                 return dead
-            slack = 1 - floor  # (compared, never added to: its denominator is the core's whole lcm)
+            slack = capacity - floor  # (compared, never added to: its denominator is the core's whole lcm)
             for t in by_core[core]:
                 choice = self.choices.get(t.id)
                 if choice is None:

@@ -422,6 +422,8 @@ class Engine:
         best: Outcome | None = None
         guard = None
         start = self.start() if not assumptions and not self.problem.tracked else None
+        if start is not None and objectives and any(o.real(*start) is None for o in objectives):
+            start = None  # (unbounded where no statement in force asks for a bound: no incumbent, below)
         if start is not None:
             if not objectives:
                 return Outcome("sat", *start)
@@ -453,6 +455,10 @@ class Engine:
             if not objectives:
                 return Outcome("sat", config, ev)
             values = tuple(o.real(config, ev) for o in objectives)
+            if any(v is None for v in values):  # (unbounded where no statement in force asks for a bound,
+                # e.g. a chain through an overlapping reentrant callback, §9.4: no incumbent)
+                self.enc.add(z3.Implies(scope, z3.Not(z3.And(*self._config_literals(config)))))
+                continue
             if proven and values == tuple(self._value(answer, o.term) for o in objectives):
                 # the encoded optimum, and its true values are the encoded ones: every accepted
                 # configuration lies in the encoding with true values no better than its encoded ones

@@ -80,8 +80,11 @@ def dependency_graph(model: SystemModel, trigger: nx.DiGraph[str]) -> nx.DiGraph
     of t; em(t) → r(t); hp(core, p(t)) → r(t); em(t) → hp(core, p(t)); hp level → next lower level;
     and r(j) → r(i) where i's analysis reads j's response time: a cooperative sibling, a
     cooperative task of higher priority (its suspension jitter), or a task above the thread of i's
-    executor (the polling-round bound of specs/timing.md §9.3)."""
+    executor (the polling-round bound of specs/timing.md §9.3). A callback of a multi-threaded
+    executor whose bound counts the other callbacks' jobs without their activations (§9.4) depends on
+    their execution times alone: ("wc", j) → r(i) for each other callback j instead of hp → r(i)."""
     graph: nx.DiGraph[DepNode] = nx.DiGraph()
+    capped = _capped_callbacks(model)
     for w, r in trigger.edges:
         graph.add_edge(("em", w), ("em", r))
         graph.add_edge(("r", w), ("em", r))
@@ -95,7 +98,10 @@ def dependency_graph(model: SystemModel, trigger: nx.DiGraph[str]) -> nx.DiGraph
             graph.add_edge(("hp", core, higher), ("hp", core, lower))
         for t in tasks:
             graph.add_edge(("em", t.id), ("hp", core, t.priority))
-            graph.add_edge(("hp", core, t.priority), ("r", t.id))
+            if t.id in capped:
+                graph.add_edges_from((("wc", j.id), ("r", t.id)) for j in capped[t.id])
+            else:
+                graph.add_edge(("hp", core, t.priority), ("r", t.id))
     for t in model.tasks:
         if t.executor is not None:
             for h in by_core[t.core]:
@@ -119,9 +125,27 @@ def dependency_graph(model: SystemModel, trigger: nx.DiGraph[str]) -> nx.DiGraph
     return graph
 
 
-def dependency_cones(graph: nx.DiGraph[DepNode], atoms: Mapping[str, int]) -> dict[str, int]:
+def _capped_callbacks(model: SystemModel) -> dict[str, tuple[TaskModel, ...]]:
+    """The callbacks of multi-threaded executors whose bound (§9.4) does not follow the other callbacks'
+    activations, with those other callbacks."""
+    from ..timing.multithreaded import group_blocking
+
+    out: dict[str, tuple[TaskModel, ...]] = {}
+    for ex in model.executors:
+        if not ex.multi_threaded:
+            continue
+        members = model.callbacks(ex.name)
+        for t in members:
+            blocking, why = group_blocking(model, t, ex)
+            if blocking is not None and why != "siblings":
+                out[t.id] = tuple(m for m in members if m.id != t.id)
+    return out
+
+
+def dependency_cones(graph: nx.DiGraph[DepNode], atoms: Mapping[str, int],
+                     choice_bits: Mapping[str, int] | None = None) -> dict[str, int]:
     """Per task: the OR of ``atoms`` (attached to the task's event model) over everything its
-    response time depends on."""
+    response time depends on; a ("wc", t) node carries t's atoms without its choice (``choice_bits``)."""
     condensed = nx.condensation(graph)
     bits: dict[int, int] = {}
     for scc in nx.topological_sort(condensed):
@@ -129,6 +153,8 @@ def dependency_cones(graph: nx.DiGraph[DepNode], atoms: Mapping[str, int]) -> di
         for m in condensed.nodes[scc]["members"]:
             if m[0] == "em":
                 value |= atoms.get(m[1], 0)
+            elif m[0] == "wc":
+                value |= atoms.get(m[1], 0) & ~(choice_bits or {}).get(m[1], 0)
         for pred in condensed.predecessors(scc):
             value |= bits[pred]
         bits[scc] = value
@@ -154,5 +180,6 @@ def and_feeders(model: SystemModel, choices: Mapping[str, Choice], trigger: nx.D
 def analyse_structure(model: SystemModel, choices: Mapping[str, Choice], atoms: Mapping[str, int]) -> Structure:
     trigger, edges = trigger_graph(model, choices)
     order, cyclic = topological(trigger)
-    cones = dependency_cones(dependency_graph(model, trigger), atoms)
+    choice_bits = {tid: 1 << n for n, tid in enumerate(choices)}  # (``problem._atoms``: choices first)
+    cones = dependency_cones(dependency_graph(model, trigger), atoms, choice_bits)
     return Structure(order, cyclic, tuple(edges), cones, and_feeders(model, choices, trigger))

@@ -110,7 +110,7 @@ def _window(system: SystemModel, task: TaskModel, executor: ExecutorModel, membe
     workers = len(executor.workers)
     if held and (load := sum((f.cost / f.period for f in live), ZERO)) >= workers:  # type: ignore[operator]
         return None, f"the other callbacks' utilisation is {ratio(load)}, not below its {workers} workers"
-    carry = _carry_in(system, members, workers)
+    carry = carry_in(system, members, workers)
     caps = [None if held else 2 if f.task in ahead else 1 for f in live]
     w = blocking + (carry + sum((_jobs(f, ZERO, c) * f.cost for f, c in zip(live, caps)), ZERO)) / workers  # type: ignore[operator]
     for _ in range(MAX_STEPS):
@@ -130,7 +130,7 @@ def _jobs(flow: Interferer, window: Fraction, cap: int | None) -> int:
     return arrivals if cap is None else min(cap, arrivals)
 
 
-def _carry_in(system: SystemModel, members: tuple[TaskModel, ...], workers: int) -> Fraction:
+def carry_in(system: SystemModel, members: tuple[TaskModel, ...], workers: int) -> Fraction:
     """The most work the workers still have of jobs started before the window: the ``m`` largest
     execution times, a reentrant callback's up to ``m`` times (it may run on several workers)."""
     costs: list[Fraction] = []
