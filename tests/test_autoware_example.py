@@ -87,22 +87,28 @@ def test_the_prioritized_executors_prove_the_hot_path(capsys):
     assert analysis.task("behavior_planner.Plan").response.rule == "single_threaded executor, polling rounds"
     assert main(["prove", "--budget", "50", str(AUTOWARE / "autoware-executors.vfy")]) == 3  # undecided: the rest
     out = capsys.readouterr().out
-    assert "chain hot_path: reaction time                       proved     bound   <= 400 ms" in out
-    assert "chain control: reaction time                        undecided" in out
+    out = " ".join(out.split())
+    assert "chain hot_path: reaction time proved bound <= 400 ms" in out
+    assert "chain control: reaction time undecided" in out
 
 
 def test_one_executor_for_every_node_is_overloaded(capsys):
     """The single-threaded set-up asks 151.67 % of its thread (E311): its callbacks miss activations,
-    which they absorb, so each is still bounded — by the polling rounds, 341.6 ms. ``prove`` finds runs
-    that break the hot path's specs (and the control chain's), each a counterexample that replays."""
+    which they absorb, so each is still bounded — by the polling rounds: the round in progress and the
+    callbacks before it in the next, from 170.9 ms for the first timer to 341.6 ms for the last
+    subscription. ``prove`` finds runs that break the hot path's specs (and the control chain's), each a
+    counterexample that replays."""
     analysis = analyze(verify.load(str(AUTOWARE / "autoware-single-executor.vfy")).system())
     assert [d.code for d in diagnostics_of(analysis) if d.severity.value == "error"] == ["E311"]
     assert analysis.core("cpu0").utilisation == Fraction(15167, 10000)
-    assert {t.wcrt for t in analysis.tasks} == {Fraction(3416, 10000)}
+    bounds = sorted(t.wcrt for t in analysis.tasks)
+    assert (bounds[0], bounds[-1]) == (Fraction(1709, 10000), Fraction(3416, 10000))
+    assert all(t.response.rule == "single_threaded executor, polling rounds" for t in analysis.tasks)
     assert main(["prove", "--budget", "50", str(AUTOWARE / "autoware-single-executor.vfy")]) == 1
     out = capsys.readouterr().out
-    assert "chain hot_path: reaction time                       violated   search  <= 400 ms" in out
-    assert "chain control: reaction time                        violated" in out
+    out = " ".join(out.split())
+    assert "chain hot_path: reaction time violated search <= 400 ms" in out
+    assert "chain control: reaction time violated" in out
 
 
 def test_one_multi_threaded_executor_bounds_every_callback(capsys):

@@ -211,15 +211,20 @@ def round_bound(system: SystemModel, task: TaskModel, members: tuple[TaskModel, 
     """The polling-point bound of a wait-set executor (§9.3, after Blaß et al., RTSS 2021: a polled
     callback runs at most once per snapshot): the least ``w`` with
 
-        w = Cᵢ + Σ_{c ∈ E} C_c + Σ_{j ≠ i} Cⱼ + Σ_{h ∈ hp(π)} η⁺ₕ(w + Rₕ)·Cₕ.
+        w = Cᵢ + Σ_{c ∈ E} C_c + Σ_{j ≺ i} Cⱼ + Σ_{h ∈ hp(π)} η⁺ₕ(w + Rₕ)·Cₕ.
 
     Every callback has at most one pending job (§9.1), so when i's job is released the round in progress
     runs at most one job of each callback (i's previous job included), and the next snapshot, which
-    holds i's job, runs at most one job of each other callback before it; a job of h that runs in the
-    window was released at most Rₕ before it. None when some Rₕ is unbounded."""
+    holds i's job, runs at most one job before it of each callback that comes before i in the processing
+    order (kind, then system order: ``j ≺ i``); a job of h that runs in the window was released at most
+    Rₕ before it. None when some Rₕ is unbounded."""
     if any(estimates.get(h.id) is None for h in hp):
         return None
-    base = task.wcet + sum((m.wcet for m in members), ZERO) + sum((m.wcet for m in members if m.id != task.id), ZERO)
+    executor = system.executor(task.executor)  # type: ignore[arg-type]  # (a callback)
+    order = {t.id: n for n, t in enumerate(system.tasks)}
+    place = (executor.kind_rank(task), order[task.id])
+    ahead = sum((m.wcet for m in members if (executor.kind_rank(m), order[m.id]) < place), ZERO)
+    base = task.wcet + sum((m.wcet for m in members), ZERO) + ahead
     streams = [replace(s, jitter=s.jitter + estimates[h.id]) if s.jitter is not None else s  # type: ignore[operator]
                for h in hp for s in [interferer(system, h, events[h.id], estimates.get(h.id), h.wcet)]]
     value, _ = least_fixed_point(base, base, streams)
