@@ -85,7 +85,7 @@ from collections.abc import Callable
 import verify
 
 from . import lsp, ros1, startup, tightness
-from .generate import generate_chain_system, generate_pipeline_system, generate_system
+from .generate import generate_chain_system, generate_executor_system, generate_pipeline_system, generate_system
 
 DEFAULT_OUT = Path(__file__).resolve().parent / "out" / "results.json"
 DEFAULT_SIZES = (10, 100, 1000)
@@ -128,7 +128,9 @@ class Instance:
 
     @property
     def name(self) -> str:
-        kind = {generate_chain_system: "chain", generate_pipeline_system: "pipeline"}.get(self.generator, "waters")
+        kind = {generate_chain_system: "chain", generate_pipeline_system: "pipeline",
+                generate_executor_system: f"executors-{self.options.get('kind', 'single_threaded')}"
+                }.get(self.generator, "waters")
         return f"{kind}-{self.n_tasks}-s{self.seed}.vfy"
 
     @cached_property
@@ -365,6 +367,22 @@ def _register_analyze() -> None:
             raise BenchmarkError(f"{len(unbounded)} task(s) without a WCRT bound (converged: {result.converged})",
                                  found)
         return found
+
+
+    def analyze_executors(inst: Instance) -> dict:
+        result = analyze(inst.model)
+        unbounded = [t.id for t in result.tasks if t.response.wcrt is None]
+        found = {"CPA rounds": result.rounds, "largest WCRT": _ms(max(t.response.wcrt or Fraction(0)
+                                                                      for t in result.tasks))}
+        if not result.converged or unbounded:
+            raise BenchmarkError(f"{len(unbounded)} callback(s) without a WCRT bound (converged: {result.converged})",
+                                 found)
+        return found
+
+    for kind in ("single_threaded", "multi_threaded"):
+        stage(f"analyze-{kind.replace('_', '-')}", f"verify.timing.analyze on callbacks of {kind} ROS 2 executors, "
+              "100 callbacks each (specs/timing.md §9)", needs=("model",), sizes=(1000,), quick_sizes=(100,),
+              generator=generate_executor_system, options={"kind": kind})(analyze_executors)
 
 
 def _ms(seconds: Fraction | None) -> str:

@@ -18,7 +18,7 @@ from verify.prove.intsim import run_trace
 from verify.sim import Scenario, random_scenario, simulate
 from verify.timing import analyze
 
-from .executor_systems import executor_system
+from .executor_systems import executor_system, mt_system
 from .test_intsim import _targets, concrete_scenario
 from .test_prove import KINDS as PROVE_KINDS
 from .test_timing import MS, bound_violations
@@ -291,3 +291,21 @@ def test_synth_on_executors_agrees_with_brute_force(seed):
         assert result.optimal and result.values == naive.values, text
         assert accepted(result.model)
         simulated_within_bounds(result.model, runs=1, horizon=F(1))
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_what_an_executors_callbacks_share_is_built_once_without_changing_a_bound(seed):
+    """``executor_responses`` builds each executor's streams, time base and busy window once for all its
+    callbacks; every response is the one ``callback_response`` computes for the callback alone."""
+    from verify.timing.executors import callback_response, executor_responses
+
+    rng = random.Random(seed)
+    model = _model(executor_system(rng) if seed % 2 else mt_system(rng))
+    analysis = analyze(model)
+    events = {t.id: t.events for t in analysis.tasks}
+    estimates = {t.id: t.wcrt for t in analysis.tasks}
+    shared = executor_responses(model, events, estimates)
+    assert list(shared) == [t.id for t in model.tasks if t.executor is not None]
+    for t in model.tasks:
+        if t.executor is not None:
+            assert shared[t.id] == callback_response(model, t, events, estimates)

@@ -307,6 +307,10 @@ class _Index(TypedDict):
     ports: dict[str, PortModel]
     instances: dict[str, InstanceModel]
     components: dict[str, ComponentModel]
+    executors: dict[str, ExecutorModel]
+    groups: dict[str, GroupModel]
+    callbacks: dict[str, tuple[TaskModel, ...]]  # executor -> its callbacks, in system order
+    order: dict[str, int]  # task -> its position in ``tasks``
 
 
 #: why a chain's element cannot be reached from the previous one (``chain_path``): its index, the kind
@@ -356,7 +360,11 @@ class SystemModel:
             index = {"tasks": {t.id: t for t in self.tasks}, "producers": producers, "into": into,
                      "out_of": out_of, "ports": {p.id: p for p in self.ports},
                      "instances": {i.name: i for i in self.instances},
-                     "components": {c.name: c for c in self.components}}
+                     "components": {c.name: c for c in self.components},
+                     "executors": {e.name: e for e in self.executors}, "groups": {g.id: g for g in self.groups},
+                     "callbacks": {e.name: tuple(t for t in self.tasks if t.executor == e.name)
+                                   for e in self.executors},
+                     "order": {t.id: n for n, t in enumerate(self.tasks)}}
             object.__setattr__(self, "_lookup", index)
         return index
 
@@ -392,7 +400,7 @@ class SystemModel:
         return tuple(t for t in self.tasks if t.core == core)
 
     def executor(self, name: str) -> ExecutorModel:
-        return next(e for e in self.executors if e.name == name)
+        return self._index()["executors"][name]
 
     def capacity(self, core: str) -> int:
         """How many jobs the tasks of ``core`` (``TaskModel.core``) run at once: the workers of the
@@ -400,11 +408,15 @@ class SystemModel:
         return next((len(e.workers) for e in self.executors if e.multi_threaded and e.core == core), 1)
 
     def group(self, group_id: str) -> GroupModel:
-        return next(g for g in self.groups if g.id == group_id)
+        return self._index()["groups"][group_id]
+
+    def order(self, task_id: str) -> int:
+        """The position of a task in the system's order (``tasks``)."""
+        return self._index()["order"][task_id]
 
     def callbacks(self, executor: str) -> tuple[TaskModel, ...]:
         """The tasks bound to ``executor``, in system order (its registration order, §9)."""
-        return tuple(t for t in self.tasks if t.executor == executor)
+        return self._index()["callbacks"].get(executor, ())
 
 
 # ------------------------------------------------------------------ building

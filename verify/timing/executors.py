@@ -37,7 +37,7 @@ from ..model import ExecutorModel, SystemModel, TaskModel
 from .multithreaded import multi_threaded_response
 from .rates import EventModel
 from ..timebase import TimeBase
-from .rta import MAX_JOBS, MAX_STEPS, TaskResponse, bcrt, deadline_of, interferer, least_fixed_point, ratio
+from .rta import MAX_JOBS, MAX_STEPS, Interferer, TaskResponse, bcrt, deadline_of, interferer, least_fixed_point, ratio
 
 ZERO = Fraction(0)
 
@@ -49,8 +49,17 @@ def higher_threads(system: SystemModel, executor: ExecutorModel) -> tuple[TaskMo
 
 def executor_responses(system: SystemModel, events: Mapping[str, EventModel],
                        estimates: Mapping[str, Fraction | None]) -> dict[str, TaskResponse]:
-    """The response of every callback (the tasks bound to an executor)."""
-    return {t.id: callback_response(system, t, events, estimates) for t in system.tasks if t.executor is not None}
+    """The response of every callback (the tasks bound to an executor), in system order; what the
+    callbacks of one executor share (their streams, the time base, the busy window) is built once."""
+    found: dict[str, TaskResponse] = {}
+    for executor in system.executors:
+        members = system.callbacks(executor.name)
+        if executor.multi_threaded:
+            found.update((t.id, multi_threaded_response(system, t, executor, events, estimates)) for t in members)
+        elif members:
+            level = _Level(system, executor, events, estimates, members)
+            found.update((t.id, level.response(t)) for t in members)
+    return {t.id: found[t.id] for t in system.tasks if t.executor is not None}
 
 
 def callback_response(system: SystemModel, task: TaskModel, events: Mapping[str, EventModel],
@@ -60,26 +69,7 @@ def callback_response(system: SystemModel, task: TaskModel, events: Mapping[str,
     executor = system.executor(task.executor)
     if executor.multi_threaded:
         return multi_threaded_response(system, task, executor, events, estimates)
-    deadline, deadline_rule = deadline_of(task, events[task.id])
-    members = system.callbacks(executor.name)
-    hp = higher_threads(system, executor)
-    streams = [interferer(system, h, events[h.id], estimates.get(h.id), h.wcet) for h in hp]
-    hold, _ = least_fixed_point(task.wcet, task.wcet, streams)
-    computed: Fraction | None
-    rounds = round_bound(system, task, members, hp, events, estimates) if executor.polls else None
-    computed, offsets, critical, failure = _wcrt(system, task, executor, members, hp, events, estimates, rounds)
-    rule = (f"{executor.kind} executor, {'FIFO' if not executor.polls else 'non-preemptive'} busy window, "
-            f"{offsets} offset{'s' if offsets != 1 else ''}")
-    if rounds is not None and (computed is None or rounds < computed):
-        computed, rule, failure = rounds, f"{executor.kind} executor, polling rounds", None
-    used: Fraction | None = computed
-    if task.wcrt_bound is not None:
-        used, rule = task.wcrt_bound, "user bound"
-    elif computed is None:
-        rule = "unbounded"
-    names = tuple(m.id for m in members if m.id != task.id) + tuple(h.id for h in hp)
-    return TaskResponse(task.id, task.core, task.priority, bcrt(task), used, computed, rule, deadline, deadline_rule,
-                        ZERO, hold, offsets, critical, names, failure)
+    return _Level(system, executor, events, estimates, (task,)).response(task)
 
 
 class _Stream:
@@ -99,83 +89,141 @@ class _Stream:
         return 0 if self.silent or window <= 0 else -(-(window + self.jitter) // self.period)
 
 
-def _wcrt(system: SystemModel, task: TaskModel, executor: ExecutorModel, members: tuple[TaskModel, ...],
-          hp: tuple[TaskModel, ...], events: Mapping[str, EventModel], estimates: Mapping[str, Fraction | None],
-          cap: Fraction | None = None) -> tuple[Fraction | None, int | None, int | None, str | None]:
-    """(R, the number of offsets searched, the critical one (1-based), failure) of the busy-window bound;
-    with ``cap`` (a bound known already), the search stops as soon as it reaches it (R is then None).
-    Computed in integer ticks of the coarsest base in which every time involved is whole."""
-    flows = {t.id: interferer(system, t, events[t.id], estimates.get(t.id), t.wcet) for t in members + hp}
-    unbounded = [tid for tid, s in flows.items() if not s.silent and (s.period is None or s.jitter is None)]
-    if unbounded:
-        return None, None, None, f"the activations of `{unbounded[0]}` are not bounded"
-    load = sum((s.cost / s.period for s in flows.values() if not s.silent), ZERO)  # type: ignore[operator]
-    if load >= 1:
-        return None, None, None, f"the utilisation of its executor's level is {ratio(load)} (at least 1)"
-    times = [v for s in flows.values() if not s.silent for v in (s.cost, s.period, s.jitter)]
-    base = TimeBase.gcd_of(times + ([cap] if cap is not None else []))  # type: ignore[arg-type]  # (bounded)
-    ticks = base.ticks
-    streams = {tid: _Stream(ticks(s.cost), 1, 0, True) if s.silent else  # type: ignore[arg-type]
-               _Stream(ticks(s.cost), ticks(s.period), ticks(s.jitter), False)  # type: ignore[arg-type]
-               for tid, s in flows.items()}
-    own, cost = streams[task.id], streams[task.id].cost
-    caused = local_descendants(system, task, members)
-    others = [streams[m.id] for m in members if m.id != task.id and m.id not in caused]
-    downstream = [streams[m.id] for m in members if m.id in caused]
-    above = [streams[h.id] for h in hp]
-    everyone = list(streams.values())
-    length = _fixed(lambda w: sum(s.open(w) * s.cost for s in everyone), sum(streams[m.id].cost for m in members))
-    if length is None:
-        return None, None, None, f"no fixed point within {MAX_STEPS} iteration steps"
-    offsets = _offsets(own, length)
-    if offsets is None:
-        return None, None, None, f"the busy window holds more than {MAX_JOBS} jobs of `{task.id}`"
-    best: tuple[int, int] | None = None
-    bound = None if cap is None else ticks(cap)
-    last = 0  # F(A) grows with A (the right-hand sides do): each search starts at the last
-    for n, offset in enumerate(offsets, 1):
-        limit = None if bound is None else offset + bound
-        jobs = own.closed(offset)
-        mine = jobs * cost
-        if executor.polls:  # Eq. (6)
-            finish = _fixed(lambda f: mine + sum(s.closed(f - cost) * s.cost for s in others)  # noqa: B023
-                            + sum(min(s.closed(f - cost), jobs - 1) * s.cost for s in downstream)  # noqa: B023
-                            + sum(s.open(f) * s.cost for s in above), max(last, mine), limit)  # noqa: B023
-        else:  # FIFO
-            queued = mine + sum(s.closed(offset) * s.cost for s in others)
-            queued += sum(min(s.closed(offset), jobs - 1) * s.cost for s in downstream)
-            finish = _fixed(lambda f: queued + sum(s.open(f) * s.cost for s in above),  # noqa: B023
-                            max(last, queued), limit)
-        if finish is None:
-            return None, n, None, f"no fixed point within {MAX_STEPS} iteration steps"
-        if limit is not None and finish >= limit:
-            return None, n, None, "not below the polling-round bound"
-        last = finish
-        if best is None or finish - offset > best[0]:
-            best = (finish - offset, n)
-    assert best is not None  # (offset 0 is always searched)
-    return base.seconds(best[0]), len(offsets), best[1], None
+class _Level:
+    """The level-π busy window of one executor, for the callbacks ``tasks`` of it: its members' and the
+    higher threads' streams in integer ticks of the coarsest base in which every time involved (the
+    polling-round bounds of ``tasks`` included) is whole, and the longest busy window ``L``."""
+
+    def __init__(self, system: SystemModel, executor: ExecutorModel, events: Mapping[str, EventModel],
+                 estimates: Mapping[str, Fraction | None], tasks: tuple[TaskModel, ...]):
+        self.system, self.executor, self.events = system, executor, events
+        self.members = system.callbacks(executor.name)
+        self.hp = higher_threads(system, executor)
+        self.rounds = {t.id: round_bound(system, t, self.members, self.hp, events, estimates) if executor.polls
+                       else None for t in tasks}
+        self.above_flows = [interferer(system, h, events[h.id], estimates.get(h.id), h.wcet) for h in self.hp]
+        flows: dict[str, Interferer] = {t.id: interferer(system, t, events[t.id], estimates.get(t.id), t.wcet)
+                                        for t in self.members}
+        flows.update(zip((h.id for h in self.hp), self.above_flows))
+        self.failure = self._failure(flows)
+        self.children = _local_children(system, self.members)
+        if self.failure is not None:
+            return
+        times = [v for f in flows.values() if not f.silent for v in (f.cost, f.period, f.jitter)]
+        caps = [c for c in self.rounds.values() if c is not None]
+        self.base = TimeBase.gcd_of(times + caps)  # type: ignore[arg-type]  # (bounded: no failure)
+        ticks = self.base.ticks
+        self.streams = {tid: _Stream(ticks(f.cost), 1, 0, True) if f.silent else  # type: ignore[arg-type]
+                        _Stream(ticks(f.cost), ticks(f.period), ticks(f.jitter), False)  # type: ignore[arg-type]
+                        for tid, f in flows.items()}
+        everyone = list(self.streams.values())
+        self.length = _fixed(lambda w: sum(s.open(w) * s.cost for s in everyone),
+                             sum(self.streams[m.id].cost for m in self.members))
+
+    @staticmethod
+    def _failure(flows: Mapping[str, Interferer]) -> str | None:
+        unbounded = [tid for tid, f in flows.items() if not f.silent and (f.period is None or f.jitter is None)]
+        if unbounded:
+            return f"the activations of `{unbounded[0]}` are not bounded"
+        load = sum((f.cost / f.period for f in flows.values() if not f.silent), ZERO)  # type: ignore[operator]
+        if load >= 1:
+            return f"the utilisation of its executor's level is {ratio(load)} (at least 1)"
+        return None
+
+    def response(self, task: TaskModel) -> TaskResponse:
+        """WCRT (§9.3) and BCRT (``bcet``) of callback ``task``."""
+        executor = self.executor
+        deadline, deadline_rule = deadline_of(task, self.events[task.id])
+        hold, _ = least_fixed_point(task.wcet, task.wcet, list(self.above_flows))
+        rounds = self.rounds[task.id]
+        computed, offsets, critical, failure = self._wcrt(task, rounds)
+        rule = (f"{executor.kind} executor, {'FIFO' if not executor.polls else 'non-preemptive'} busy window, "
+                f"{offsets} offset{'s' if offsets != 1 else ''}")
+        if rounds is not None and (computed is None or rounds < computed):
+            computed, rule, failure = rounds, f"{executor.kind} executor, polling rounds", None
+        used: Fraction | None = computed
+        if task.wcrt_bound is not None:
+            used, rule = task.wcrt_bound, "user bound"
+        elif computed is None:
+            rule = "unbounded"
+        names = tuple(m.id for m in self.members if m.id != task.id) + tuple(h.id for h in self.hp)
+        return TaskResponse(task.id, task.core, task.priority, bcrt(task), used, computed, rule, deadline,
+                            deadline_rule, ZERO, hold, offsets, critical, names, failure)
+
+    def _wcrt(self, task: TaskModel, cap: Fraction | None
+              ) -> tuple[Fraction | None, int | None, int | None, str | None]:
+        """(R, the number of offsets searched, the critical one (1-based), failure) of the busy-window
+        bound; with ``cap`` (a bound known already), the search stops as soon as it reaches it (R is
+        then None)."""
+        if self.failure is not None:
+            return None, None, None, self.failure
+        if self.length is None:
+            return None, None, None, f"no fixed point within {MAX_STEPS} iteration steps"
+        streams, members = self.streams, self.members
+        own, cost = streams[task.id], streams[task.id].cost
+        caused = _descendants(self.children, task.id)
+        others = [streams[m.id] for m in members if m.id != task.id and m.id not in caused]
+        downstream = [streams[m.id] for m in members if m.id in caused]
+        above = [streams[h.id] for h in self.hp]
+        offsets = _offsets(own, self.length)
+        if offsets is None:
+            return None, None, None, f"the busy window holds more than {MAX_JOBS} jobs of `{task.id}`"
+        best: tuple[int, int] | None = None
+        bound = None if cap is None else self.base.ticks(cap)
+        last = 0  # F(A) grows with A (the right-hand sides do): each search starts at the last
+        for n, offset in enumerate(offsets, 1):
+            limit = None if bound is None else offset + bound
+            jobs = own.closed(offset)
+            mine = jobs * cost
+            if self.executor.polls:  # Eq. (6)
+                finish = _fixed(lambda f: mine + sum(s.closed(f - cost) * s.cost for s in others)  # noqa: B023
+                                + sum(min(s.closed(f - cost), jobs - 1) * s.cost for s in downstream)  # noqa: B023
+                                + sum(s.open(f) * s.cost for s in above), max(last, mine), limit)  # noqa: B023
+            else:  # FIFO
+                queued = mine + sum(s.closed(offset) * s.cost for s in others)
+                queued += sum(min(s.closed(offset), jobs - 1) * s.cost for s in downstream)
+                finish = _fixed(lambda f: queued + sum(s.open(f) * s.cost for s in above),  # noqa: B023
+                                max(last, queued), limit)
+            if finish is None:
+                return None, n, None, f"no fixed point within {MAX_STEPS} iteration steps"
+            if limit is not None and finish >= limit:
+                return None, n, None, "not below the polling-round bound"
+            last = finish
+            if best is None or finish - offset > best[0]:
+                best = (finish - offset, n)
+        assert best is not None  # (offset 0 is always searched)
+        return self.base.seconds(best[0]), len(offsets), best[1], None
+
+
+def _local_children(system: SystemModel, members: tuple[TaskModel, ...]) -> dict[str, list[str]]:
+    """Per callback of an executor, the callbacks of it that its completions alone release at once:
+    triggered by one port alone, connected from it without delay (``local_descendants``)."""
+    on = {m.id for m in members}
+    children: dict[str, list[str]] = {}
+    for m in members:
+        port = m.activation.single_port
+        link = None if port is None else system.link_into(f"{m.instance}.{port}")
+        if link is not None and link.delay_max == 0 and link.writer in on and link.writer != m.id:
+            children.setdefault(link.writer, []).append(m.id)
+    return children
+
+
+def _descendants(children: Mapping[str, list[str]], task: str) -> set[str]:
+    found: set[str] = set()
+    todo = list(children.get(task, ()))
+    while todo:
+        m = todo.pop()
+        if m != task and m not in found:
+            found.add(m)
+            todo += children.get(m, ())
+    return found
 
 
 def local_descendants(system: SystemModel, task: TaskModel, members: tuple[TaskModel, ...]) -> set[str]:
     """The callbacks of ``task``'s executor whose every activation is caused by a completion of
     ``task`` at that instant (§9.3, "causal caps"): triggered by one port alone, connected without
     delay from ``task`` or from another such callback."""
-    on = {m.id for m in members}
-    found: set[str] = set()
-    grown = True
-    while grown:
-        grown = False
-        for m in members:
-            port = m.activation.single_port
-            if m.id == task.id or m.id in found or port is None:
-                continue
-            link = system.link_into(f"{m.instance}.{port}")
-            if (link is not None and link.delay_max == 0 and link.writer in on
-                    and (link.writer == task.id or link.writer in found)):
-                found.add(m.id)
-                grown = True
-    return found
+    return _descendants(_local_children(system, members), task.id)
 
 
 def _fixed(step: Callable[[int], int], start: int, limit: int | None = None) -> int | None:
@@ -221,9 +269,8 @@ def round_bound(system: SystemModel, task: TaskModel, members: tuple[TaskModel, 
     if any(estimates.get(h.id) is None for h in hp):
         return None
     executor = system.executor(task.executor)  # type: ignore[arg-type]  # (a callback)
-    order = {t.id: n for n, t in enumerate(system.tasks)}
-    place = (executor.kind_rank(task), order[task.id])
-    ahead = sum((m.wcet for m in members if (executor.kind_rank(m), order[m.id]) < place), ZERO)
+    place = (executor.kind_rank(task), system.order(task.id))
+    ahead = sum((m.wcet for m in members if (executor.kind_rank(m), system.order(m.id)) < place), ZERO)
     base = task.wcet + sum((m.wcet for m in members), ZERO) + ahead
     streams = [replace(s, jitter=s.jitter + estimates[h.id]) if s.jitter is not None else s  # type: ignore[operator]
                for h in hp for s in [interferer(system, h, events[h.id], estimates.get(h.id), h.wcet)]]

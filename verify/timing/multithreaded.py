@@ -82,9 +82,8 @@ def group_blocking(system: SystemModel, task: TaskModel, executor: ExecutorModel
     siblings = [m for m in system.callbacks(executor.name) if m.group == task.group and m.id != task.id]
     if not siblings:
         return task.wcet, ""
-    order = {t.id: n for n, t in enumerate(system.tasks)}
-    place = (executor.kind_rank(task), order[task.id])
-    ahead = [m for m in siblings if (executor.kind_rank(m), order[m.id]) < place]
+    place = (executor.kind_rank(task), system.order(task.id))
+    ahead = [m for m in siblings if (executor.kind_rank(m), system.order(m.id)) < place]
     if ahead:
         return None, (f"it may starve: `{ahead[0].id}` comes before it in {group.describe()} "
                       "(Teper et al., EMSOFT 2024)")
@@ -99,10 +98,9 @@ def _window(system: SystemModel, task: TaskModel, executor: ExecutorModel, membe
     if blocking is None:
         return None, why
     held = blocking > 0 and why == "siblings"  # (its own previous job alone: the counts stay capped)
-    order = {t.id: n for n, t in enumerate(system.tasks)}
-    place = (executor.kind_rank(task), order[task.id])
+    place = (executor.kind_rank(task), system.order(task.id))
     flows = [interferer(system, m, events[m.id], estimates.get(m.id), m.wcet) for m in members if m.id != task.id]
-    ahead = {m.id for m in members if (executor.kind_rank(m), order[m.id]) < place}
+    ahead = {m.id for m in members if (executor.kind_rank(m), system.order(m.id)) < place}
     live = [f for f in flows if not f.silent]
     if held and any(f.period is None or f.jitter is None for f in live):
         unbounded = next(f for f in live if f.period is None or f.jitter is None)
@@ -111,23 +109,21 @@ def _window(system: SystemModel, task: TaskModel, executor: ExecutorModel, membe
     if held and (load := sum((f.cost / f.period for f in live), ZERO)) >= workers:  # type: ignore[operator]
         return None, f"the other callbacks' utilisation is {ratio(load)}, not below its {workers} workers"
     carry = carry_in(system, members, workers)
-    caps = [None if held else 2 if f.task in ahead else 1 for f in live]
-    w = blocking + (carry + sum((_jobs(f, ZERO, c) * f.cost for f, c in zip(live, caps)), ZERO)) / workers  # type: ignore[operator]
+    if not held:  # (the counts do not depend on the window: no fixed point to find)
+        jobs = sum(((2 if f.task in ahead else 1) * f.cost for f in live), ZERO)  # type: ignore[operator]
+        return blocking + (carry + jobs) / workers, None
+    w = blocking + (carry + sum((_jobs(f, ZERO) * f.cost for f in live), ZERO)) / workers  # type: ignore[operator]
     for _ in range(MAX_STEPS):
-        new = blocking + (carry + sum((_jobs(f, w, c) * f.cost for f, c in zip(live, caps)), ZERO)) / workers  # type: ignore[operator]
+        new = blocking + (carry + sum((_jobs(f, w) * f.cost for f in live), ZERO)) / workers  # type: ignore[operator]
         if new == w:
             return w, None
         w = new
     return None, f"no fixed point within {MAX_STEPS} iteration steps"
 
 
-def _jobs(flow: Interferer, window: Fraction, cap: int | None) -> int:
-    """``nⱼ``: the jobs of a callback started in a window of length ``window`` (§9.4), at most ``cap``."""
-    if flow.period is None or flow.jitter is None:
-        assert cap is not None  # (only where the group never holds the job back)
-        return cap
-    arrivals = int(1 + (window + flow.jitter) // flow.period + 1)
-    return arrivals if cap is None else min(cap, arrivals)
+def _jobs(flow: Interferer, window: Fraction) -> int:
+    """``nⱼ ≤ 1 + η̄ⱼ(window)``: the jobs of a callback (of bounded activations) started in a window (§9.4)."""
+    return int(1 + (window + flow.jitter) // flow.period + 1)  # type: ignore[operator]
 
 
 def carry_in(system: SystemModel, members: tuple[TaskModel, ...], workers: int) -> Fraction:
