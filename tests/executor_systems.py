@@ -9,6 +9,9 @@ from __future__ import annotations
 
 import random
 from fractions import Fraction
+from typing import TypeVar
+
+T = TypeVar("T", int, tuple[int, int])
 
 KINDS = ("single_threaded", "static_single_threaded", "events")
 PERIODS_MS = (10, 20, 25, 40, 50, 100)
@@ -16,6 +19,24 @@ PERIODS_MS = (10, 20, 25, 40, 50, 100)
 
 def _ms(value: Fraction) -> str:
     return f"{value.numerator}/{value.denominator} ms" if value.denominator != 1 else f"{value.numerator} ms"
+
+
+def _delay(rng: random.Random, rigid: bool, least: list[int], spread: list[int]) -> str:
+    """A connection's delay clause: a least delay from ``least``, a range from ``spread`` unless rigid."""
+    dmin = rng.choice(least)
+    dmax = dmin + (0 if rigid else rng.choice(spread))
+    return "" if dmax == 0 else f" delay {dmin} ms" if dmin == dmax else f" delay {dmin} ms .. {dmax} ms"
+
+
+def _path(rng: random.Random, first: T, edges: dict[T, list[T]], longest: int) -> list[T]:
+    """A random path along ``edges`` from ``first``, of at most ``longest`` elements and without a repeat."""
+    path = [first]
+    while len(path) < longest and path[-1] in edges and rng.randrange(longest) > 0:
+        nxt = rng.choice(sorted(set(edges[path[-1]])))
+        if nxt in path:
+            break
+        path.append(nxt)
+    return path
 
 
 def executor_system(rng: random.Random, kinds: tuple[str, ...] = KINDS, rigid: bool = False) -> str:
@@ -74,17 +95,9 @@ def executor_system(rng: random.Random, kinds: tuple[str, ...] = KINDS, rigid: b
             bindings.append(f"  instance i{i} : C{i} on c{core} {{ task T priority {prio} {act} }}")
     lines += bindings
     for w, r, port in connections:
-        dmin = rng.choice([0, 0, 1, 2])
-        dmax = dmin + (0 if rigid else rng.choice([0, 0, 1, 3]))
-        delay = "" if dmax == 0 else f" delay {dmin} ms" if dmin == dmax else f" delay {dmin} ms .. {dmax} ms"
-        lines.append(f"  connect i{w}.o -> i{r}.{port}{delay}")
+        lines.append(f"  connect i{w}.o -> i{r}.{port}{_delay(rng, rigid, [0, 0, 1, 2], [0, 0, 1, 3])}")
     for c in range(rng.randint(1, 3)):
-        path = [rng.randrange(n)]
-        while len(path) < 5 and path[-1] in edges and rng.randrange(5) > 0:
-            nxt = rng.choice(sorted(set(edges[path[-1]])))
-            if nxt in path:
-                break
-            path.append(nxt)
+        path = _path(rng, rng.randrange(n), edges, 5)
         lines.append(f"  chain ch{c}: " + " -> ".join(f"i{t}.o" for t in path))
     lines.append("}")
     return "\n\n".join(components) + "\n\n" + "\n".join(lines) + "\n"
@@ -144,17 +157,9 @@ def mt_system(rng: random.Random, rigid: bool = False) -> str:
         bindings.append(f"  instance p : P on c{workers} {{ task T priority {rng.choice([5, 15])} timer 20 ms }}")
     lines += bindings
     for (wi, wk), (ri, _rk), port in connections:
-        dmin = rng.choice([0, 0, 1])
-        dmax = dmin + (0 if rigid else rng.choice([0, 0, 2]))
-        delay = "" if dmax == 0 else f" delay {dmin} ms" if dmin == dmax else f" delay {dmin} ms .. {dmax} ms"
-        lines.append(f"  connect n{wi}.o{wk} -> n{ri}.{port}{delay}")
+        lines.append(f"  connect n{wi}.o{wk} -> n{ri}.{port}{_delay(rng, rigid, [0, 0, 1], [0, 0, 2])}")
     for c in range(rng.randint(1, 3)):
-        path = [rng.choice(outputs)]
-        while len(path) < 4 and path[-1] in edges and rng.randrange(4) > 0:
-            nxt = rng.choice(sorted(set(edges[path[-1]])))
-            if nxt in path:
-                break
-            path.append(nxt)
+        path = _path(rng, rng.choice(outputs), edges, 4)
         lines.append(f"  chain ch{c}: " + " -> ".join(f"n{a}.o{b}" for a, b in path))
     lines.append("}")
     return "\n\n".join(components) + "\n\n" + "\n".join(lines) + "\n"

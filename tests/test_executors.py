@@ -228,15 +228,21 @@ def test_the_exact_search_lies_between_runs_and_the_bound(seed):
     the analysis' bound and at least every run at random phases off the grid; the periodic evaluation
     (the timing state holds each executor's snapshot) agrees with the reference simulator's."""
     model, text = _rigid(seed)
+    exact_between_runs_and_bound(model, text, random.Random(seed), 3)
+
+
+def exact_between_runs_and_bound(model, text: str, rng: random.Random, count: int) -> None:
+    """The exact supremum of every chain and callback response target of ``model`` is at most the
+    analysis' bound and at least each of ``count`` runs at random phases off the grid, whose periodic
+    evaluation agrees with the reference simulator's."""
     targets = [Target(k, c.name) for c in model.chains for k in PROVE_KINDS]
     targets += [Target("response", t.id) for t in model.tasks if t.executor is not None]
     exact = enumerate_exact(model, targets, Budget(5000))
     assert exact is not None and exact.complete, text
     analysis = analyze(model)
     grid = grid_of(model)
-    rng = random.Random(seed)
     runs = []
-    for _ in range(3):
+    for _ in range(count):
         phases = {a: F(rng.randrange(p * 97), 97) * grid.tick for a, p in zip(grid.timers, grid.periods)}
         scenario = scenario_of(phases, {})
         runs.append(measure_periodic(model, scenario, targets, grid.hyper))

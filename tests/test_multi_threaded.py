@@ -9,17 +9,15 @@ from fractions import Fraction as F
 import pytest
 
 import verify
-from verify.prove import Target
-from verify.prove.exact import Budget, count_representatives, enumerate_exact, exact_class, grid_of, scenario_of
+from verify.prove.exact import count_representatives, exact_class, grid_of
 from verify.prove.intsim import run_trace
-from verify.prove.scenario import measure, measure_periodic, measure_periodic_reference, measure_reference, replay
+from verify.prove.scenario import measure, measure_reference, replay
 from verify.sim import Scenario, random_scenario, simulate
 from verify.timing import analyze
 
 from .executor_systems import mt_system
-from .test_executors import _model, _times
+from .test_executors import _model, _times, exact_between_runs_and_bound
 from .test_intsim import _targets, concrete_scenario
-from .test_prove import KINDS as PROVE_KINDS
 from .test_timing import MS, bound_violations
 
 
@@ -192,28 +190,7 @@ def _rigid(seed: int):
 @pytest.mark.parametrize("seed", range(6))
 def test_the_exact_search_on_multi_threaded_executors_lies_between_runs_and_the_bound(seed):
     model, text = _rigid(seed)
-    targets = [Target(k, c.name) for c in model.chains for k in PROVE_KINDS]
-    targets += [Target("response", t.id) for t in model.tasks if t.executor is not None]
-    exact = enumerate_exact(model, targets, Budget(5000))
-    assert exact is not None and exact.complete, text
-    analysis = analyze(model)
-    grid = grid_of(model)
-    rng = random.Random(seed)
-    for _ in range(2):
-        phases = {a: F(rng.randrange(p * 97), 97) * grid.tick for a, p in zip(grid.timers, grid.periods)}
-        scenario = scenario_of(phases, {})
-        run = measure_periodic(model, scenario, targets, grid.hyper)
-        assert run == measure_periodic_reference(model, scenario, targets, grid.hyper), text
-        for t in targets:
-            value = exact.worst[t].value
-            s = run.values[t].worst if run.complete else None
-            assert s is None or value is None or s.value <= value, (t, text)
-    for t in targets:
-        value = exact.worst[t].value
-        if value is None:
-            continue
-        bound = (analysis.task(t.name).wcrt if t.kind == "response" else analysis.chain(t.name).bound(t.kind).worst)
-        assert bound is None or value <= bound, (t, value, bound, text)
+    exact_between_runs_and_bound(model, text, random.Random(seed), 2)
 
 
 LASER = """
