@@ -20,7 +20,8 @@ back only while ``i``'s previous job runs, until some ``f₀ ≤ r + Cᵢ``, and
 above applies to ``[f₀, s)`` (the snapshot in progress at ``f₀``, the one that collects ``J``, the jobs
 started before ``f₀`` in the carry-in), so the capped counts hold there too; for a mutually exclusive
 group in which ``i`` comes first in the processing order, the job running at ``r`` and one job of
-each other member taken from the snapshot in progress at ``r`` (a poll with the group free collects ``J``, and ``J`` then precedes every other member). A
+each other member taken from the snapshot in progress at ``r`` (a poll with the group free collects
+``J``, and ``J`` then precedes every other member). A
 member with another member before it can starve: at every poll with the group free, the earlier
 member may be pending again and run first, and every poll while it runs leaves ``J`` out (Teper, Kuhse,
 Ueter, von der Brüggen and Chen, *Thread Carefully: Preventing Starvation in the ROS 2 Multithreaded
