@@ -21,6 +21,15 @@ def _ms(value: Fraction) -> str:
     return f"{value.numerator}/{value.denominator} ms" if value.denominator != 1 else f"{value.numerator} ms"
 
 
+def _timed_activation(rng: random.Random, rigid: bool) -> str:
+    """A timer (with a fixed phase, sometimes) or, unless rigid, sometimes a sporadic source."""
+    period = rng.choice(PERIODS_MS)
+    if rng.random() < 0.2 and not rigid:
+        return f"sporadic {period} ms .. {_ms(Fraction(period * rng.randint(4, 8), 4))}"
+    phase = f" phase {_ms(Fraction(rng.randrange(2 * period), 2))}" if rng.random() < 0.3 else ""
+    return f"timer {period} ms{phase}"
+
+
 def _delay(rng: random.Random, rigid: bool, least: list[int], spread: list[int]) -> str:
     """A connection's delay clause: a least delay from ``least``, a range from ``spread`` unless rigid."""
     dmin = rng.choice(least)
@@ -55,12 +64,7 @@ def executor_system(rng: random.Random, kinds: tuple[str, ...] = KINDS, rigid: b
     for i in range(n):
         ins, reads, extra = [], [], []
         if i == 0 or rng.random() < 0.45:
-            period = rng.choice(PERIODS_MS)
-            if rng.random() < 0.2 and not rigid:
-                act = f"sporadic {period} ms .. {_ms(Fraction(period * rng.randint(4, 8), 4))}"
-            else:
-                phase = f" phase {_ms(Fraction(rng.randrange(2 * period), 2))}" if rng.random() < 0.3 else ""
-                act = f"timer {period} ms{phase}"
+            act = _timed_activation(rng, rigid)
         else:
             mode = rng.choice(["single", "single", "single", "and", "or"])
             members = ["a"] if mode == "single" else ["a", "b"]
@@ -127,13 +131,7 @@ def mt_system(rng: random.Random, rigid: bool = False) -> str:
         for k in range(ntasks):
             reads = []
             if not outputs or rng.random() < 0.4:
-                period = rng.choice(PERIODS_MS)
-                if rng.random() < 0.2 and not rigid:
-                    act = f"sporadic {period} ms .. {_ms(Fraction(period * rng.randint(4, 8), 4))}"
-                else:
-                    phase = f" phase {_ms(Fraction(rng.randrange(2 * period), 2))}" if rng.random() < 0.3 else ""
-                    act = f"timer {period} ms"
-                    act += phase
+                act = _timed_activation(rng, rigid)
             else:
                 w = rng.choice(outputs)
                 comp.append(f"  in a{k} : T")

@@ -189,12 +189,17 @@ system S {
 @pytest.mark.parametrize("seed", range(40))
 def test_no_simulated_latency_beyond_the_bounds(seed):
     """Random systems with executors of every kind: no run exceeds a response-time or chain bound."""
-    text = executor_system(random.Random(seed))
+    no_run_beyond_the_bounds(executor_system(random.Random(seed)), seed)
+
+
+def no_run_beyond_the_bounds(text: str, seed: int) -> None:
+    """Three runs of 1 s of the system ``text`` (the first with every job at its wcet and every message
+    at its least delay) stay within its bounds."""
     model = _model(text)
     analysis = analyze(model)
     for run in range(3):
         scenario = random_scenario(model, random.Random(f"{seed}/{run}"), F(1))
-        if run == 0:  # every job at its wcet, every message at its least delay
+        if run == 0:
             scenario = Scenario(scenario.horizon, scenario.phases, None, None, None, scenario.counter_phase)
         assert bound_violations(model, simulate(model, scenario), analysis) == [], text
 
@@ -212,13 +217,14 @@ def test_the_integer_run_is_the_reference_run(seed):
     assert measure(model, scenario, targets, 20_000) == measure_reference(model, scenario, targets, 20_000)
 
 
-def _rigid(seed: int):
-    """The first random executor system from ``seed`` in the exact class whose enumeration is small."""
+def rigid_system(generate, seed: int, limit: int):
+    """The first random system of ``generate`` from ``seed`` in the exact class whose enumeration has at
+    most ``limit`` representatives."""
     rng = random.Random(seed)
     while True:
-        text = executor_system(rng, rigid=True)
+        text = generate(rng, rigid=True)
         model = _model(text)
-        if exact_class(model) is None and count_representatives(grid_of(model), 400) <= 400:
+        if exact_class(model) is None and count_representatives(grid_of(model), limit) <= limit:
             return model, text
 
 
@@ -227,7 +233,7 @@ def test_the_exact_search_lies_between_runs_and_the_bound(seed):
     """The exact supremum of ``prove`` (proof spec §4.4) on rigid systems with executors is at most
     the analysis' bound and at least every run at random phases off the grid; the periodic evaluation
     (the timing state holds each executor's snapshot) agrees with the reference simulator's."""
-    model, text = _rigid(seed)
+    model, text = rigid_system(executor_system, seed, 400)
     exact_between_runs_and_bound(model, text, random.Random(seed), 3)
 
 

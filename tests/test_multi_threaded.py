@@ -9,16 +9,15 @@ from fractions import Fraction as F
 import pytest
 
 import verify
-from verify.prove.exact import count_representatives, exact_class, grid_of
 from verify.prove.intsim import run_trace
 from verify.prove.scenario import measure, measure_reference, replay
-from verify.sim import Scenario, random_scenario, simulate
+from verify.sim import Scenario, simulate
 from verify.timing import analyze
 
 from .executor_systems import mt_system
-from .test_executors import _model, _times, exact_between_runs_and_bound
+from .test_executors import _model, _times, exact_between_runs_and_bound, no_run_beyond_the_bounds, rigid_system
 from .test_intsim import _targets, concrete_scenario
-from .test_timing import MS, bound_violations
+from .test_timing import MS
 
 
 def _two(group_x: str, group_y: str, groups: str = "") -> str:
@@ -168,28 +167,12 @@ def test_the_integer_run_is_the_reference_run_on_multi_threaded_executors(seed):
 
 @pytest.mark.parametrize("seed", range(40))
 def test_no_simulated_latency_beyond_the_multi_threaded_bounds(seed):
-    text = mt_system(random.Random(seed))
-    model = _model(text)
-    analysis = analyze(model)
-    for run in range(3):
-        scenario = random_scenario(model, random.Random(f"{seed}/{run}"), F(1))
-        if run == 0:  # every job at its wcet, every message at its least delay
-            scenario = Scenario(scenario.horizon, scenario.phases, None, None, None, scenario.counter_phase)
-        assert bound_violations(model, simulate(model, scenario), analysis) == [], text
-
-
-def _rigid(seed: int):
-    rng = random.Random(seed)
-    while True:
-        text = mt_system(rng, rigid=True)
-        model = _model(text)
-        if exact_class(model) is None and count_representatives(grid_of(model), 300) <= 300:
-            return model, text
+    no_run_beyond_the_bounds(mt_system(random.Random(seed)), seed)
 
 
 @pytest.mark.parametrize("seed", range(6))
 def test_the_exact_search_on_multi_threaded_executors_lies_between_runs_and_the_bound(seed):
-    model, text = _rigid(seed)
+    model, text = rigid_system(mt_system, seed, 300)
     exact_between_runs_and_bound(model, text, random.Random(seed), 2)
 
 
