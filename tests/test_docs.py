@@ -82,3 +82,14 @@ def test_the_manual_holds_no_numbers_that_age():
              for path in PROSE for n, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1)
              for pattern, what in AGING if pattern.search(line)]
     assert not found, "\n".join(found)
+
+
+def test_the_benchmark_page_describes_every_stage():
+    """benchmarks/README.md's table of stages names every stage the runner registers."""
+    from benchmarks.run import STAGES
+
+    text = (ROOT / "benchmarks" / "README.md").read_text(encoding="utf-8")
+    described = set(re.findall(r"^\| `([a-z0-9+-]+)`", text, flags=re.MULTILINE))
+    described |= {n for row in re.findall(r"^\| (`[a-z0-9+-]+`(?:, `[a-z0-9+-]+`)+) \|", text, flags=re.MULTILINE)
+                  for n in re.findall(r"`([a-z0-9+-]+)`", row)}
+    assert set(STAGES) and set(STAGES) <= described, sorted(set(STAGES) - described)
