@@ -46,6 +46,29 @@ def test_the_site_builds_strictly_with_the_specs_and_the_benchmarks(site):
     assert not (site / "hooks").exists()
 
 
+def section_headings(markdown: str) -> int:
+    """The ``## `` headings of a Markdown text outside its fenced blocks."""
+    count, fence = 0, ""
+    for line in markdown.splitlines():
+        opening = re.match(r"^\s*(`{3,}|~{3,})", line)
+        if opening and (not fence or opening.group(1).startswith(fence)):
+            fence = "" if fence else opening.group(1)
+        elif not fence and line.startswith("## "):
+            count += 1
+    return count
+
+
+@pytest.mark.slow
+def test_every_section_of_a_served_file_is_a_section_of_its_page(site):
+    """What the site's Markdown would not take for a fence (```` ```vfy file=a.vfy ````) would swallow the
+    sections after it: every ``##`` section of a spec and of the benchmark page is one on the site."""
+    pages = {ROOT / "specs" / f"{p.stem}.md": site / "specs" / p.stem for p in (ROOT / "specs").glob("*.md")}
+    pages[ROOT / "benchmarks" / "README.md"] = site / "contributing" / "benchmarks"
+    for source, page in sorted(pages.items()):
+        html = (page / "index.html").read_text(encoding="utf-8")
+        assert html.count("<h2 id=") == section_headings(source.read_text(encoding="utf-8")), source.name
+
+
 @pytest.mark.slow
 def test_the_command_line_reference_is_the_help_of_every_command(site):
     top = subprocess.run([sys.executable, "-m", "verify", "--help"], capture_output=True, text=True,

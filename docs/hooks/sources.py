@@ -30,6 +30,8 @@ SOURCES = {f"specs/{p.name}": p for p in sorted((ROOT / "specs").glob("*.md"))} 
     "contributing/benchmarks.md": ROOT / "benchmarks" / "README.md",
 }
 
+#: the opening of a fenced block with words after its language
+FENCE_INFO = re.compile(r"^([ \t]*`{3,})([A-Za-z][\w+-]*)[ \t]+([^`{\n][^`\n]*?)[ \t]*$", re.MULTILINE)
 #: a Markdown link or image: ``[text](target#anchor)``
 LINK = re.compile(r"(!?\[[^\]]*\])\(([^)\s#]+)(#[^)\s]*)?\)")
 
@@ -55,7 +57,15 @@ def on_page_markdown(markdown: str, page: Page, config: MkDocsConfig, files: Fil
             return match.group(0)
         return f"{match.group(1)}({posixpath.relpath(uri, page_dir)}{anchor})"
 
-    return LINK.sub(relink, markdown)
+    return FENCE_INFO.sub(titled, LINK.sub(relink, markdown))
+
+
+def titled(match: re.Match[str]) -> str:
+    """A fence with words after its language (```` ```vfy file=a.vfy ````, as specs/diagnostics.md marks its
+    examples) as the fence with those words for its title: the Markdown of the site would not take it
+    for a fence otherwise, and a forge shows the words as they are."""
+    words = match.group(3).replace('"', "'")
+    return f'{match.group(1)}{match.group(2)} title="{words}"'
 
 
 def help_text(*command: str) -> str:
