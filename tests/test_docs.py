@@ -116,3 +116,12 @@ def test_the_benchmark_page_describes_every_stage():
     described |= {n for row in re.findall(r"^\| (`[a-z0-9+-]+`(?:, `[a-z0-9+-]+`)+) \|", text, flags=re.MULTILINE)
                   for n in re.findall(r"`([a-z0-9+-]+)`", row)}
     assert set(STAGES) and set(STAGES) <= described, sorted(set(STAGES) - described)
+
+
+def test_every_link_of_the_readme_leads_to_a_file_of_the_repository():
+    """The README is read on a forge, outside the site: its relative links name files of the clone."""
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    targets = [t for t in re.findall(r"\]\(([^)\s#]+)(?:#[^)]*)?\)", text) if "://" not in t]
+    assert targets, "the README links its documentation"
+    missing = [t for t in targets if not (ROOT / t).exists()]
+    assert not missing, missing
