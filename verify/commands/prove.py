@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING
 
 from ..diagnostics import Diagnostic
 from ..outputs import Output, Report, render
+from ..sanitize import shown_lines
 from ..source import SourceFile
 from .common import EXIT_INVALID, EXIT_OK, fail, load_args, to_stderr
 
@@ -62,7 +63,7 @@ def _emit(output: Output, args: argparse.Namespace) -> int:
     elif output.stdout:
         sys.stdout.write(output.stdout)
     if output.stderr:
-        sys.stderr.write(output.stderr)
+        sys.stderr.write(shown_lines(output.stderr))
     return status
 
 
