@@ -70,6 +70,18 @@ def test_a_file_name_never_starts_a_line_of_its_own(tmp_path, capsys):
     assert out.count("\n") == 1 and out.endswith(": ok (1 component, 0 systems)\n")
 
 
+def test_a_usage_error_naming_a_file_stays_one_line(tmp_path, capsys):
+    model = tmp_path / "main.vfy"
+    model.write_text("component C {\n}\nsystem S {\n  core k\n  instance c : C on k\n}\n", encoding="utf-8")
+    taken = tmp_path / f"graph{PAYLOAD}.dot"
+    taken.write_text("mine", encoding="utf-8")
+    assert main(["graph", str(model), "-o", str(taken)]) == 2
+    err = capsys.readouterr().err
+    _assert_clean(err)
+    assert err.count("\n") == 1 and "exists; refusing to overwrite it" in err
+    assert taken.read_text(encoding="utf-8") == "mine"
+
+
 def test_json_keeps_the_file_name_exact_and_escaped(tmp_path, capsys):
     bad = tmp_path / f"m{PAYLOAD}.vfy"
     bad.write_text("component C {\n  bogus\n}\n", encoding="utf-8")

@@ -138,8 +138,8 @@ def load_configured(args: argparse.Namespace, command: str) -> tuple[api.LoadRes
 
 
 def fail(message: str) -> int:
-    """A usage error (exit 2)."""
-    to_stderr(f"error: {message}")
+    """A usage error (exit 2): ``message`` is one line, whatever a file name in it holds."""
+    to_stderr(f"error: {shown(message)}")
     return EXIT_INVALID
 
 
