@@ -302,6 +302,20 @@ def test_a_write_that_fails_midway_reports_exactly_what_it_wrote(tmp_path, capsy
     assert f"cannot write {calls[-1]}: No space left on device" in err
 
 
+def test_an_export_failing_midway_reports_the_file_it_wrote(tmp_path, capsys):
+    from ..conftest import EXAMPLES
+
+    out = tmp_path / "out"
+    (out / "Navigation.componentArch").mkdir(parents=True)  # (the second file cannot be written)
+    assert main(["export", "smartmdsd", str(EXAMPLES / "navigation" / "navigation.vfy"), "-o", str(out),
+                 "--force"]) == 2
+    err = capsys.readouterr().err
+    assert f"error[E004]: cannot write {out / 'Navigation.componentArch'}: Is a directory" in err
+    assert re.findall(r"= note: written before the failure: (.*)", err) == [str(out / "Navigation.activityArch")]
+    assert "before the failure only the path in the note changed" in err
+    assert sorted(p.name for p in out.iterdir()) == ["Navigation.activityArch", "Navigation.componentArch"]
+
+
 @pytest.mark.slow
 def test_the_hostile_names_glue_compiles(tmp_path, capsys):
     """Every generated translation unit of the hostile model, in one (``main`` renamed per unit), checked

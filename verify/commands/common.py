@@ -148,8 +148,8 @@ def cannot_write(path: str, err: OSError, written: Sequence[str] = ()) -> int:
     what the command wrote before the failure (each in a note), so the message says exactly what
     changed: nothing, or those."""
     sink = DiagnosticSink()
-    count = f"{len(written)} path{'s' if len(written) != 1 else ''}"
-    done = f"before the failure, only the {count} the notes name were changed" if written else "nothing was changed"
+    count = "the path in the note" if len(written) == 1 else f"the {len(written)} paths in the notes"
+    done = f"before the failure only {count} changed" if written else "nothing was changed"
     sink.emit("E004", f"cannot write {path}: {err.strerror or err}", Span(path, 1, 1, 1, 1), "cannot be written",
               notes=[f"{'made' if os.path.isdir(w) else 'written'} before the failure: {w}" for w in written],
               help=f"check that the file and its directory are writable; {done}")
