@@ -343,3 +343,27 @@ def test_the_generator_names_what_it_mangles():
         assert ros1.cpp(name) == name + "_", name
     for name in ("scan", "Laser", "GPSDriver", "A", "x1"):
         assert ros1.cpp(name) == name, name
+
+
+@pytest.mark.parametrize("value", ["yes", "on", "null", "True", "~", "1e3", "0x10", 'a"b\\c', "x\ny\x1b[31m\x07\r",
+                                   "tab\there", "é€😀", "\x85\u2028", ""])
+def test_a_yaml_string_loads_back_as_the_same_string(value):
+    from verify.sanitize import yaml_string
+
+    assert yaml.safe_load(f"key: {yaml_string(value)}") == {"key": value}
+    assert "\n" not in yaml_string(value)
+
+
+@pytest.mark.parametrize("value", ['a"b', "back\\slash", "x\ny", "\x1b[31m", "é", "??="])
+def test_a_cpp_string_literal_holds_printable_ascii_only(value):
+    from verify.sanitize import c_string
+
+    literal = c_string(value)
+    assert literal.startswith('"') and literal.endswith('"')
+    assert all(0x20 <= ord(ch) < 0x7F for ch in literal)
+    body = literal[1:-1]
+    assert '"' not in body.replace('\\"', "") and "??" not in body
+    # the literal means the value's UTF-8 bytes: undo the escapes as a C++ compiler does
+    decoded = re.sub(rb"\\([0-7]{3}|.)", lambda m: bytes([int(m[1], 8)]) if len(m[1]) == 3 else m[1],
+                     body.encode("ascii"))
+    assert decoded == value.encode("utf-8")
