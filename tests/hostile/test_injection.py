@@ -302,6 +302,43 @@ def test_a_write_that_fails_midway_reports_exactly_what_it_wrote(tmp_path, capsy
     assert f"cannot write {calls[-1]}: No space left on device" in err
 
 
+def test_a_user_file_failing_midway_is_not_left_half_written(tmp_path, capsys, monkeypatch):
+    import builtins
+
+    from verify.gen import tree
+
+    class Full:
+        """A file whose write fails as on a full disk (after it was created)."""
+
+        def __init__(self, fh):
+            self.fh = fh
+
+        def __enter__(self):
+            return self
+
+        def __exit__(self, *exc):
+            self.fh.close()
+
+        def write(self, text):
+            self.fh.write(text[:10])
+            raise OSError(28, "No space left on device", self.fh.name)
+
+    def opening(path, mode="r", *args, **kwargs):
+        fh = builtins.open(path, mode, *args, **kwargs)  # noqa: SIM115 (closed by its caller)
+        return Full(fh) if mode == "x" and str(path).endswith("user.cmake") else fh
+
+    monkeypatch.setattr(tree, "open", opening, raising=False)
+    (tmp_path / "main.vfy").write_text(HOSTILE, encoding="utf-8")
+    project = tmp_path / "out"
+    assert main(["gen", "ros1", str(tmp_path / "main.vfy"), "-o", str(project)]) == 2
+    err = capsys.readouterr().err
+    assert f"cannot write {project / 'user' / 'user.cmake'}: No space left on device" in err
+    assert not (project / "user" / "user.cmake").exists()
+    noted = re.findall(r"= note: (?:made|written) before the failure: (.*)", err)
+    assert sorted(noted) == sorted([str(project)] + [str(p) for p in project.rglob("*")])
+    assert len(noted) > 20
+
+
 def test_an_export_failing_midway_reports_the_file_it_wrote(tmp_path, capsys):
     from ..conftest import EXAMPLES
 

@@ -116,8 +116,7 @@ def write(tree: Tree, directory: str, outcome: Outcome) -> Iterator[str]:
         path = os.path.join(directory, *f.path.split("/"))
         yield from _make_directories(os.path.dirname(path))
         if f.owner == "user":  # (created only: never over a file that appeared meanwhile)
-            with open(path, "x", encoding="utf-8", newline="") as fh:
-                fh.write(f.text)
+            _create(path, f.text)
             yield path
             continue
         fd, tmp = tempfile.mkstemp(prefix=".", suffix=".tmp", dir=os.path.dirname(path))
@@ -132,6 +131,20 @@ def write(tree: Tree, directory: str, outcome: Outcome) -> Iterator[str]:
         yield path
 
 
+def _create(path: str, text: str) -> None:
+    """Create file ``path`` holding ``text`` (never over one that exists); on a failure nothing of it is left."""
+    created = False
+    try:
+        with open(path, "x", encoding="utf-8", newline="") as fh:
+            created = True
+            fh.write(text)
+    except BaseException:
+        if created:
+            with contextlib.suppress(OSError):
+                os.unlink(path)
+        raise
+
+
 def _make_directories(directory: str) -> Iterator[str]:
     """Make ``directory`` and its missing parents, yielding each one made (outermost first)."""
     missing = []
@@ -142,5 +155,10 @@ def _make_directories(directory: str) -> Iterator[str]:
             break
         directory = parent
     for made in reversed(missing):
-        os.mkdir(made)
+        try:
+            os.mkdir(made)
+        except FileExistsError:
+            if os.path.isdir(made):  # (made by someone else meanwhile: not ours to report)
+                continue
+            raise
         yield made
