@@ -140,9 +140,9 @@ def test_parameters_are_exact_and_complete(tmp_path, write):
     model = verify.load(path).system(None)
     yaml = next(f.text for f in ros1.generate(model).files if f.path == "config/parameters.yaml")
     assert 'period_ns: "100000000/3"  # 1/30 s' in yaml  # 30 Hz, exactly
-    assert "trigger: both" in yaml and "prescaler: 2" in yaml
+    assert 'trigger: "both"' in yaml and "prescaler: 2" in yaml
     assert 'min_ns: "50000000"' in yaml and 'max_ns: "200000000"' in yaml
-    assert "nodes: [n_src, sink]" in yaml
+    assert 'nodes: ["n_src", "sink"]' in yaml
 
 
 def test_os_priorities_keep_the_models_order():

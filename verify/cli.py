@@ -93,7 +93,9 @@ def main(argv: list[str] | None = None) -> int:
     except Exception as err:  # the last line of defence: never a traceback for the user
         if os.environ.get("VERIFY_DEBUG"):
             raise
-        print(f"internal error: {type(err).__name__}: {err}\n"
+        from .sanitize import shown
+
+        print(f"internal error: {type(err).__name__}: {shown(str(err))}\n"
               "This is a bug in verify; please report it with the input file. "
               "Set VERIFY_DEBUG=1 to see the traceback.", file=sys.stderr)
         return EXIT_INTERNAL

@@ -53,7 +53,9 @@ class Project:
 
 def _shown(path: str) -> str:
     """``path`` for a message: characters that cannot be shown (NUL, control characters) escaped."""
-    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in path)
+    from .sanitize import shown
+
+    return shown(path)
 
 
 def read_bytes(path: str, sink: DiagnosticSink, at: Span | None,

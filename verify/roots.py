@@ -86,7 +86,9 @@ class Roots:
     def resolve(self, importer: str, target: str) -> str | Refusal:
         """The file that ``import "target"`` in file ``importer`` names, or why it is refused. The file is
         not opened; it need not exist (the loader then reports E004)."""
-        shown = "".join(c if c.isprintable() else repr(c)[1:-1] for c in target)
+        from .sanitize import shown as printable
+
+        shown = printable(target)
         if "\0" in target:
             return Refusal("E004", f"invalid file name `{shown}`: it contains a NUL character", "cannot be read",
                            "correct the file name")

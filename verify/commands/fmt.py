@@ -7,6 +7,7 @@ import sys
 
 from ..diagnostics import DiagnosticSink
 from ..render import render_all_text
+from ..sanitize import shown
 from ..source import SourceFile
 from .common import EXIT_INVALID, EXIT_OK, EXIT_VIOLATED, STDIN, read_stdin, replace_file, to_stderr, write_new_file
 
@@ -50,7 +51,7 @@ def run(args: argparse.Namespace) -> int:
         return EXIT_INVALID
     if args.check:
         if formatted != text:
-            print(f"{args.file}: not canonically formatted (run `verify fmt --in-place {args.file}`)",
+            print(f"{shown(args.file)}: not canonically formatted (run `verify fmt --in-place {shown(args.file)}`)",
                   file=sys.stderr)
             return EXIT_VIOLATED
         return EXIT_OK

@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING
 
 from ..diagnostics import Diagnostic
 from ..outputs import Output, Report, render
+from ..sanitize import shown, shown_lines
 from ..source import SourceFile
 from .common import EXIT_INVALID, EXIT_OK, fail, load_args, to_stderr
 
@@ -62,7 +63,7 @@ def _emit(output: Output, args: argparse.Namespace) -> int:
     elif output.stdout:
         sys.stdout.write(output.stdout)
     if output.stderr:
-        sys.stderr.write(output.stderr)
+        sys.stderr.write(shown_lines(output.stderr))
     return status
 
 
@@ -125,7 +126,7 @@ def run(args: argparse.Namespace) -> int:
 def _trace_svg(model: SystemModel, proof: ProofResult, args: argparse.Namespace) -> int | None:
     drawn = [v for v in proof.verdicts if v.counterexample is not None]
     if not drawn:
-        to_stderr(f"note: no counterexample, so nothing was drawn to {args.trace_svg}")
+        to_stderr(f"note: no counterexample, so nothing was drawn to {shown(args.trace_svg)}")
         return None
     from ..prove.gantt import to_svg_all
 

@@ -14,6 +14,7 @@ import hashlib
 import os
 import stat
 import tempfile
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Literal
 
@@ -104,17 +105,19 @@ def plan(tree: Tree, directory: str, force: bool) -> Outcome:
     return outcome
 
 
-def write(tree: Tree, directory: str, outcome: Outcome) -> None:
-    """Write the files ``outcome.written`` names (each atomically: a temporary file renamed over it)."""
+def write(tree: Tree, directory: str, outcome: Outcome) -> Iterator[str]:
+    """Write the files ``outcome.written`` names (each atomically: a temporary file renamed over it),
+    yielding each directory made and each file written as soon as it is in place: a failure midway
+    (an ``OSError`` from the iteration) leaves exactly what was yielded changed."""
     wanted = set(outcome.written)
     for f in tree.files:
         if f.path not in wanted:
             continue
         path = os.path.join(directory, *f.path.split("/"))
-        os.makedirs(os.path.dirname(path), exist_ok=True)
+        yield from _make_directories(os.path.dirname(path))
         if f.owner == "user":  # (created only: never over a file that appeared meanwhile)
-            with open(path, "x", encoding="utf-8", newline="") as fh:
-                fh.write(f.text)
+            _create(path, f.text)
+            yield path
             continue
         fd, tmp = tempfile.mkstemp(prefix=".", suffix=".tmp", dir=os.path.dirname(path))
         try:
@@ -125,3 +128,37 @@ def write(tree: Tree, directory: str, outcome: Outcome) -> None:
             with contextlib.suppress(OSError):
                 os.unlink(tmp)
             raise
+        yield path
+
+
+def _create(path: str, text: str) -> None:
+    """Create file ``path`` holding ``text`` (never over one that exists); on a failure nothing of it is left."""
+    created = False
+    try:
+        with open(path, "x", encoding="utf-8", newline="") as fh:
+            created = True
+            fh.write(text)
+    except BaseException:
+        if created:
+            with contextlib.suppress(OSError):
+                os.unlink(path)
+        raise
+
+
+def _make_directories(directory: str) -> Iterator[str]:
+    """Make ``directory`` and its missing parents, yielding each one made (outermost first)."""
+    missing = []
+    while directory and not os.path.isdir(directory):
+        missing.append(directory)
+        parent = os.path.dirname(directory)
+        if parent == directory:
+            break
+        directory = parent
+    for made in reversed(missing):
+        try:
+            os.mkdir(made)
+        except FileExistsError:
+            if os.path.isdir(made):  # (made by someone else meanwhile: not ours to report)
+                continue
+            raise
+        yield made

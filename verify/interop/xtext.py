@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from fractions import Fraction
 
 from ..diagnostics import DiagnosticSink
+from ..sanitize import shown
 from ..source import Span
 
 _TOKEN = re.compile(r"""
@@ -53,8 +54,7 @@ def tokenize(text: str, path: str, sink: DiagnosticSink) -> list[Tok] | None:
         if m is None:
             col = pos - line_start + 1
             ch = text[pos]
-            shown = ch if ch.isprintable() else repr(ch)[1:-1]
-            sink.emit("E701", f"unexpected character `{shown}` in {path}", Span(path, line, col, line, col + 1),
+            sink.emit("E701", f"unexpected character `{shown(ch)}` in {path}", Span(path, line, col, line, col + 1),
                       "not part of the format", help="the file must be a SmartMDSD model as its editor writes it")
             return None
         kind = m.lastgroup or ""
