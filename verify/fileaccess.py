@@ -12,12 +12,14 @@ and the parser's cache. Each is read only when
 
 A refused file is reported by its name only (``Refused``); what it holds is never read. Generated files
 are written only below their output directory and never through a symbolic link (``links_below``,
-``write_new``).
+``write_output``).
 """
 from __future__ import annotations
 
+import contextlib
 import os
 import stat
+import tempfile
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -126,9 +128,36 @@ def links_below(directory: str, relative: str) -> str | None:
     return None
 
 
-def write_new(path: str, text: str) -> None:
-    """Create file ``path`` with ``text``; ``FileExistsError`` when anything is there, a symbolic link
-    included (it is never followed: ``O_EXCL``)."""
-    fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0), 0o666)
-    with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
-        fh.write(text)
+def write_output(path: str, data: str | bytes, *, replace: bool) -> None:
+    """Write ``data`` (text as UTF-8) to ``path`` without ever following a symbolic link there: a new
+    file (``FileExistsError`` when anything is there, a link included: ``O_EXCL``), or with ``replace``
+    a temporary file beside it renamed over what is there (a link is replaced, not written through; a
+    regular file keeps its mode). Either the whole file is written or nothing changes."""
+    raw = data.encode("utf-8") if isinstance(data, str) else data
+    if not replace:
+        flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_BINARY", 0)
+        with os.fdopen(os.open(path, flags, 0o666), "wb") as fh:
+            fh.write(raw)
+        return
+    mode = _mode_of(path)
+    fd, temporary = tempfile.mkstemp(prefix=".", suffix=".tmp", dir=os.path.dirname(path) or os.curdir)
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(raw)
+        os.chmod(temporary, mode)
+        os.replace(temporary, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(temporary)
+        raise
+
+
+def _mode_of(path: str) -> int:
+    """The mode a file written at ``path`` gets: that of the regular file there, else the default."""
+    with contextlib.suppress(OSError):
+        info = os.lstat(path)
+        if stat.S_ISREG(info.st_mode):
+            return stat.S_IMODE(info.st_mode)
+    umask = os.umask(0o022)
+    os.umask(umask)
+    return 0o666 & ~umask

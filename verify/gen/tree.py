@@ -9,14 +9,12 @@ work), so regenerating after ``synth`` rewrites only what changed: the parameter
 """
 from __future__ import annotations
 
-import contextlib
 import hashlib
 import os
-import tempfile
 from dataclasses import dataclass, field
 from typing import Literal
 
-from ..fileaccess import Refused, links_below, read_regular, write_new
+from ..fileaccess import Refused, links_below, read_regular, write_output
 
 MARK = "verify-gen sha256 "
 #: why a symbolic link in the output directory is refused (E601, even with ``--force``)
@@ -119,15 +117,5 @@ def write(tree: Tree, directory: str, outcome: Outcome) -> None:
             continue
         path = os.path.join(directory, *f.path.split("/"))
         os.makedirs(os.path.dirname(path), exist_ok=True)
-        if f.owner == "user":  # (created only: never over a file, or a link, that appeared meanwhile)
-            write_new(path, f.text)
-            continue
-        fd, tmp = tempfile.mkstemp(prefix=".", suffix=".tmp", dir=os.path.dirname(path))
-        try:
-            with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
-                fh.write(f.text)
-            os.replace(tmp, path)
-        except BaseException:
-            with contextlib.suppress(OSError):
-                os.unlink(tmp)
-            raise
+        # (a user file is created only: never over a file, or a link, that appeared meanwhile)
+        write_output(path, f.text, replace=f.owner == "glue")
