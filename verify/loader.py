@@ -2,9 +2,10 @@
 
 Files are read as bytes and decoded as strict UTF-8; unreadable, missing or non-UTF-8 files become
 located diagnostics (E003, E004), never exceptions. An import is confined to the project's allowed
-directories before anything is opened (``verify.roots``: E006, E007), and what one run reads is bounded
-(``verify.limits``: E008). Text held in memory (an editor's unsaved buffers) takes the place of a file
-of the same path (``overlay``).
+directories before anything is opened (``verify.roots``: E006, E007), every file read — the root file
+too — obeys the rule of ``verify.fileaccess`` (inside those directories once links are followed, a
+regular file: E006, E004), and what one run reads is bounded (``verify.limits``: E008). Text held in
+memory (an editor's unsaved buffers) takes the place of a file of the same path (``overlay``).
 """
 from __future__ import annotations
 
