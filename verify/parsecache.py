@@ -29,8 +29,10 @@ MAX_TABLE_BYTES = 4 * 1024 * 1024
 
 
 def private_cache_dir() -> str | None:
-    """The cache directory, made if need be, or None when it is not a directory only this user can
-    write to (or cannot be made)."""
+    """The cache directory, made if need be (mode 0700), or None when it is not such a private directory
+    of this user (or cannot be made). Any permission for others is refused, not only writing: a
+    directory that a checkout made (0755) — ``$XDG_CACHE_HOME`` pointing into a repository — may hold
+    files a pull request committed, and Lark's cache is a pickle."""
     base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
     directory = os.path.join(base, CACHE_DIR)
     try:
@@ -40,7 +42,7 @@ def private_cache_dir() -> str | None:
         return None
     getuid = getattr(os, "getuid", None)
     mine = getuid is None or info.st_uid == getuid()
-    if not stat.S_ISDIR(info.st_mode) or not mine or info.st_mode & 0o022:
+    if not stat.S_ISDIR(info.st_mode) or not mine or info.st_mode & 0o077:
         return None
     return directory
 

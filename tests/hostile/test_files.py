@@ -419,3 +419,19 @@ def test_an_output_that_is_a_link_is_replaced_with_force_never_written_through(p
     assert code == (1 if command == "prove --trace-svg" else 0)  # (a violated spec: its counterexample drawn)
     assert not out.is_symlink() and out.is_file() and SECRET not in out.read_text()
     assert secret.read_text() == before and SECRET not in output
+
+
+def test_a_cache_directory_a_checkout_made_is_never_used(tmp_path, monkeypatch):
+    """``$XDG_CACHE_HOME`` inside a repository: a pull request could commit the cache directory with a
+    Lark cache (a pickle) in it; git makes directories 0755, verify makes its own 0700."""
+    import lark
+
+    planted = tmp_path / "checkout" / ".cache" / parsecache.CACHE_DIR
+    planted.mkdir(parents=True)
+    os.chmod(planted, 0o755)
+    bait = planted / f"lark-{lark.__version__}-parser.cache"
+    bait.write_bytes(b"not a pickle of a parser\n")
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "checkout" / ".cache"))
+    assert parsecache.private_cache_dir() is None and larkparse._cache_file() is False
+    os.chmod(planted, 0o700)
+    assert parsecache.private_cache_dir() == str(planted)
