@@ -23,7 +23,9 @@ SECRET = "hunter2-very-secret-value"
 
 @pytest.fixture
 def opened(monkeypatch):
-    """Every path opened for reading during the test (``os.open`` and ``open``), as real paths."""
+    """Every path opened for reading during the test (``os.open`` and ``open``), as real paths (the parser
+    is loaded before: its tables come from the user's cache directory)."""
+    verify.load_text(COMPONENT)
     seen: list[str] = []
     real_os_open, real_open = os.open, builtins.open
 

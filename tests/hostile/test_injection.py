@@ -303,15 +303,13 @@ def test_a_write_that_fails_midway_reports_exactly_what_it_wrote(tmp_path, capsy
 
 
 def test_a_user_file_failing_midway_is_not_left_half_written(tmp_path, capsys, monkeypatch):
-    import builtins
-
-    from verify.gen import tree
+    import os
 
     class Full:
         """A file whose write fails as on a full disk (after it was created)."""
 
-        def __init__(self, fh):
-            self.fh = fh
+        def __init__(self, fh, path):
+            self.fh, self.path = fh, path
 
         def __enter__(self):
             return self
@@ -319,15 +317,18 @@ def test_a_user_file_failing_midway_is_not_left_half_written(tmp_path, capsys, m
         def __exit__(self, *exc):
             self.fh.close()
 
-        def write(self, text):
-            self.fh.write(text[:10])
-            raise OSError(28, "No space left on device", self.fh.name)
+        def write(self, data):
+            self.fh.write(data[:10])
+            raise OSError(28, "No space left on device", self.path)
 
-    def opening(path, mode="r", *args, **kwargs):
-        fh = builtins.open(path, mode, *args, **kwargs)  # noqa: SIM115 (closed by its caller)
-        return Full(fh) if mode == "x" and str(path).endswith("user.cmake") else fh
+    real_fdopen = os.fdopen
 
-    monkeypatch.setattr(tree, "open", opening, raising=False)
+    def opening(fd, mode="r", *args, **kwargs):
+        path = os.readlink(f"/proc/self/fd/{fd}")
+        fh = real_fdopen(fd, mode, *args, **kwargs)
+        return Full(fh, path) if "w" in mode and path.endswith("user.cmake") else fh
+
+    monkeypatch.setattr(os, "fdopen", opening)
     (tmp_path / "main.vfy").write_text(HOSTILE, encoding="utf-8")
     project = tmp_path / "out"
     assert main(["gen", "ros1", str(tmp_path / "main.vfy"), "-o", str(project)]) == 2

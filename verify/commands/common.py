@@ -182,14 +182,27 @@ def replace_file(path: str, text: str) -> int:
     return EXIT_OK
 
 
-def write_new_file(path: str, text: str, force: bool) -> int:
-    """Write ``text`` to ``path``, which must not exist unless ``force``."""
-    if os.path.exists(path) and not force:
+def exists(path: str) -> bool:
+    """Something is at ``path``: a file, a directory, or a symbolic link (even one that leads nowhere)."""
+    return os.path.lexists(path)
+
+
+def write_output(path: str, data: str | bytes, force: bool) -> int:
+    """Write ``data`` to ``path``, which must not exist unless ``force`` (E004 when it cannot be written).
+    A symbolic link there is never written through (``verify.fileaccess.write_output``): without
+    ``force`` it is in the way, with ``force`` it is replaced by the file."""
+    from ..fileaccess import write_output as write
+
+    if exists(path) and not force:
         to_stderr(f"error: {shown(path)} exists; refusing to overwrite it (pass --force to replace it)")
         return EXIT_INVALID
     try:
-        with open(path, "w", encoding="utf-8") as fh:
-            fh.write(text)
+        write(path, data, replace=force)
     except OSError as err:
         return cannot_write(path, err)
     return EXIT_OK
+
+
+def write_new_file(path: str, text: str, force: bool) -> int:
+    """Write ``text`` to ``path``, which must not exist unless ``force``."""
+    return write_output(path, text, force)

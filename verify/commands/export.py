@@ -14,8 +14,9 @@ import argparse
 import os
 
 from ..diagnostics import DiagnosticSink
+from ..fileaccess import write_output
 from ..sanitize import shown
-from .common import EXIT_INVALID, EXIT_OK, cannot_write, load_configured, show_diagnostics, to_stderr
+from .common import EXIT_INVALID, EXIT_OK, cannot_write, exists, load_configured, show_diagnostics, to_stderr
 
 HELP = "write a configured system as another tool's models (SmartMDSD, CARET)"
 RESULT = "diagnostics"
@@ -63,7 +64,7 @@ def run(args: argparse.Namespace) -> int:
     if os.path.exists(args.output) and not os.path.isdir(args.output):
         to_stderr(f"error: {shown(args.output)} exists and is not a directory")
         return EXIT_INVALID
-    in_the_way = [n for n in exported.files if os.path.exists(os.path.join(args.output, n))]
+    in_the_way = [n for n in exported.files if exists(os.path.join(args.output, n))]
     if in_the_way and not args.force:
         to_stderr(f"error: {', '.join(map(shown, in_the_way))} exist{'s' if len(in_the_way) == 1 else ''} in "
                   f"{shown(args.output)}; "
@@ -74,11 +75,10 @@ def run(args: argparse.Namespace) -> int:
         if not os.path.isdir(args.output):
             os.makedirs(args.output)
             written.append(args.output)
-        for name, text in exported.files.items():
+        for name, text in exported.files.items():  # (never through a link: ``fileaccess.write_output``)
             path = os.path.join(args.output, name)
-            with open(path, "w", encoding="utf-8") as fh:
-                written.append(path)  # (from here on, the file is changed)
-                fh.write(text)
+            write_output(path, text, replace=args.force)  # (whole or not at all)
+            written.append(path)
     except OSError as err:
         return cannot_write(getattr(err, "filename", None) or args.output, err, written)
     for name in exported.files:

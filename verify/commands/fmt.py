@@ -28,7 +28,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from ..fmt import format_text
-    from ..loader import _read
+    from ..fileaccess import area_of
+    from ..loader import read_text
 
     sink = DiagnosticSink()
     if args.file == "-":
@@ -38,7 +39,9 @@ def run(args: argparse.Namespace) -> int:
         args.file = STDIN
         text = read_stdin(sink)
     else:
-        text = _read(os.path.normpath(args.file), sink, None)
+        path = os.path.normpath(args.file)
+        # (the rule of every model file: a link that leads out of the file's directory is refused, E006)
+        text = read_text(path, sink, area=area_of([path]))
     if text is None:
         to_stderr(render_all_text(sink.items, {}))
         return EXIT_INVALID

@@ -18,6 +18,8 @@ import os
 from typing import TYPE_CHECKING
 
 from ..diagnostics import Diagnostic, DiagnosticSink, Label
+from ..fileaccess import Area, Refused, read_regular
+from ..gen.tree import LINK
 from ..sanitize import shown as printable
 from ..outputs import Report, render
 from ..source import SourceFile, Span
@@ -57,20 +59,25 @@ def refusals(outcome: Outcome, directory: str) -> tuple[list[Diagnostic], dict[s
     for path, why in outcome.refused:
         full = os.path.join(directory, *path.split("/"))
         shown = printable(full)
-        first = ""
-        if os.path.isfile(full):  # (never a FIFO or a device: opening one could block)
-            try:
-                with open(full, encoding="utf-8", errors="replace", newline="") as fh:
-                    first = printable(fh.readline(200).rstrip("\r\n"))
-            except OSError:
-                pass
+        first = _first_line(full, directory) if why != LINK else ""
         span = Span(shown, 1, 1, 1, len(first) + 1)
         if first:
             sources[shown] = SourceFile(shown, first + "\n", only=span)
-        sink.emit("E601", f"{shown} {why}; it is not replaced", span, why,
-                  help="move your changes into the user files (user/), or pass --force to replace it; "
-                       "nothing was written")
+        help = ("remove the link; generated files are written only below the output directory, never through a "
+                "link (--force does not change that); nothing was written") if why == LINK else \
+            "move your changes into the user files (user/), or pass --force to replace it; nothing was written"
+        sink.emit("E601", f"{shown} {why}; it is not replaced", span, why, help=help)
     return sink.items, sources
+
+
+def _first_line(path: str, directory: str) -> str:
+    """The first line of the regular file ``path`` in ``directory`` (at most 200 characters), or "" for
+    anything else: a link is never followed, a FIFO or a device never opened (``verify.fileaccess``)."""
+    try:
+        data = read_regular(path, 200, Area((directory,)), follow_links=False)
+    except (Refused, OSError):
+        return ""
+    return printable(data[:200].decode("utf-8", errors="replace").split("\n")[0].rstrip("\r"))
 
 
 def unsupported_parts(module: ModuleType, name: str, system: SystemModel) -> list[Diagnostic]:

@@ -18,7 +18,7 @@ import os
 import sys
 from typing import TYPE_CHECKING
 
-from .common import EXIT_OK, cannot_write, fail, load_system
+from .common import EXIT_OK, exists, fail, load_system, write_output
 
 if TYPE_CHECKING:
     from ..model import SystemModel
@@ -55,7 +55,7 @@ def run(args: argparse.Namespace) -> int:
 
     if args.format == "png" and not args.output and sys.stdout.isatty():
         return fail("a PNG is not shown on a terminal: write it with `-o FILE.png` (or pipe it)")
-    if args.output and os.path.exists(args.output) and not args.force:
+    if args.output and exists(args.output) and not args.force:
         return fail(f"{args.output} exists; refusing to overwrite it (pass --force to replace it)")
     loaded = load_system(args)
     if isinstance(loaded, int):
@@ -73,9 +73,4 @@ def run(args: argparse.Namespace) -> int:
         sys.stdout.buffer.write(data)
         sys.stdout.buffer.flush()
         return EXIT_OK
-    try:
-        with open(args.output, "wb") as fh:
-            fh.write(data)
-    except OSError as err:
-        return cannot_write(args.output, err)
-    return EXIT_OK
+    return write_output(args.output, data, args.force)

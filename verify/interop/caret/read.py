@@ -14,10 +14,12 @@ from dataclasses import dataclass, field
 import yaml
 
 from ...diagnostics import DiagnosticSink
-from ...limits import Limits
+from ...limits import DEFAULT_LIMITS, Limits
 from ...source import Span
 
 UNDEFINED = "UNDEFINED"
+#: the most characters of a number (the language's own limit, ``verify.limits``: E005)
+NUMBER_LENGTH = DEFAULT_LIMITS.number_length
 #: topics CARET leaves out of every architecture
 IGNORED_TOPICS = ("/parameter_events", "/rosout", "/clock")
 
@@ -25,9 +27,9 @@ IGNORED_TOPICS = ("/parameter_events", "/rosout", "/clock")
 class Malformed(Exception):
     """The file is not an architecture file: E701 at ``span``."""
 
-    def __init__(self, message: str, span: Span, help: str):
+    def __init__(self, message: str, span: Span, help: str, code: str = "E701"):
         super().__init__(message)
-        self.span, self.help = span, help
+        self.span, self.help, self.code = span, help, code
 
 
 @dataclass(frozen=True)
@@ -271,7 +273,11 @@ def _callback(c: Y, what: str) -> Callback:
     symbol = fields["symbol"].value if "symbol" in fields and isinstance(fields["symbol"].value, str) else None
     if kind == "timer_callback":
         period = _text(_key(c, "period_ns", f"timer callback `{name}`"), "`period_ns`")
-        if not period.isdigit() or int(period) <= 0:
+        if len(period) > NUMBER_LENGTH:  # (never converted whole: no number is longer in the language either)
+            raise Malformed(f"the period of timer callback `{name}` has {len(period):,} characters; at most "
+                            f"{NUMBER_LENGTH} are allowed", fields["period_ns"].span,
+                            "write `period_ns` as a whole number of nanoseconds, e.g. 100000000", "E005")
+        if not period.isascii() or not period.isdigit() or int(period) <= 0:
             raise Malformed(f"the period of timer callback `{name}` is not a positive number of nanoseconds",
                             fields["period_ns"].span, "write `period_ns` as a whole number, e.g. 100000000")
         return Callback(name, "timer", c.span, period_ns=int(period), symbol=symbol)
@@ -301,7 +307,7 @@ def read(text: str, path: str, sink: DiagnosticSink, limits: Limits) -> Architec
     try:
         return read_architecture(parse(text, path, limits), path)
     except Malformed as err:
-        sink.emit("E701", f"{path} is not a CARET architecture file: {err}", err.span, "here", help=err.help)
+        sink.emit(err.code, f"{path} is not a CARET architecture file: {err}", err.span, "here", help=err.help)
     except RecursionError:
         sink.emit("E701", f"{path} is nested too deeply", Span(path, 1, 1, 1, 2), "too deep",
                   help="an architecture file nests four levels")
