@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from .conftest import ROOT
+from .conftest import ROOT, in_ci
 
 
 def test_every_subpackage_is_installed():
@@ -115,7 +115,11 @@ def _installed_venv(where):
     (site / "deps.pth").write_text("\n".join(deps) + "\n", encoding="utf-8")
     done = subprocess.run([sys.executable, "-m", "pip", "--python", str(python), "install", "-q", "--no-deps",
                            str(ROOT)], capture_output=True, text=True, timeout=600)
-    assert done.returncode == 0, done.stderr
+    if done.returncode != 0:  # (the build needs setuptools and wheel from the package index)
+        message = f"cannot build and install verify: {done.stderr.strip()[-400:]}"
+        if in_ci():
+            pytest.fail(message)
+        pytest.skip(message)
     return python
 
 
@@ -152,3 +156,13 @@ def test_a_non_editable_install_works_from_the_clone_root(tmp_path):
     where, result = snippet.stdout.splitlines()
     assert Path(where).resolve().is_relative_to(clone.resolve())  # the shadowing this test is about
     assert result.split()[0] == "True" and int(result.split()[1]) > 0
+
+
+def test_nothing_reads_beside_the_repository():
+    """The repository stands alone: no code, test, example, fuzz seed, benchmark or script refers to a
+    directory beside the clone (the test data is copied in, with its origin and licence)."""
+    beside = ("../" + "shared", 'parent / "' + 'shared"')
+    found = [str(p.relative_to(ROOT)) for top in ("verify", "tests", "fuzz", "benchmarks", "examples", "scripts")
+             for p in (ROOT / top).rglob("*") if p.is_file() and "out" not in p.relative_to(ROOT).parts[:2]
+             and p.suffix != ".pyc" and any(b in p.read_text(encoding="utf-8", errors="replace") for b in beside)]
+    assert not found
