@@ -60,7 +60,7 @@ def read_bytes(path: str, sink: DiagnosticSink, at: Span | None,
                limit: int = DEFAULT_LIMITS.file_bytes) -> bytes | None:
     """The bytes of regular file ``path``, at most ``limit`` + 1 of them (more than ``limit``: the file is
     too large), or None after reporting why it cannot be read."""
-    where = at or Span(path, 1, 1, 1, 1)
+    where = at or Span(path, 0, 0, 0, 0)  # (a file named on the command line: no line to point at)
     shown = _shown(path)
     try:
         # a FIFO, a device or a socket would block or never end: only regular files are read, checked
@@ -81,7 +81,8 @@ def read_bytes(path: str, sink: DiagnosticSink, at: Span | None,
         return None
     except FileNotFoundError:
         sink.emit("E004", f"file not found: {shown}", where, "cannot be read",
-                  help="check the path; imports are relative to the importing file")
+                  help="check the path; imports are relative to the importing file" if at else
+                  f"check the path (relative to the working directory, {_shown(os.getcwd())})")
         return None
     except IsADirectoryError:
         sink.emit("E004", f"{shown} is a directory, not a file", where, "cannot be read",
