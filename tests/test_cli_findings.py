@@ -4,6 +4,8 @@ from __future__ import annotations
 import verify
 from verify.cli import main
 
+from .conftest import EXAMPLES
+
 LIB = "component A {\n  task T { wcet 1 ms }\n\ncomponent B { }\n"  # (A's closing brace is missing)
 MAIN = ('import "lib.vfy"\nsystem S {\n  core c\n  instance a : A on c { task T priority 1 timer 10 ms }\n'
         "  instance b : B on c\n}\n")
@@ -49,3 +51,71 @@ def test_other_files_keep_their_errors_beside_a_syntax_error(write):
                   "lib.vfy": "component A {\n  task T { wcet 1 ms }\n}\ncomponent B {\n  task U { wcet }\n}\n"})
     found = [(d.code, d.span.file.rsplit("/", 1)[-1]) for d in verify.load(path).diagnostics]
     assert ("E102", "main.vfy") in found and ("E001", "lib.vfy") in found
+
+
+NAVIGATION = str(EXAMPLES / "navigation" / "navigation.vfy")
+
+
+def test_graph_refuses_an_extension_it_cannot_write(tmp_path, capsys):
+    out = tmp_path / "nav.jpeg"
+    assert main(["graph", NAVIGATION, "-o", str(out)]) == 2
+    assert "name it .dot (or .gv), .svg, .png or .pdf" in capsys.readouterr().err and not out.exists()
+
+
+def test_graph_writes_dot_to_dot_and_gv_and_says_so(tmp_path, capsys):
+    for name in ("nav.dot", "nav.gv", "nav"):
+        out = tmp_path / name
+        assert main(["graph", NAVIGATION, "-o", str(out)]) == 0
+        assert out.read_text(encoding="utf-8").startswith("digraph")
+        assert capsys.readouterr().err == f"wrote {out}\n"
+
+
+def test_graph_lays_out_a_pdf_through_graphviz(tmp_path, monkeypatch):
+    """`-o x.pdf` is Graphviz's `dot -Tpdf` (here a stand-in `dot` records what it was asked)."""
+    import verify.diagram
+
+    calls = []
+
+    def fake_dot(argv, input, **kwargs):
+        import subprocess
+
+        calls.append(argv[1])
+        return subprocess.CompletedProcess(argv, 0, b"%PDF-1.7 ...", b"")
+
+    monkeypatch.setattr(verify.diagram.shutil, "which", lambda name: "/usr/bin/dot")
+    monkeypatch.setattr(verify.diagram.subprocess, "run", fake_dot)
+    out = tmp_path / "nav.PDF"
+    assert main(["graph", NAVIGATION, "-o", str(out)]) == 0
+    assert calls == ["-Tpdf"] and out.read_bytes().startswith(b"%PDF")
+
+
+def test_every_file_written_is_confirmed_on_stderr(tmp_path, capsys):
+    import shutil
+
+    shutil.copytree(EXAMPLES / "navigation", tmp_path / "navigation")
+    holes = str(tmp_path / "navigation" / "navigation-holes.vfy")
+    configured = tmp_path / "navigation" / "configured.vfy"
+    assert main(["synth", holes, "-o", str(configured)]) == 0
+    assert f"wrote {configured}\n" in capsys.readouterr().err
+    formatted = tmp_path / "f.vfy"
+    assert main(["fmt", NAVIGATION, "-o", str(formatted)]) == 0
+    assert capsys.readouterr().err == f"wrote {formatted}\n"
+    report = tmp_path / "proof.json"
+    assert main(["prove", str(configured), "--format", "json", "-o", str(report)]) == 0
+    out = capsys.readouterr()
+    assert out.out == "" and f"wrote {report}\n" in out.err
+    exported = tmp_path / "caret"
+    assert main(["export", "caret", str(configured), "-o", str(exported)]) == 0
+    out = capsys.readouterr()
+    assert out.out == "" and f"wrote {exported / 'architecture.yaml'}\n" in out.err
+
+
+def test_export_caret_without_from_warns_that_the_file_is_new(tmp_path, capsys):
+    completed = str(EXAMPLES / "caret-talker-listener" / "completed.vfy")
+    assert main(["export", "caret", completed, "-o", str(tmp_path / "a")]) == 0
+    err = capsys.readouterr().err
+    assert "warning[E707]" in err and "placeholders" in err and "--from ARCHITECTURE.yaml" in err
+    original = str(EXAMPLES / "caret-talker-listener" / "architecture.yaml")
+    completed_configured = str(EXAMPLES / "caret-talker-listener" / "completed.vfy")
+    assert main(["export", "caret", completed_configured, "-o", str(tmp_path / "b"), "--from", original]) == 0
+    assert "E707" not in capsys.readouterr().err

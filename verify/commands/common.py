@@ -133,6 +133,11 @@ def load_configured(args: argparse.Namespace, command: str) -> tuple[api.LoadRes
     return result, system
 
 
+def wrote(path: str) -> None:
+    """The one-line confirmation of a file written (on standard error: standard output stays the result)."""
+    to_stderr(f"wrote {path}")
+
+
 def fail(message: str) -> int:
     """A usage error (exit 2)."""
     to_stderr(f"error: {message}")
@@ -170,6 +175,7 @@ def replace_file(path: str, text: str) -> int:
         if tmp is not None:
             with contextlib.suppress(OSError):
                 os.unlink(tmp)
+    wrote(path)
     return EXIT_OK
 
 
@@ -183,4 +189,5 @@ def write_new_file(path: str, text: str, force: bool) -> int:
             fh.write(text)
     except OSError as err:
         return cannot_write(path, err)
+    wrote(path)
     return EXIT_OK

@@ -14,7 +14,7 @@ import argparse
 import os
 
 from ..diagnostics import DiagnosticSink
-from .common import EXIT_INVALID, EXIT_OK, cannot_write, load_configured, show_diagnostics, to_stderr
+from .common import EXIT_INVALID, EXIT_OK, cannot_write, load_configured, show_diagnostics, to_stderr, wrote
 
 HELP = "write a configured system as another tool's models (SmartMDSD, CARET)"
 RESULT = "diagnostics"
@@ -75,5 +75,5 @@ def run(args: argparse.Namespace) -> int:
     except OSError as err:
         return cannot_write(args.output, err)
     for name in exported.files:
-        print(os.path.join(args.output, name))
+        wrote(os.path.join(args.output, name))
     return EXIT_OK

@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING
 from ..diagnostics import Diagnostic
 from ..outputs import Output, Report, render
 from ..source import SourceFile
-from .common import EXIT_INVALID, EXIT_OK, fail, load_args, to_stderr
+from .common import EXIT_INVALID, EXIT_OK, fail, load_args, to_stderr, wrote
 
 if TYPE_CHECKING:
     from ..model import SystemModel
@@ -57,6 +57,7 @@ def _emit(output: Output, args: argparse.Namespace) -> int:
         try:
             with open(args.output, "w", encoding="utf-8") as fh:
                 fh.write(output.stdout)
+            wrote(args.output)
         except OSError as err:
             status = fail(f"cannot write {args.output}: {err.strerror or err}")
     elif output.stdout:
@@ -134,4 +135,5 @@ def _trace_svg(model: SystemModel, proof: ProofResult, args: argparse.Namespace)
             fh.write(to_svg_all(model, drawn))
     except OSError as err:
         return fail(f"cannot write {args.trace_svg}: {err.strerror or err}")
+    wrote(args.trace_svg)
     return None

@@ -10,7 +10,7 @@ from __future__ import annotations
 import argparse
 import os
 
-from .common import EXIT_OK, cannot_write, fail, load_configured
+from .common import EXIT_OK, cannot_write, fail, load_configured, wrote
 
 HELP = "one self-contained HTML page: diagram, outline, chains with margins, counterexamples"
 RESULT = None
@@ -47,4 +47,5 @@ def run(args: argparse.Namespace) -> int:
             fh.write(page)
     except OSError as err:
         return cannot_write(args.output, err)
+    wrote(args.output)
     return EXIT_OK
