@@ -119,3 +119,92 @@ def test_export_caret_without_from_warns_that_the_file_is_new(tmp_path, capsys):
     completed_configured = str(EXAMPLES / "caret-talker-listener" / "completed.vfy")
     assert main(["export", "caret", completed_configured, "-o", str(tmp_path / "b"), "--from", original]) == 0
     assert "E707" not in capsys.readouterr().err
+
+
+# ------------------------------------------------------------------ check of several files, completion, explain --list, --color
+
+
+def test_check_takes_several_files_and_directories_with_one_exit_code(write, tmp_path, capsys):
+    write({"main.vfy": MAIN, "lib.vfy": LIB, "ok/a.vfy": "component A {\n  task T {\n    wcet 1 ms\n  }\n}\n",
+           ".hidden/b.vfy": "junk"})
+    good = str(tmp_path / "ok")
+    assert main(["check", good]) == 0
+    assert capsys.readouterr().out == f"{tmp_path / 'ok' / 'a.vfy'}: ok (1 component, 0 systems)\n"
+    assert main(["check", good, str(tmp_path / "main.vfy"), str(tmp_path / "lib.vfy")]) == 2
+    out = capsys.readouterr()
+    assert out.out.count(": ok (") == 1 and out.err.count("error[E001]") == 1  # (lib.vfy's, shown once)
+    assert main(["check", str(tmp_path)]) == 2  # the directory: a.vfy, lib.vfy, main.vfy; not .hidden
+    out = capsys.readouterr()
+    assert out.err.count("error[") == 1 and "junk" not in out.err
+
+
+def test_check_of_several_files_as_json_is_one_document(write, tmp_path, capsys):
+    import json
+
+    write({"main.vfy": MAIN, "lib.vfy": LIB})
+    assert main(["check", str(tmp_path / "main.vfy"), str(tmp_path / "lib.vfy"), "--format", "json"]) == 2
+    document = json.loads(capsys.readouterr().out)
+    assert [d["code"] for d in document["diagnostics"]] == ["E001"]
+
+
+def test_check_of_an_empty_directory_is_a_usage_error(tmp_path, capsys):
+    assert main(["check", str(tmp_path)]) == 2
+    assert "holds no .vfy file" in capsys.readouterr().err
+
+
+def test_explain_lists_every_code(capsys):
+    from verify.codes import CODES
+
+    assert main(["explain", "--list"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert len(lines) == len(CODES) and lines[0] == f"E001  {CODES['E001'].title}"
+    assert main(["explain"]) == 2 and "--list" in capsys.readouterr().err
+
+
+def test_color_always_never_and_no_color(write, monkeypatch, capsys):
+    path = write({"main.vfy": "system S { instance x : Nope }"})
+    monkeypatch.delenv("NO_COLOR", raising=False)
+    assert main(["--color", "always", "check", path]) == 2
+    assert "\x1b[" in capsys.readouterr().err
+    assert main(["check", path]) == 2  # auto: not a terminal
+    assert "\x1b[" not in capsys.readouterr().err
+    monkeypatch.setenv("NO_COLOR", "1")
+    assert main(["check", path, "--color", "always"]) == 2  # the command line overrides NO_COLOR
+    assert "\x1b[" in capsys.readouterr().err
+    assert main(["--color", "always", "check", path, "--color", "never"]) == 2  # the later one wins
+    assert "\x1b[" not in capsys.readouterr().err
+
+
+def _bash_complete(script: str, words: list[str]) -> list[str]:
+    import subprocess
+
+    line = " ".join(f"'{w}'" for w in words)
+    done = subprocess.run(["bash", "-c", f'{script}\nCOMP_WORDS=({line}); COMP_CWORD={len(words) - 1}; '
+                           '_verify_complete; printf "%s\\n" "${COMPREPLY[@]}"'],
+                          capture_output=True, text=True, timeout=30, check=True)
+    return done.stdout.split()
+
+
+def test_bash_completion_completes_commands_options_and_choices(capsys):
+    assert main(["completion", "bash"]) == 0
+    script = capsys.readouterr().out
+    assert _bash_complete(script, ["verify", "ch"]) == ["check"]
+    assert _bash_complete(script, ["verify", "check", "--format", ""]) == ["text", "json", "sarif"]
+    assert _bash_complete(script, ["verify", "--color", "check", "--fo"]) == ["--format"]
+    assert _bash_complete(script, ["verify", "gen", "r"]) == ["ros1"]
+    assert _bash_complete(script, ["verify", "explain", "E10"]) == [f"E10{i}" for i in range(1, 9)]
+    assert _bash_complete(script, ["synth", "--objective", "x"]) == []  # (no choices: no file named x here)
+    assert "--objective" in _bash_complete(script, ["synth", "--obj"])
+
+
+def test_zsh_and_fish_scripts_name_every_command(capsys):
+    from verify.commands import COMMANDS
+
+    assert main(["completion", "zsh"]) == 0
+    zsh = capsys.readouterr().out
+    assert zsh.startswith("#compdef verify synth prove\n") and "bashcompinit" in zsh
+    assert main(["completion", "fish"]) == 0
+    fish = capsys.readouterr().out
+    assert all(f" -a {name} -d " in fish for name in COMMANDS)
+    assert "__fish_seen_subcommand_from graph' -l format -x -a 'dot svg png pdf'" in fish
+    assert main(["completion", "tcsh"]) == 2

@@ -25,7 +25,7 @@ from .common import EXIT_OK, cannot_write, fail, load_system, wrote
 if TYPE_CHECKING:
     from ..model import SystemModel
 
-HELP = "draw the system: instances, ports, data flow, activations, chains (DOT, SVG, PNG)"
+HELP = "draw the system: instances, ports, data flow, activations, chains (DOT, SVG, PNG, PDF)"
 RESULT = None
 FORMATS = ("dot", "svg", "png", "pdf")
 FORMAT_HELP = "dot (Graphviz's text, the default), svg, png or pdf (laid out by Graphviz)"
