@@ -121,7 +121,7 @@ def test_export_caret_without_from_warns_that_the_file_is_new(tmp_path, capsys):
     assert "E707" not in capsys.readouterr().err
 
 
-# ------------------------------------------------------------------ check of several files, completion, explain --list, --color
+# ------------------------------------------------------------------ check of several files, completion, --list, --color
 
 
 def test_check_takes_several_files_and_directories_with_one_exit_code(write, tmp_path, capsys):

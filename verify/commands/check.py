@@ -27,15 +27,21 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     """(no options of its own)"""
 
 
+def models_under(directory: str) -> list[str]:
+    """The ``.vfy`` files under ``directory``, in name order; hidden files and directories left out."""
+    found = []
+    for here, dirs, names in os.walk(directory):
+        dirs[:] = sorted(d for d in dirs if not d.startswith("."))
+        found += [os.path.join(here, n) for n in sorted(names) if n.endswith(".vfy") and not n.startswith(".")]
+    return sorted(found)
+
+
 def model_files(paths: list[str]) -> list[str] | str:
     """The files to check: each path as given, a directory as its ``.vfy`` files; or what is wrong."""
     files: list[str] = []
     for path in paths:
         if path != "-" and os.path.isdir(path):
-            found = sorted(os.path.join(d, f) for d, dirs, names in os.walk(path)
-                           for f in names if f.endswith(".vfy") and not f.startswith(".")
-                           if not any(part.startswith(".") and part not in (".", "..")
-                                      for part in os.path.relpath(d, path).split(os.sep)))
+            found = models_under(path)
             if not found:
                 return f"{path} holds no .vfy file"
             files += found
