@@ -48,3 +48,16 @@ def test_the_completed_example_is_proved_and_exports_its_chain(tmp_path, capsys)
     main(["import", "caret", str(out / "architecture.yaml"), "-o", str(back)])  # (incomplete: no wcet)
     text = back.read_text(encoding="utf-8")
     assert "chain chatter: talker.talker_chatter -> listener.subscription_callback_0" in text  # (topic /talker/chatter)
+
+
+def test_the_chain_exported_into_the_early_file_comes_back(tmp_path, capsys):
+    """`export caret --from` the early-format file adds its `named_paths`; importing that file again gives
+    the chain, through the same nodes and topic."""
+    out = tmp_path / "out"
+    assert main(["export", "caret", str(EXAMPLE / "completed.vfy"), "-o", str(out),
+                 "--from", str(EXAMPLE / "architecture.yaml")]) == 0
+    text = (out / "architecture.yaml").read_text(encoding="utf-8")
+    assert text.startswith("named_paths:\n- path_name: chatter\n") and "path_name_aliases: []" in text
+    back = tmp_path / "back.vfy"
+    main(["import", "caret", str(out / "architecture.yaml"), "-o", str(back)])
+    assert "chain chatter: talker.chatter -> listener.subscription_callback_0" in back.read_text(encoding="utf-8")

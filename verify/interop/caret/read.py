@@ -221,7 +221,8 @@ def read_architecture(root: Y, path: str) -> Architecture:
         for node in nodes:  # (its subscriptions are those of its subscription callbacks)
             node.subscribes += [Subscribe(c.topic, c.name, c.span) for c in node.callbacks
                                 if c.topic is not None and c.topic not in IGNORED_TOPICS]
-        return Architecture([n for n in nodes if "caret_trace_" not in n.name], [], [], path)
+        paths = [_path(y) for y in _optional_list(root, "named_paths", "the architecture file")]
+        return Architecture([n for n in nodes if "caret_trace_" not in n.name], [], paths, path)
     for key in ("named_paths", "executors", "nodes"):
         _list(_key(root, key, "the architecture file"), f"`{key}`")
     nodes = [_node(y) for y in _list(_key(root, "nodes", "the file"), "`nodes`")]
@@ -234,9 +235,9 @@ def _is_early(root: Y) -> bool:
     """A file of CARET's early format (before named paths and executors were recorded, 2021): top-level
     ``path_name_aliases`` instead of ``named_paths``, no ``executors``; a callback's ``type``, a
     publisher's one ``callback_name``, no ``subscribes`` (a subscription callback's topic is the node's
-    subscription). Its aliases name no path, so it has no chains."""
+    subscription). Its aliases name no path; ``named_paths`` are those ``export caret --from`` added."""
     keys = _map(root, "the architecture file")
-    return "path_name_aliases" in keys and "named_paths" not in keys and "executors" not in keys
+    return "path_name_aliases" in keys and "executors" not in keys
 
 
 def _node(y: Y) -> Node:
