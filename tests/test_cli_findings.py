@@ -208,3 +208,12 @@ def test_zsh_and_fish_scripts_name_every_command(capsys):
     assert all(f" -a {name} -d " in fish for name in COMMANDS)
     assert "__fish_seen_subcommand_from graph' -l format -x -a 'dot svg png pdf'" in fish
     assert main(["completion", "tcsh"]) == 2
+
+
+def test_graph_writes_a_real_pdf_with_graphviz(tmp_path, capsys):
+    from .test_graph import require_graphviz
+
+    require_graphviz()
+    out = tmp_path / "nav.pdf"
+    assert main(["graph", NAVIGATION, "-o", str(out)]) == 0
+    assert out.read_bytes().startswith(b"%PDF-") and capsys.readouterr().err == f"wrote {out}\n"
