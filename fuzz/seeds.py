@@ -51,15 +51,15 @@ def seeds() -> dict[str, bytes]:
 
 
 def _smartmdsd() -> dict[str, bytes]:
-    """SmartMDSD inputs for the ``smartmdsd`` target: each system of ../shared/smartmdsd with every
+    """SmartMDSD inputs for the ``smartmdsd`` target: each system of examples/smartmdsd with every
     component (files after ``// file NAME`` lines), and the SmartMDSD examples of specs/diagnostics.md."""
     from .targets import SMARTMDSD_FILE
 
     out: dict[str, bytes] = {}
-    shared = ROOT.parent / "shared" / "smartmdsd"
-    components = sorted((shared / "components").glob("*.component"))
-    for arch in sorted((shared / "systems").glob("*.componentArch")):
-        files = components + sorted(p for p in (shared / "systems").glob(arch.stem + ".*"))
+    models = ROOT / "examples" / "smartmdsd"
+    components = sorted((models / "components").glob("*.component"))
+    for arch in sorted((models / "systems").glob("*.componentArch")):
+        files = components + sorted(p for p in (models / "systems").glob(arch.stem + ".*"))
         out[f"smartmdsd-{arch.stem}"] = "".join(f"{SMARTMDSD_FILE}{p.name}\n{p.read_text(encoding='utf-8')}\n"
                                                 for p in files).encode("utf-8")
     text = (ROOT / "specs" / "diagnostics.md").read_text(encoding="utf-8")

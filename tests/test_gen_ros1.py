@@ -226,8 +226,11 @@ def test_the_monitor_library_works_from_hand_written_code(tmp_path):
                             str(ROOT / "tests" / "ros" / "monitor_check.cpp"), "-o", str(binary)],
                            capture_output=True, text=True, timeout=300)
     assert built.returncode == 0, built.stderr
-    ran = subprocess.run([str(binary)], capture_output=True, text=True, timeout=60)
+    scratch = tmp_path / "scratch"
+    scratch.mkdir()
+    ran = subprocess.run([str(binary), str(scratch)], capture_output=True, text=True, timeout=60)
     assert ran.returncode == 0, ran.stdout
+    assert (scratch / "latency" / "run1" / "n.json").is_file()  # (summary_dir:=… made when it was missing)
 
 
 def test_a_fifo_or_junk_in_the_way_is_refused_without_blocking(models, tmp_path, capsys):

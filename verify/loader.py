@@ -64,19 +64,19 @@ def read_bytes(path: str, sink: DiagnosticSink, at: Span | None,
     """The bytes of regular file ``path``, at most ``limit`` + 1 of them (more than ``limit``: the file is
     too large), or None after reporting why it cannot be read. Within ``area`` (when given) as written
     and once links are followed (``verify.fileaccess``: the one rule of every file read)."""
-    where = at or Span(path, 1, 1, 1, 1)
+    where = at or Span(path, 0, 0, 0, 0)  # (a file named on the command line: no line to point at)
     shown = _shown(path)
     try:
         return read_regular(path, limit, area)
     except Refused as refused:
-        _refused(refused.reason, shown, where, sink)
+        _refused(refused.reason, shown, where, sink, imported=at is not None)
     except OSError as err:
         sink.emit("E004", f"cannot read {shown}: {err.strerror or err}", where, "cannot be read",
                   help="check that the file exists and is readable")
     return None
 
 
-def _refused(reason: str, shown: str, where: Span, sink: DiagnosticSink) -> None:
+def _refused(reason: str, shown: str, where: Span, sink: DiagnosticSink, imported: bool = True) -> None:
     """The diagnostic of a file ``verify.fileaccess`` refuses: its name, never its content."""
     if reason in ("outside", "link"):
         sink.emit("E006", f"{shown} is a symbolic link to a file outside the allowed directories; it is not read",
@@ -87,7 +87,8 @@ def _refused(reason: str, shown: str, where: Span, sink: DiagnosticSink) -> None
                   help="correct the file name")
     elif reason == "missing":
         sink.emit("E004", f"file not found: {shown}", where, "cannot be read",
-                  help="check the path; imports are relative to the importing file")
+                  help="check the path; imports are relative to the importing file" if imported else
+                  f"check the path (relative to the working directory, {_shown(os.getcwd())})")
     elif reason == "directory":
         sink.emit("E004", f"{shown} is a directory, not a file", where, "cannot be read", help="name a .vfy file")
     else:

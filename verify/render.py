@@ -8,7 +8,8 @@ JSON schema ``verify.diagnostics/1``::
                       "end_column", "message"}], "notes": [...], "help": str | null, "spec": str}],
      "summary": {"errors": int, "warnings": int}}
 
-Lines and columns are 1-based; ``end_column`` is exclusive. A snippet of source text shows at most
+Lines and columns are 1-based; ``end_column`` is exclusive; 0 for a diagnostic about a whole file (one
+named on the command line that cannot be read) or about no file. A snippet of source text shows at most
 ``source.SNIPPET_WIDTH`` characters of a line (``source.excerpt``), and nothing of a file that is not a
 model but its offending token (``SourceFile.only``). In text, every field (file names, message, labels,
 notes, help) and every snippet is shown through ``verify.sanitize``: a character that is not printable

@@ -137,6 +137,11 @@ def load_configured(args: argparse.Namespace, command: str) -> tuple[api.LoadRes
     return result, system
 
 
+def wrote(path: str) -> None:
+    """The one-line confirmation of a file written (on standard error: standard output stays the result)."""
+    to_stderr(f"wrote {shown(path)}")
+
+
 def fail(message: str) -> int:
     """A usage error (exit 2): ``message`` is one line, whatever a file name in it holds."""
     to_stderr(f"error: {shown(message)}")
@@ -179,6 +184,7 @@ def replace_file(path: str, text: str) -> int:
         if tmp is not None:
             with contextlib.suppress(OSError):
                 os.unlink(tmp)
+    wrote(path)
     return EXIT_OK
 
 
@@ -200,6 +206,7 @@ def write_output(path: str, data: str | bytes, force: bool) -> int:
         write(path, data, replace=force)
     except OSError as err:
         return cannot_write(path, err)
+    wrote(path)
     return EXIT_OK
 
 

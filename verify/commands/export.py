@@ -16,7 +16,7 @@ import os
 from ..diagnostics import DiagnosticSink
 from ..fileaccess import write_output
 from ..sanitize import shown
-from .common import EXIT_INVALID, EXIT_OK, cannot_write, exists, load_configured, show_diagnostics, to_stderr
+from .common import EXIT_INVALID, EXIT_OK, cannot_write, exists, load_configured, show_diagnostics, to_stderr, wrote
 
 HELP = "write a configured system as another tool's models (SmartMDSD, CARET)"
 RESULT = "diagnostics"
@@ -82,5 +82,5 @@ def run(args: argparse.Namespace) -> int:
     except OSError as err:
         return cannot_write(getattr(err, "filename", None) or args.output, err, written)
     for name in exported.files:
-        print(shown(os.path.join(args.output, name)))
+        wrote(os.path.join(args.output, name))
     return EXIT_OK

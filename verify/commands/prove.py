@@ -20,7 +20,7 @@ from ..fileaccess import write_output
 from ..outputs import Output, Report, render
 from ..sanitize import shown, shown_lines
 from ..source import SourceFile
-from .common import EXIT_INVALID, EXIT_OK, fail, load_args, to_stderr
+from .common import EXIT_INVALID, EXIT_OK, fail, load_args, to_stderr, wrote
 
 if TYPE_CHECKING:
     from ..model import SystemModel
@@ -58,6 +58,7 @@ def _emit(output: Output, args: argparse.Namespace) -> int:
     if args.output and output.stdout:
         try:
             write_output(args.output, output.stdout, replace=args.force)
+            wrote(args.output)
         except OSError as err:
             status = fail(f"cannot write {args.output}: {err.strerror or err}")
     elif output.stdout:
@@ -134,4 +135,5 @@ def _trace_svg(model: SystemModel, proof: ProofResult, args: argparse.Namespace)
         write_output(args.trace_svg, to_svg_all(model, drawn), replace=args.force)
     except OSError as err:
         return fail(f"cannot write {args.trace_svg}: {err.strerror or err}")
+    wrote(args.trace_svg)
     return None

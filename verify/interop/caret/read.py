@@ -218,12 +218,28 @@ def _topic(m: Y, key: str) -> str | None:
 
 def read_architecture(root: Y, path: str) -> Architecture:
     """The architecture of a parsed file (Malformed on a shape CARET would not read)."""
+    if _is_early(root):
+        nodes = [_node(y) for y in _list(_key(root, "nodes", "the file"), "`nodes`")]
+        for node in nodes:  # (its subscriptions are those of its subscription callbacks)
+            node.subscribes += [Subscribe(c.topic, c.name, c.span) for c in node.callbacks
+                                if c.topic is not None and c.topic not in IGNORED_TOPICS]
+        paths = [_path(y) for y in _optional_list(root, "named_paths", "the architecture file")]
+        return Architecture([n for n in nodes if "caret_trace_" not in n.name], [], paths, path)
     for key in ("named_paths", "executors", "nodes"):
         _list(_key(root, key, "the architecture file"), f"`{key}`")
     nodes = [_node(y) for y in _list(_key(root, "nodes", "the file"), "`nodes`")]
     executors = [_executor(y) for y in _list(_key(root, "executors", "the file"), "`executors`")]
     paths = [_path(y) for y in _list(_key(root, "named_paths", "the file"), "`named_paths`")]
     return Architecture([n for n in nodes if "caret_trace_" not in n.name], executors, paths, path)
+
+
+def _is_early(root: Y) -> bool:
+    """A file of CARET's early format (before named paths and executors were recorded, 2021): top-level
+    ``path_name_aliases`` instead of ``named_paths``, no ``executors``; a callback's ``type``, a
+    publisher's one ``callback_name``, no ``subscribes`` (a subscription callback's topic is the node's
+    subscription). Its aliases name no path; ``named_paths`` are those ``export caret --from`` added."""
+    keys = _map(root, "the architecture file")
+    return "path_name_aliases" in keys and "executors" not in keys
 
 
 def _node(y: Y) -> Node:
@@ -244,8 +260,7 @@ def _node(y: Y) -> Node:
         if UNDEFINED not in (write, read):
             node.passings.append((write, read, v.span))
     for p in _optional_list(y, "publishes", what):
-        callbacks = [_text(c, "a callback name") for c in _list(_key(p, "callback_names", "a publisher"),
-                                                                "`callback_names`")]
+        callbacks = _publishers(p)
         topic = _text(_key(p, "topic_name", "a publisher"), "`topic_name`")
         if topic not in IGNORED_TOPICS:
             node.publishes.append(Publish(topic, [c for c in callbacks if c != UNDEFINED], p.span))
@@ -260,6 +275,14 @@ def _node(y: Y) -> Node:
                                      _text(_key(m, "publisher_topic_name", "a message context"), "a topic"),
                                      m.span))
     return node
+
+
+def _publishers(p: Y) -> list[str]:
+    """The callbacks a publisher names: ``callback_names``, or the early format's one ``callback_name``."""
+    fields = _map(p, "a publisher")
+    if "callback_names" not in fields and "callback_name" in fields:
+        return [_text(fields["callback_name"], "`callback_name`")]
+    return [_text(c, "a callback name") for c in _list(_key(p, "callback_names", "a publisher"), "`callback_names`")]
 
 
 def _callback(c: Y, what: str) -> Callback:
