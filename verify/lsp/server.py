@@ -157,7 +157,7 @@ class VerifyServer(LanguageServer):
     async def follow(self, doc: Document, version: int) -> None:
         """Load ``version`` of ``doc`` and publish its diagnostics, then analyse it and publish again."""
         try:
-            result = await doc.worker("load").run(_load, doc.path, self.buffers())
+            result = await doc.worker("load").run(load_document, doc.path, self.buffers())
             if doc.version != version:
                 return  # (a newer change: its own load follows)
             doc.result, doc.loaded = result, version
@@ -196,7 +196,7 @@ class VerifyServer(LanguageServer):
         return self.documents.get(uri)
 
 
-def _load(path: str, buffers: dict[str, str]) -> api.LoadResult:
+def load_document(path: str, buffers: dict[str, str]) -> api.LoadResult:
     return api.load(path, overlay=lambda p: buffers.get(os.path.realpath(p)))
 
 
