@@ -38,7 +38,7 @@ from ..source import SourceMap
 from ..symbols import Symbol
 from ..timing import AnalysisResult
 from . import features as f
-from .transport import MESSAGE_BYTES, Worker, serve
+from .transport import MESSAGE_BYTES, Worker, serve, shared_converter
 
 #: seconds after the last change before the timing analysis starts
 ANALYSIS_DELAY = 0.3
@@ -105,7 +105,7 @@ class VerifyProtocol(LanguageServerProtocol):
 
 class VerifyServer(LanguageServer):
     def __init__(self) -> None:
-        super().__init__("verify", __version__, protocol_cls=VerifyProtocol)
+        super().__init__("verify", __version__, protocol_cls=VerifyProtocol, converter_factory=shared_converter)
         self.documents: dict[str, Document] = {}
         self.formatter: Worker | None = None
 

@@ -26,19 +26,19 @@ is read as usual.
 from __future__ import annotations
 
 import asyncio
+import functools
 import json
 import queue
 import threading
 from collections.abc import Callable
 from concurrent.futures import Future
 from dataclasses import dataclass
-from typing import IO, Any, BinaryIO, TypeGuard, TypeVar
+from typing import IO, Any, BinaryIO, TypeGuard, TypeVar, cast
 
 import cattrs
 from lsprotocol import types as lsp
-from lsprotocol.converters import get_converter
 from pygls.io_ import StdoutWriter
-from pygls.protocol import JsonRPCProtocol, JsonRPCRequestMessage
+from pygls.protocol import JsonRPCProtocol, JsonRPCRequestMessage, default_converter
 
 #: the largest message body the server reads (bytes): a document at the loader's size limit
 #: (``verify.limits``, 16 MiB) fits even with every character escaped in JSON as ``\\uXXXX`` pairs
@@ -140,6 +140,13 @@ def error_response(msg_id: int | str | None, code: int, message: str) -> dict[st
     return {"jsonrpc": "2.0", "id": msg_id, "error": {"code": code, "message": message}}
 
 
+@functools.cache
+def shared_converter() -> cattrs.Converter:
+    """pygls' converter (lsprotocol's types and pygls' own), made once: making one compiles a function per
+    type the first time it meets the type, which a server per fuzzed input would pay each time."""
+    return cast(Callable[[], cattrs.Converter], default_converter)()
+
+
 def _valid_id(value: object) -> TypeGuard[int | str]:
     return isinstance(value, str) or (isinstance(value, int) and not isinstance(value, bool))
 
@@ -151,7 +158,7 @@ class Connection:
     def __init__(self, protocol: JsonRPCProtocol, write: Callable[[bytes], Any]) -> None:
         self.protocol = protocol
         self.write = write
-        self.converter = get_converter()  # (lsprotocol's, as pygls' for the LSP types)
+        self.converter = shared_converter()
         self.initialized = False
         self.shut_down = False
 
