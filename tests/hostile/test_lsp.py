@@ -399,3 +399,41 @@ def test_the_message_limit_option_is_checked(work):
     done = subprocess.run([sys.executable, "-m", "verify", "lsp", "--max-message-bytes", "0"], cwd=work,
                           capture_output=True, text=True, stdin=subprocess.DEVNULL, env=dict(os.environ))
     assert done.returncode == 2 and "positive number of bytes" in done.stderr and "Traceback" not in done.stderr
+
+
+# ------------------------------------------------------------------ the position helpers, without a server
+
+
+def _partial(start: tuple[int, int], end: tuple[int, int], text: str):
+    from lsprotocol import types as lsp
+
+    return lsp.TextDocumentContentChangePartial(range=lsp.Range(lsp.Position(*start), lsp.Position(*end)), text=text)
+
+
+@pytest.mark.parametrize("before,start,end,text,after", [
+    ("ab\ncd\n", (1, 1), (1, 2), "X", "ab\ncX\n"),
+    ("ab\ncd", (0, 99), (0, 99), "!", "ab!\ncd"),  # past the line: its end
+    ("ab\ncd", (7, 0), (9, 3), "!", "ab\ncd!"),  # past the text: its end
+    ("ab\ncd", (0, 1), (99, 0), "", "a"),
+    ("\ufeffab", (0, 0), (0, 0), "X", "\ufeffXab"),  # a byte order mark is not counted: after it
+    ("\ufeffab", (0, 1), (0, 2), "", "\ufeffa"),
+    ("😀b", (0, 2), (0, 3), "X", "😀X"),  # UTF-16: the emoji counts two units
+    ("😀b", (0, 1), (0, 3), "", "😀"),  # inside a surrogate pair: the next whole character
+])
+def test_a_change_is_applied_at_its_clamped_utf16_range(before, start, end, text, after):
+    from verify.lsp.features import apply_changes, reversed_range
+
+    change = _partial(start, end, text)
+    assert reversed_range(change) is None
+    assert apply_changes(before, [change]) == after
+
+
+def test_a_reversed_range_is_recognised_and_a_whole_document_change_is_not_one():
+    from lsprotocol import types as lsp
+
+    from verify.lsp.features import reversed_range
+
+    assert reversed_range(_partial((1, 0), (0, 5), "")) is not None
+    assert reversed_range(_partial((0, 5), (0, 4), "")) is not None
+    assert reversed_range(_partial((0, 4), (0, 4), "")) is None
+    assert reversed_range(lsp.TextDocumentContentChangeWholeDocument(text="x")) is None

@@ -28,6 +28,7 @@ from __future__ import annotations
 import asyncio
 import functools
 import json
+import logging
 import queue
 import threading
 from collections.abc import Callable
@@ -271,6 +272,7 @@ class Connection:
 def serve(protocol: JsonRPCProtocol, stdin: BinaryIO, stdout: BinaryIO, limit: int = MESSAGE_BYTES) -> int:
     """Serve one client over ``stdin`` and ``stdout`` until the stream ends (0) or the client sends
     ``exit`` (0 after ``shutdown``, else 1, as LSP asks)."""
+    logging.getLogger("pygls").addHandler(logging.NullHandler())  # (what pygls logs, the client is told)
     writer = StdoutWriter(stdout)
     protocol.set_writer(writer)
     connection = Connection(protocol, writer.write)
