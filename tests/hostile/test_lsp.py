@@ -224,6 +224,8 @@ BAD_REQUESTS = [  # (what is sent, the id and error code of its answer)
     (b'{"jsonrpc": "2.0", "id": 13, "method": "textDocument/hover", "params": {"textDocument": {"uri": 5}, '
      b'"position": {"line": -1, "character": "x"}}}', 13, -32602),
     (b'{"jsonrpc": "2.0", "id": 14, "method": "textDocument/hover"}', 14, -32602),
+    (b'{"jsonrpc": "2.0", "id": 18, "method": "textDocument/hover", "params": {"textDocument": {"uri": "file:///a"}, '
+     b'"position": {"line": 1099511627776, "character": 0}}}', 18, -32602),  # above LSP's uinteger
     (b'{"jsonrpc": "2.0", "id": 15, "method": "textDocument/completion", "params": [1, 2]}', 15, -32602),
     (b'{"jsonrpc": "2.0", "id": 16, "method": "no/such/method", "params": {}}', 16, -32601),
     (b'{"jsonrpc": "2.0", "id": 17, "method": "initialize", "params": {"capabilities": {}}}', 17, -32600),
