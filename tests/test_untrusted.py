@@ -1,4 +1,4 @@
-"""Untrusted input (README, "Running on untrusted input"): imports are confined to the allowed
+"""Untrusted input (docs/guide/untrusted.md): imports are confined to the allowed
 directories and refused before any file outside is opened; nothing of a file that is not a model is
 shown but its offending token; snippets are cut to a bounded width; every limit is a located E008."""
 from __future__ import annotations

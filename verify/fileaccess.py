@@ -1,4 +1,4 @@
-"""The one rule for every file verify reads or writes (README, "Running on untrusted input").
+"""The one rule for every file verify reads or writes (docs/guide/untrusted.md).
 
 The files of a project are untrusted: the model named on the command line, what it imports, the
 ``pyproject.toml`` above it, the files ``verify import`` reads, what lies in the way of generated code,

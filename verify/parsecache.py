@@ -1,4 +1,4 @@
-"""The fast parser's tables, kept between processes without Lark (README, "Running on untrusted input").
+"""The fast parser's tables, kept between processes without Lark (docs/guide/untrusted.md, "The cache").
 
 A command that parses valid text needs only ``verify.lalr.FastParser``: Lark's LALR table for the
 grammar and the lexer of ``lalr.py``. Building it needs Lark (about 20 ms to import, 9 ms to load

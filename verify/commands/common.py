@@ -1,7 +1,7 @@
 """What the commands share: exit codes, loading the model a command names, showing a report, and
 writing files without ever losing what the user wrote.
 
-Exit codes (stable, documented in README.md):
+Exit codes (stable, documented in README.md and docs/reference/commands.md):
   0  ok: the model is valid / every spec holds
   1  a spec is violated, or synthesis is unsatisfiable
   2  invalid input or usage (diagnostics say where)

@@ -1,5 +1,5 @@
-"""``verify lsp``: the language server, over standard input and output (``verify.lsp``; README,
-"Editors")."""
+"""``verify lsp``: the language server, over standard input and output (``verify.lsp``;
+docs/guide/editors.md)."""
 from __future__ import annotations
 
 import argparse
