@@ -219,3 +219,193 @@ def test_a_file_of_empty_lines_after_an_error_needs_no_list_of_its_lines():
     peak, diagnostics = _peak_of_parsing("'component C { x y' + '\\n' * (4 << 20) + 'z'")
     assert diagnostics[0] == ("E001", 1, 15)
     assert peak < 64 << 20, peak
+
+
+# ------------------------------------------------------------------ analysis
+
+
+def _lines_run(code, run) -> int:
+    """Lines of ``code`` (a function's ``__code__``) executed while ``run()`` runs: a deterministic
+    count of the work of one function."""
+    count = [0]
+
+    def local(frame, event, arg):
+        if event == "line":
+            count[0] += 1
+        return local
+
+    def call(frame, event, arg):
+        return local if frame.f_code is code else None
+
+    sys.settrace(call)
+    try:
+        run()
+    finally:
+        sys.settrace(None)
+    return count[0]
+
+
+def _one_core(n: int, same_priority: bool) -> str:
+    instances = "".join(f"  instance i{k} : C on c {{ task T priority {1 if same_priority else n - k} timer 1 s }}\n"
+                        for k in range(n))
+    return "component C {\n  task T {\n    wcet 1 us\n  }\n}\nsystem S {\n  core c\n" + instances + "}\n"
+
+
+def _retained_by_analysis(text: str) -> int:
+    import tracemalloc
+
+    from verify.timing import analyze
+
+    model = verify.load_text(text, "core.vfy").system()
+    tracemalloc.start()
+    try:
+        before = tracemalloc.get_traced_memory()[0]
+        result = analyze(model)
+        kept = tracemalloc.get_traced_memory()[0] - before
+    finally:
+        tracemalloc.stop()
+    assert all(t.response.wcrt is not None for t in result.tasks)
+    return kept
+
+
+@pytest.mark.parametrize("same_priority", [True, False], ids=["one-level", "one-level-each"])
+def test_analysis_memory_is_linear_in_the_tasks_of_a_core(same_priority):
+    # (every response once held the ids of all its higher-priority tasks: n²/2 names on one core)
+    small = _retained_by_analysis(_one_core(300, same_priority))
+    large = _retained_by_analysis(_one_core(1200, same_priority))
+    assert large <= 5 * small, (small, large)
+
+
+def test_interferers_are_hp_in_declaration_order_and_equal_the_tuple():
+    import random
+
+    from verify.timing.interferers import CoreOrder, Interferers
+
+    rng = random.Random(37)
+    for _ in range(200):
+        n = rng.randint(1, 40)
+        ids = [f"t{k}" for k in range(n)]
+        levels = [rng.randint(0, 5) for _ in range(n)]
+        order = CoreOrder(ids, levels)
+        for k in range(n):
+            extra = tuple(f"r{j}" for j in range(rng.randint(0, 2)))
+            view = Interferers(order, levels[k], ids[k], extra)
+            expected = tuple(ids[j] for j in range(n) if levels[j] <= levels[k] and j != k) + extra
+            assert tuple(view) == expected and len(view) == len(expected)
+            assert view == expected and expected == view and hash(view) == hash(expected)
+            assert view[:3] == expected[:3] and view[1:] == expected[1:] and view[::2] == expected[::2]
+            if expected:
+                assert view[0] == expected[0] and view[-1] == expected[-1]
+            assert (ids[k] in view) is False
+
+
+def test_interferers_agree_with_the_reference_analysis():
+    from verify.timing import analyze, rta
+    from verify.timing.fastrta import response_times
+
+    model = verify.load_text(_one_core(40, same_priority=False), "core.vfy").system()
+    result = analyze(model)
+    events = {t.id: t.events for t in result.tasks}
+    estimates = {t.id: t.response.wcrt for t in result.tasks}
+    fast, slow = response_times(model, events, estimates), rta.response_times(model, events, estimates)
+    assert fast == slow
+    assert fast["i5.T"].interferers == ("i0.T", "i1.T", "i2.T", "i3.T", "i4.T")
+
+
+def _trigger_chain(n: int, cores: int = 8) -> str:
+    """A chain of ``n`` tasks over ``cores`` cores, each triggered by the one before, priorities falling
+    along it (no causal path keeps a cap: each task's writers are of higher priority)."""
+    component = ("component P {\n  in i : M\n  out o : M\n  task Run {\n    reads i optional\n    produces o\n"
+                 "    bcet 1 us\n    wcet 2 us\n  }\n}\n")
+    lines = [f"  core c{c}\n" for c in range(cores)]
+    lines += [f"  instance p{k} : P on c{k % cores} {{ task Run priority {n - k} "
+              f"{'trigger i' if k else 'timer 10 ms'} }}\n" for k in range(n)]
+    lines += [f"  connect p{k - 1}.o -> p{k}.i\n" for k in range(1, n)]
+    lines.append("  chain c: " + " -> ".join(f"p{k}.o" for k in range(n)) + " {\n    reaction_time <= 100 s\n  }\n")
+    return component + "system S {\n" + "".join(lines) + "}\n"
+
+
+def test_the_causal_paths_of_a_long_trigger_chain_cost_what_they_find():
+    from verify.timing import analyze
+    from verify.timing.fastrta import Round
+
+    def walk_lines(n: int) -> int:
+        model = verify.load_text(_trigger_chain(n), "chain.vfy").system()
+        return _lines_run(Round._causal_paths.__code__, lambda: analyze(model))
+
+    small, large = walk_lines(60), walk_lines(240)
+    # (one walk per task through all that lies upstream of it was n²/2 steps per CPA round)
+    assert large <= 6 * small, (small, large)
+
+
+# ------------------------------------------------------------------ prove
+
+
+E312_SYSTEM = """
+component Ticker { out tick : Msg
+  task Tick { produces tick  wcet 1 ms } }
+component Echo { in tick : Msg  in again : Msg  in any = tick | again  out echo : Msg
+  task Run { reads tick  reads again  produces echo  wcet 1 ms } }
+system Robot {
+  core cpu
+  instance ticker : Ticker on cpu { task Tick priority 2 timer 10 ms }
+  instance echo : Echo on cpu { task Run priority 1 trigger any }
+  connect ticker.tick -> echo.tick
+  connect echo.echo -> echo.again
+}
+"""
+
+
+def test_the_run_of_e312s_note_is_a_scenario_of_the_budget():
+    from verify.prove.core import prove
+
+    model = verify.load_text(E312_SYSTEM, "e312.vfy").system()
+    result = prove(model, budget=1)
+    (d,) = result.diagnostics
+    assert d.code == "E312" and "in 12 ms" in d.notes[-1] and result.explored == 1
+
+
+def test_e312s_note_is_not_simulated_when_the_budget_is_spent(monkeypatch):
+    from verify.prove import core
+    from verify.prove.exact import Budget
+
+    def no_run(*args, **kwargs):
+        raise AssertionError("simulated beyond the budget")
+
+    monkeypatch.setattr(core, "replay", no_run)
+    model = verify.load_text(E312_SYSTEM, "e312.vfy").system()
+    responses = verify.timing.analyze(model)
+    spent = Budget(1)
+    assert spent.take()
+    (d,) = core.unbounded(model, {t.id: t.response for t in responses.tasks}, spent)
+    assert d.notes[-1].endswith("was not simulated: the scenario budget (`--budget`) was spent")
+    (d,) = core.unbounded(model, {t.id: t.response for t in responses.tasks}, Budget(5, deadline=0.0))
+    assert d.notes[-1].endswith("was not simulated: the timeout (`--timeout`) had passed")
+
+
+def test_a_simulation_with_a_deadline_stops_within_a_clock_period():
+    from verify.prove.scenario import ConcreteScenario, replay
+    from verify.sim import CLOCK_EVERY, SimulationTimeout
+
+    model = verify.load_text(E312_SYSTEM, "e312.vfy").system()
+    with pytest.raises(SimulationTimeout) as stopped:
+        replay(model, ConcreteScenario(verify.timing.Fraction(10 ** 6)), 10 ** 9, deadline=0.0)
+    assert stopped.value.at is not None
+    assert str(stopped.value).startswith(f"the deadline passed after {CLOCK_EVERY} events")
+
+
+def test_prove_with_a_small_budget_and_timeout_ends_within_them(tmp_path, capsys):
+    # 40 echo loops on one core: the reference run of E312's note takes minutes without a timeout
+    loops = "".join(f"  instance e{i} : Echo on cpu {{ task Run priority {i + 1} trigger any }}\n"
+                    f"  connect ticker.tick -> e{i}.tick\n  connect e{i}.echo -> e{i}.again\n" for i in range(40))
+    text = E312_SYSTEM.split("system Robot")[0].replace("wcet 1 ms", "wcet 1 us") + (
+        "system Robot {\n  core cpu\n  instance ticker : Ticker on cpu { task Tick priority 100 timer 1 ms }\n"
+        + loops + "}\n")
+    path = tmp_path / "loops.vfy"
+    path.write_text(text, encoding="utf-8")
+    started = resource.getrusage(resource.RUSAGE_SELF).ru_utime
+    assert main(["prove", "--budget", "1", "--timeout", "1", str(path)]) == 3
+    assert resource.getrusage(resource.RUSAGE_SELF).ru_utime - started < 30  # (CPU seconds: generous)
+    err = capsys.readouterr().err
+    assert err.count("error[E312]") == 40
+    assert "was not simulated: the timeout (`--timeout`) passed while it ran" in err
