@@ -84,7 +84,7 @@ from collections.abc import Callable
 
 import verify
 
-from . import lsp, ros1, startup, tightness
+from . import hostile, lsp, ros1, startup, tightness
 from .generate import generate_chain_system, generate_executor_system, generate_pipeline_system, generate_system
 
 DEFAULT_OUT = Path(__file__).resolve().parent / "out" / "results.json"
@@ -129,8 +129,8 @@ class Instance:
     @property
     def name(self) -> str:
         kind = {generate_chain_system: "chain", generate_pipeline_system: "pipeline",
-                generate_executor_system: f"executors-{self.options.get('kind', 'single_threaded')}"
-                }.get(self.generator, "waters")
+                generate_executor_system: f"executors-{self.options.get('kind', 'single_threaded')}",
+                **HOSTILE_NAMES}.get(self.generator, "waters")
         return f"{kind}-{self.n_tasks}-s{self.seed}.vfy"
 
     @cached_property
@@ -385,6 +385,53 @@ def _register_analyze() -> None:
               generator=generate_executor_system, options={"kind": kind})(analyze_executors)
 
 
+#: the generators of the hostile stages (``benchmarks/hostile.py``) and the names of their instances
+HOSTILE_NAMES: dict[Callable[..., str], str] = {
+    hostile.generate_unknown_instances: "unknown-instances", hostile.generate_junk_line: "junk-line",
+    hostile.generate_one_core: "one-core", hostile.generate_trigger_chain: "trigger-chain"}
+
+
+def _register_hostile() -> None:
+    """Issue 37's big cases: work linear in their size (``benchmarks/hostile.py``)."""
+    from verify.render import TEXT_PER_FILE
+
+    @stage("hostile-diagnostics", "verify.load_text and the text rendering of its diagnostics (as `verify check` "
+           "shows them) for a file of n lines with two unknown instances each", sizes=(4000, 16000),
+           quick_sizes=(100,), generator=hostile.generate_unknown_instances)
+    def diagnostics_stage(inst: Instance) -> dict:
+        found, lines = hostile.render_diagnostics(inst.text)
+        if found != 2 * inst.n_tasks or lines > 10 * TEXT_PER_FILE:
+            raise BenchmarkError(f"{found} diagnostics, {lines} lines shown", {"diagnostics": found})
+        return {"diagnostics": found, "lines shown": lines}
+
+    @stage("hostile-recovery", "verify.parse.parse_source on a component opened and then n words on its one "
+           "line: error recovery up to its limit", sizes=(100000, 1000000), quick_sizes=(1000,),
+           generator=hostile.generate_junk_line)
+    def recovery_stage(inst: Instance) -> dict:
+        errors = hostile.recover(inst.text)
+        if not errors:
+            raise BenchmarkError("no syntax error reported")
+        return {"syntax errors": errors}
+
+    def analyze_bounded(inst: Instance) -> dict:
+        from verify.timing import analyze
+
+        result = analyze(inst.model)
+        unbounded = [t.id for t in result.tasks if t.response.wcrt is None]
+        found = {"CPA rounds": result.rounds, "largest WCRT": _ms(max(t.response.wcrt or Fraction(0)
+                                                                      for t in result.tasks))}
+        if not result.converged or unbounded:
+            raise BenchmarkError(f"{len(unbounded)} task(s) without a WCRT bound", found)
+        return found
+
+    stage("analyze-one-core", "verify.timing.analyze on n timer tasks on one core at one priority (memory linear "
+          "in the tasks of a core)", needs=("model",), sizes=(1000, 10000), quick_sizes=(100,),
+          generator=hostile.generate_one_core)(analyze_bounded)
+    stage("analyze-trigger-chain", "verify.timing.analyze on an n-hop chain over 8 cores, each task triggered by "
+          "the one before, at falling priorities", needs=("model",), sizes=(250, 500, 1000), quick_sizes=(20,),
+          generator=hostile.generate_trigger_chain)(analyze_bounded)
+
+
 def _ms(seconds: Fraction | None) -> str:
     if seconds is None:
         return "–"
@@ -595,6 +642,7 @@ def _register_synth() -> None:
 
 _register_parsers()
 _register_analyze()
+_register_hostile()
 _register_prove()
 _register_synth()
 startup.register(stage, BenchmarkError)

@@ -13,6 +13,7 @@ import hashlib
 import json
 import random
 import re
+from collections.abc import Sequence
 from enum import Enum
 from fractions import Fraction
 
@@ -25,7 +26,7 @@ def dump(value):
         return [type(value).__name__] + [[f.name, dump(getattr(value, f.name))] for f in dataclasses.fields(value)]
     if isinstance(value, Enum):
         return value.value
-    if isinstance(value, (tuple, list)):
+    if isinstance(value, (tuple, list, Sequence)) and not isinstance(value, str):  # (a view: ``timing.interferers``)
         return [dump(v) for v in value]
     if isinstance(value, dict):
         return [["dict"]] + [[dump(k), dump(v)] for k, v in value.items()]

@@ -73,7 +73,7 @@ def test_offsets_and_lsp_positions_round_trip(text, bom):
         line, column = m.position(offset)
         assert m.offset(line, column) == offset
         lsp_line, character = m.to_lsp(line, column)
-        line_text = text[m.line_starts[line - 1]:offset]
+        line_text = text[m.line_start(line):offset]
         assert lsp_line == line - 1 and character == len(line_text.encode("utf-16-le")) // 2
         assert m.from_lsp(lsp_line, character) == (line, column)
 

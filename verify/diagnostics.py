@@ -6,9 +6,10 @@ minimal failing example.
 """
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from enum import StrEnum
+from itertools import islice
 
 from .source import NO_SPAN, Span
 
@@ -97,7 +98,8 @@ def suggest(word: str, candidates: Iterable[str]) -> str | None:
 
 def name_list(names: Iterable[str], limit: int = 12) -> str:
     """Names for a message, each in backquotes: at most ``limit`` of them, then how many more (a
-    diagnostic about a task on a crowded core stays readable)."""
-    names = list(names)
-    shown = ", ".join(f"`{n}`" for n in names[:limit])
-    return shown + (f" and {len(names) - limit} more" if len(names) > limit else "")
+    diagnostic about a task on a crowded core stays readable; of a sequence, only the names shown are
+    visited)."""
+    seq = names if isinstance(names, Sequence) else list(names)
+    shown = ", ".join(f"`{n}`" for n in islice(seq, limit))
+    return shown + (f" and {len(seq) - limit} more" if len(seq) > limit else "")

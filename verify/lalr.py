@@ -46,7 +46,7 @@ if TYPE_CHECKING:
 LEXICAL_SHAPE = {  # (Lark writes white space into its patterns as the characters themselves)
     "WS": "(?:[ \t\x0c\r\n])+",
     "LINE_COMMENT": "\\/\\/[^\n]*",
-    "BLOCK_COMMENT": "\\/\\*(.|\n)*?\\*\\/",
+    "BLOCK_COMMENT": "\\/\\*[\\s\\S]*?\\*\\/",
     "NAME": r"[A-Za-z_][A-Za-z0-9_]*",
     "NUMBER": r"[0-9]+(\.[0-9]+)?(\/[0-9]+)?",
     "STRING": '"[^"\n]*"',

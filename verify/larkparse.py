@@ -187,8 +187,8 @@ _UNITS = ("kHz", "Hz", "ms", "us", "ns", "s")
 
 
 def _next_types(text: str, pos: int) -> list[str]:
-    """The terminals the lexeme at ``pos`` (after white space and comments) may be, for trial feeds."""
-    pos = _SKIP.match(text, pos).end()  # type: ignore[union-attr]  # (it matches the empty string)
+    """The terminals the lexeme at ``pos`` (white space and comments already skipped) may be, for trial
+    feeds."""
     if pos >= len(text):
         return ["$END"]
     if m := _WORD_RE.match(text, pos):
@@ -228,9 +228,11 @@ def _lookahead(text: str, pos: int, count: int = 2) -> list[list[Token]]:
     return combos
 
 
-def _fits(parser: InteractiveParser, tokens: list[Token], text: str, pos: int) -> bool:
-    """Whether ``parser`` accepts ``tokens`` followed by the next lexemes of the text from ``pos``."""
-    return any(_feeds(parser, tokens + more) for more in _lookahead(text, pos))
+def _fits(parser: InteractiveParser, tokens: list[Token], ahead: list[list[Token]]) -> bool:
+    """Whether ``parser`` accepts ``tokens`` followed by the next lexemes of the text (``ahead``, from
+    ``_lookahead``: looked up once for all the trials at one place, as it scans what white space and
+    comments follow)."""
+    return any(_feeds(parser, tokens + more) for more in ahead)
 
 
 def _feeds(parser: InteractiveParser, tokens: list[Token]) -> bool:
@@ -261,6 +263,7 @@ def _glued_keyword(err: UnexpectedToken, text: str) -> tuple[str, Token, Token] 
     candidates = sorted((kw for kw, name in keywords.items()
                          if name in (err.expected or ()) and len(word) > len(kw) and word.startswith(kw)),
                         key=len, reverse=True)
+    ahead = _lookahead(text, tok.end_pos) if candidates else []
     for kw in candidates:
         rest = word[len(kw):]
         kind = "NAME" if _WORD_RE.fullmatch(rest) else "NUMBER" if rest.isdigit() else None
@@ -270,7 +273,7 @@ def _glued_keyword(err: UnexpectedToken, text: str) -> tuple[str, Token, Token] 
                      end_line=tok.line, end_column=tok.column + len(kw), end_pos=tok.start_pos + len(kw))
         tail = Token(kind, rest, start_pos=tok.start_pos + len(kw), line=tok.line, column=tok.column + len(kw),
                      end_line=tok.end_line, end_column=tok.end_column, end_pos=tok.end_pos)
-        if _fits(parser, [head, tail], text, tok.end_pos):
+        if _fits(parser, [head, tail], ahead):
             return kw, head, tail
     return None
 
@@ -530,7 +533,7 @@ def _repair(err: UnexpectedToken, text: str) -> None:
     meant = _unit_meant(err.token) if "UNIT" in (err.expected or ()) else None
     if meant is not None and err.token.end_pos is not None:  # `50 mss`, `50 sec`: as if it read a unit ...
         unit_token = Token("UNIT", meant[0], line=err.token.line, column=err.token.column)
-        if _fits(parser, [unit_token], text, err.token.end_pos):  # ... if what follows fits then
+        if _fits(parser, [unit_token], _lookahead(text, err.token.end_pos)):  # ... if what follows fits then
             err.verify_unit = meant  # type: ignore[attr-defined]  # (ours, read back with getattr)
             parser.feed_token(unit_token)
             return
@@ -544,22 +547,23 @@ def _repair(err: UnexpectedToken, text: str) -> None:
         return
     tok = err.token
     if tok.type == "NAME" and tok.end_pos is not None:
+        ahead = _lookahead(text, tok.end_pos)
         near = _misspelt_keyword(str(tok), set(expected))
         keyword = Token(keywords[near], near, line=tok.line, column=tok.column) if near else None
-        if keyword is not None and _fits(parser, [keyword], text, tok.end_pos):  # replace the misspelt word
+        if keyword is not None and _fits(parser, [keyword], ahead):  # replace the misspelt word
             parser.feed_token(keyword)
             return
         candidates = sorted((k for k, n in keywords.items() if n in expected),
                             key=lambda k: (_edit_distance(str(tok).lower(), k), k))
         for kw in candidates:  # a keyword before it, after which the rest fits
             keyword = Token(keywords[kw], kw, line=tok.line, column=tok.column)
-            if _fits(parser, [keyword, tok], text, tok.end_pos):
+            if _fits(parser, [keyword, tok], ahead):
                 parser.feed_token(keyword)
                 parser.feed_token(tok)
                 return
         for kw in candidates:  # the closest keyword instead of it (`output x : T` read as `out x : T`)
             keyword = Token(keywords[kw], kw, line=tok.line, column=tok.column)
-            if _fits(parser, [keyword], text, tok.end_pos):
+            if _fits(parser, [keyword], ahead):
                 parser.feed_token(keyword)
                 return
     _insert_one(parser, err.token, [n for n in expected if n in keyword_names])
@@ -597,9 +601,8 @@ def _placeholder(name: str) -> str:
 
 
 def _end_span(path: str, text: str) -> Span:
-    lines = text.split("\n")
-    line = len(lines)
-    col = len(lines[-1]) + 1
+    line = text.count("\n") + 1
+    col = len(text) - text.rfind("\n")  # (the last line's length + 1)
     return Span(path, line, col, line, col + 1)
 
 

@@ -91,6 +91,16 @@ def parse_source(text: str, path: str, limits: Limits = DEFAULT_LIMITS) -> Parse
     return Parsed(module, tuple(sink.items), None, partial)
 
 
+#: error recovery gives a file up after this many errors per syntax error it may report (the errors on
+#: one line are reported once): with the default limit of 20 reported errors, 1,000 recoveries in all
+RECOVERIES_PER_SYNTAX_ERROR = 50
+
+
+def recovery_limit(limits: Limits) -> int:
+    """The errors error recovery recovers from in one file before it gives the file up."""
+    return limits.syntax_errors * RECOVERIES_PER_SYNTAX_ERROR
+
+
 def _too_many_tokens(path: str, at: int, limits: Limits) -> Diagnostic:
     line, column = at >> 32, at & 0xFFFFFFFF
     return DiagnosticSink().emit(
@@ -117,6 +127,11 @@ def _lark_parse(text: str, path: str, sink: DiagnosticSink,
 
     errors: list[UnexpectedInput] = []
     last_line = [-1]
+    # every error recovered from counts (several on one line are reported once), so that recovery stops
+    # within ``recovery_limit(limits)`` repairs on any text; a text that is not a model reports only its
+    # first error, so recovery stops there
+    recoveries = [0]
+    most = recovery_limit(limits) if looks_like_model(text) else 1
     completed: list[Tree[Token] | None] = [None]
 
     def give_up(err: UnexpectedInput) -> bool:
@@ -148,7 +163,8 @@ def _lark_parse(text: str, path: str, sink: DiagnosticSink,
                 return give_up(err)  # an unterminated comment: the rest of the file is its text
             if text.startswith('"', err.pos_in_stream):
                 _skip_unterminated_string(err, text)
-        return len(errors) < limits.syntax_errors or give_up(err)
+        recoveries[0] += 1
+        return (len(errors) < limits.syntax_errors and recoveries[0] < most) or give_up(err)
 
     too_many = None
     tree: Tree[Token] | None

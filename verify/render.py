@@ -24,7 +24,11 @@ from typing import Any
 from .codes import spec_anchor
 from .diagnostics import Diagnostic, Label, Severity
 from .sanitize import shown, shown_columns
-from .source import SourceFile, Span, excerpt
+from .source import ELLIPSIS, SourceFile, Span, excerpt
+
+#: the most diagnostics of one file that the text rendering shows; the rest are counted in one line
+#: ("… and N more errors in FILE"; JSON and SARIF list every one)
+TEXT_PER_FILE = 100
 
 
 def _gutter_width(d: Diagnostic) -> int:
@@ -89,11 +93,31 @@ def summary_line(diagnostics: Sequence[Diagnostic]) -> str:
     return ", ".join(parts)
 
 
-def render_all_text(diagnostics: Sequence[Diagnostic], sources: Mapping[str, SourceFile]) -> str:
-    blocks = [render_text(d, sources) for d in diagnostics]
+def render_all_text(diagnostics: Sequence[Diagnostic], sources: Mapping[str, SourceFile],
+                    per_file: int = TEXT_PER_FILE) -> str:
+    """Every diagnostic rustc-style, at most ``per_file`` of each file (that of its primary span, in the
+    order given); then, for each file with more, "… and N more errors in FILE"; then the summary line,
+    which counts them all."""
+    counted: dict[str, int] = {}
+    held: dict[str, list[Diagnostic]] = {}
+    blocks = []
+    for d in diagnostics:
+        file = d.primary.span.file
+        if counted.get(file, 0) < per_file:
+            counted[file] = counted.get(file, 0) + 1
+            blocks.append(render_text(d, sources))
+        else:
+            held.setdefault(file, []).append(d)
+    blocks.extend(f"{ELLIPSIS} and {_more(rest)} in {shown(file)}" for file, rest in held.items())
     if blocks:
         blocks.append(summary_line(diagnostics))
     return "\n\n".join(blocks)
+
+
+def _more(diagnostics: Sequence[Diagnostic]) -> str:
+    """"5 more errors", "1 more error and 2 more warnings" ... (the severities among ``diagnostics``)."""
+    counts = [(severity.value, sum(1 for d in diagnostics if d.severity is severity)) for severity in Severity]
+    return " and ".join(f"{n} more {word}{'s' if n != 1 else ''}" for word, n in counts if n)
 
 
 def _span_json(span: Span) -> dict[str, str | int]:

@@ -15,6 +15,7 @@ break from a name; notes and help each on a line of their own).
 """
 from __future__ import annotations
 
+import functools
 import hashlib
 import os
 import pathlib
@@ -38,7 +39,13 @@ def _uri(path: str) -> str:
     """A URI reference for ``path``: relative to the working directory when the file lies below it
     (forward slashes, percent-encoded as RFC 3986 asks, e.g. a space as ``%20``), else an absolute
     ``file:`` URI (a ``../`` path would point outside the repository that code scanning resolves
-    relative URIs against)."""
+    relative URIs against). Worked out once per path and working directory in one log (a log of 32,000
+    results names a few files)."""
+    return _uri_from(path, os.getcwd())
+
+
+@functools.lru_cache(maxsize=256)
+def _uri_from(path: str, cwd: str) -> str:
     if not (os.path.isabs(path) or os.path.exists(path)):
         return quote(path.replace(os.sep, "/"), safe="/")  # a name that is no file (``<text>``)
     absolute = os.path.abspath(path)
@@ -104,6 +111,7 @@ def _fingerprint(d: Diagnostic, sources: Mapping[str, SourceFile], seen: dict[st
 
 def to_sarif(diagnostics: list[Diagnostic] | tuple[Diagnostic, ...],
              sources: Mapping[str, SourceFile] | None = None) -> dict[str, Any]:
+    _uri_from.cache_clear()  # (files may have come or gone since the last log: each log looks afresh)
     codes = sorted({d.code for d in diagnostics})
     docs = documentation_uri()
     rules = [_rule(c, docs) for c in codes]

@@ -45,6 +45,7 @@ from __future__ import annotations
 
 import heapq
 import random
+import time
 from bisect import bisect_left
 from dataclasses import dataclass, field
 from fractions import Fraction
@@ -73,6 +74,15 @@ class SimulationError(RuntimeError):
     def __init__(self, message: str, at: Fraction | None = None):
         super().__init__(message)
         self.at = at
+
+
+class SimulationTimeout(SimulationError):
+    """The simulation passed its wall-clock deadline (``simulate(..., deadline=...)``: a caller's
+    ``--timeout``); every event before ``at`` was processed."""
+
+
+#: events between two looks at the clock when a simulation has a deadline
+CLOCK_EVERY = 1024
 
 
 # ------------------------------------------------------------------ scenarios
@@ -314,10 +324,11 @@ def _check(ok: bool, what: str) -> None:
 
 
 class _Simulator:
-    def __init__(self, system: SystemModel, scenario: Scenario, max_events: int):
+    def __init__(self, system: SystemModel, scenario: Scenario, max_events: int, deadline: float | None = None):
         if system.holes:
             raise ScenarioError(f"cannot simulate unresolved holes: {[t.id for t in system.holes]}")
         self.system, self.sc, self.max_events = system, scenario, max_events
+        self.deadline = deadline
         self.now, self.events, self.seq = ZERO, 0, 0
         self.heap: list[tuple[Fraction, int, int, object]] = []
         self.order = {t.id: i for i, t in enumerate(system.tasks)}
@@ -399,6 +410,8 @@ class _Simulator:
         if self.events > self.max_events:
             raise SimulationError(f"more than {self.max_events} events by t={self.now} "
                                   "(a zero-time activation loop, or raise max_events)", self.now)
+        if self.deadline is not None and self.events % CLOCK_EVERY == 0 and time.monotonic() > self.deadline:
+            raise SimulationTimeout(f"the deadline passed after {self.events} events, at t={self.now}", self.now)
 
     def _next_time(self) -> Fraction | None:
         times = [self.now + j.remaining for j in self.running.values() if j is not None]
@@ -538,9 +551,11 @@ class _Simulator:
             self.holder[t.instance] = job
 
 
-def simulate(system: SystemModel, scenario: Scenario, max_events: int = DEFAULT_MAX_EVENTS) -> Trace:
-    """Run ``system`` under ``scenario`` over ``[0, scenario.horizon)`` (specs/timing.md §1–§3)."""
-    return _Simulator(system, scenario, max_events).run()
+def simulate(system: SystemModel, scenario: Scenario, max_events: int = DEFAULT_MAX_EVENTS,
+             deadline: float | None = None) -> Trace:
+    """Run ``system`` under ``scenario`` over ``[0, scenario.horizon)`` (specs/timing.md §1–§3); with
+    ``deadline`` (a ``time.monotonic()`` instant), ``SimulationTimeout`` once it has passed."""
+    return _Simulator(system, scenario, max_events, deadline).run()
 
 
 # ------------------------------------------------------------------ chains (§4)

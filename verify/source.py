@@ -34,6 +34,8 @@ NO_SPAN = Span("<none>", 0, 0, 0, 0)
 
 #: the most characters of one source line that a snippet shows (``excerpt``)
 SNIPPET_WIDTH = 100
+#: characters per block of a ``SourceMap``'s line index
+INDEX_BLOCK = 256
 ELLIPSIS = "…"
 
 
@@ -51,13 +53,15 @@ class SourceFile:
     only: Span | None = None
 
     def line(self, number: int) -> str:
-        text = self.text[1:] if self.text.startswith("\ufeff") else self.text  # (parse skips a BOM)
-        # lines as the lexer counts them: only "\n" ends one (``splitlines`` would also split at a form
-        # feed, U+2028 and the like, and show the wrong line under a diagnostic)
-        lines = text.split("\n")
-        if not 1 <= number <= len(lines):
+        """Line ``number`` (1-based) without its line end, "" past the text. Lines are those the lexer
+        counts: only "\n" ends one (``splitlines`` would also split at a form feed, U+2028 and the like,
+        and show the wrong line under a diagnostic); a byte order mark is not part of line 1. The line
+        index (``map``) is built once per file, so a snippet costs the length of its line, not of the
+        file."""
+        index = self.map
+        if not 1 <= number <= index.lines:
             return ""
-        line = lines[number - 1].removesuffix("\r")
+        line = index.line_text(number).removesuffix("\r")
         if self.only is None:
             return line
         if number != self.only.line:
@@ -82,28 +86,47 @@ class SourceMap:
     def __init__(self, text: str):
         self.text = text
         self.bom = 1 if text.startswith("\ufeff") else 0
-        starts = [self.bom]
-        find = text.find
-        at = find("\n", self.bom)
-        while at >= 0:
-            starts.append(at + 1)
-            at = find("\n", at + 1)
-        self.line_starts = starts
+        # the line index: the newlines before each block of ``INDEX_BLOCK`` characters (from the byte
+        # order mark on), counted at C speed; a line's start is found from its block in at most
+        # ``INDEX_BLOCK`` steps, so building it and each look-up stay linear however many lines a file has
+        count, before, total = text.count, [0], 0
+        for block in range(self.bom, len(text), INDEX_BLOCK):
+            total += count("\n", block, block + INDEX_BLOCK)
+            before.append(total)
+        self._newlines_before = before
+        self._lines = total + 1
 
     @property
     def lines(self) -> int:
-        return len(self.line_starts)
+        return self._lines
 
-    def _line_end(self, index: int) -> int:
-        """The offset of the "\\n" ending line ``index`` (0-based), or of the end of the text."""
-        return self.line_starts[index + 1] - 1 if index + 1 < len(self.line_starts) else len(self.text)
+    def line_start(self, line: int) -> int:
+        """The offset of the first character of ``line`` (1-based, clamped to the text's lines)."""
+        newline = min(max(line, 1), self._lines) - 2  # (0-based: the "\n" that ends the line before)
+        if newline < 0:
+            return self.bom
+        block = bisect.bisect_right(self._newlines_before, newline) - 1
+        at = self.bom + block * INDEX_BLOCK - 1
+        find = self.text.find
+        for _ in range(newline - self._newlines_before[block] + 1):
+            at = find("\n", at + 1)
+        return at + 1
+
+    def line_text(self, line: int) -> str:
+        """The text of ``line`` (1-based, within the text) up to its "\\n"."""
+        start = self.line_start(line)
+        return self.text[start:self._end_of_line(start)]
+
+    def _end_of_line(self, start: int) -> int:
+        """The offset of the "\\n" ending the line that starts at ``start``, or of the end of the text."""
+        end = self.text.find("\n", start)
+        return end if end >= 0 else len(self.text)
 
     def offset(self, line: int, column: int) -> int:
         """The offset of (``line``, ``column``), both 1-based; clamped to the text (a column past the end
         of its line is the line's end)."""
-        index = min(max(line, 1), len(self.line_starts)) - 1
-        start = self.line_starts[index]
-        return min(start + max(column, 1) - 1, self._line_end(index))
+        start = self.line_start(line)
+        return min(start + max(column, 1) - 1, self._end_of_line(start))
 
     def span_offsets(self, span: Span) -> tuple[int, int]:
         """The offsets of ``span``'s start and (exclusive) end."""
@@ -112,21 +135,23 @@ class SourceMap:
     def position(self, offset: int) -> tuple[int, int]:
         """The 1-based (line, column) of ``offset``."""
         offset = min(max(offset, self.bom), len(self.text))
-        index = bisect.bisect_right(self.line_starts, offset) - 1
-        return index + 1, offset - self.line_starts[index] + 1
+        block = (offset - self.bom) // INDEX_BLOCK
+        line = self._newlines_before[block] + self.text.count("\n", self.bom + block * INDEX_BLOCK, offset) + 1
+        start = max(self.text.rfind("\n", 0, offset) + 1, self.bom)
+        return line, offset - start + 1
 
     def to_lsp(self, line: int, column: int) -> tuple[int, int]:
         """The LSP position (0-based line, UTF-16 character) of 1-based (``line``, ``column``)."""
-        index = min(max(line, 1), len(self.line_starts)) - 1
-        start = self.line_starts[index]
+        start = self.line_start(line)
         before = self.text[start:self.offset(line, column)]
-        return index, len(before) + sum(1 for ch in before if ord(ch) > 0xFFFF)
+        return min(max(line, 1), self._lines) - 1, len(before) + sum(1 for ch in before if ord(ch) > 0xFFFF)
 
     def from_lsp(self, line: int, character: int) -> tuple[int, int]:
         """The 1-based (line, column) of an LSP position (a character inside a surrogate pair, or past the
         end of the line, is moved to the next whole character or the line's end)."""
-        index = min(max(line, 0), len(self.line_starts) - 1)
-        start, end = self.line_starts[index], self._line_end(index)
+        index = min(max(line, 0), self._lines - 1)
+        start = self.line_start(index + 1)
+        end = self._end_of_line(start)
         units = column = 0
         while units < character and start + column < end:
             units += 2 if ord(self.text[start + column]) > 0xFFFF else 1

@@ -20,7 +20,7 @@ from typing import cast
 from ..diagnostics import Diagnostic, DiagnosticSink, Label
 from ..gcpause import paused_gc
 from ..model import SystemModel
-from ..sim import Sample, ScenarioError, SimulationError, Trace
+from ..sim import Sample, ScenarioError, SimulationError, SimulationTimeout, Trace
 from ..timing import TaskResponse, response_and_chain_bounds
 from ..units import fmt_time
 from . import bound as bound_mod
@@ -66,23 +66,21 @@ def prove(model: SystemModel, *, budget: int = DEFAULT_BUDGET, rlimit: int = DEF
         verdicts.update(_decide(model, open_, budget_obj, rlimit, use_z3, jobs, (responses, variant)))
     with paused_gc():
         ordered = tuple(verdicts[i] for i in range(len(obs)))
-        found = diagnostics(model, ordered) + unbounded(model, responses)
+        found = diagnostics(model, ordered) + unbounded(model, responses, budget_obj)
         return ProofResult(model.name, ordered, tuple(found), variant, budget_obj.used, budget)
 
 
-def unbounded(model: SystemModel, responses: Mapping[str, TaskResponse]) -> list[Diagnostic]:
+def unbounded(model: SystemModel, responses: Mapping[str, TaskResponse],
+              budget: Budget | None = None) -> list[Diagnostic]:
     """E312 for every task with neither a response-time bound nor a deadline (its activations are not
     bounded, so neither is ``A⁺``): there is nothing to prove it against, so nothing is proved for it,
     and ``prove`` does not pass (proof spec §1). The run of the first search scenario — every phase
-    0, every job at its wcet, every message at its largest delay (§6) — shows how its jobs queue."""
+    0, every job at its wcet, every message at its largest delay (§6) — shows how its jobs queue: one
+    scenario of ``budget``, run only while its deadline has not passed (else a note says why not)."""
     tasks = [t for t in model.tasks if responses[t.id].wcrt is None and responses[t.id].deadline is None]
     if not tasks:
         return []
-    horizon = search_horizon(model, None)
-    try:
-        trace = replay(model, first_scenarios(model, horizon)[0], SEARCH_EVENTS)
-    except (ScenarioError, SimulationError):
-        trace = None
+    trace, why_not = _first_run(model, budget)
     sink = DiagnosticSink()
     for task in tasks:
         notes = [f"the response-time analysis finds no bound: {responses[task.id].failure or 'not bounded'}",
@@ -90,11 +88,29 @@ def unbounded(model: SystemModel, responses: Mapping[str, TaskResponse]) -> list
                  "it against: nothing is proved for it"]
         if trace is not None:
             notes.append(_queue_text(trace, task.id))
+        elif why_not is not None:
+            notes.append(why_not)
         sink.emit("E312", f"no response-time bound for `{task.id}`, and no deadline to prove", task.span,
                   "not bounded", notes=notes,
                   help="break what lets its activations grow (a trigger cycle, an unbounded source), or give "
                        "it a deadline: prove then searches for a run that misses it")
     return sink.items
+
+
+def _first_run(model: SystemModel, budget: Budget | None) -> tuple[Trace | None, str | None]:
+    """The run of the first search scenario for E312's note, charged to ``budget`` (one scenario, and
+    its deadline); else None and why it was not run (None: it cannot be, or it exceeds its events)."""
+    not_run = "the run with every phase 0 and every job at its wcet was not simulated: "
+    if budget is not None and not budget.take():
+        return None, not_run + ("the timeout (`--timeout`) had passed" if budget.expired() else
+                                "the scenario budget (`--budget`) was spent")
+    try:
+        scenario = first_scenarios(model, search_horizon(model, None))[0]
+        return replay(model, scenario, SEARCH_EVENTS, budget.deadline if budget is not None else None), None
+    except SimulationTimeout:
+        return None, not_run + "the timeout (`--timeout`) passed while it ran"
+    except (ScenarioError, SimulationError):
+        return None, None
 
 
 def _queue_text(trace: Trace, task: str) -> str:

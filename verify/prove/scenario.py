@@ -228,9 +228,11 @@ def _policy_text(patterns: Iterable[tuple[object, tuple[Fraction, ...]]],
     return ("all wcet" if highs else "all bcet") if default == "wcet" else ("all d⁺" if highs else "all d⁻")
 
 
-def replay(model: SystemModel, scenario: ConcreteScenario, max_events: int = DEFAULT_MAX_EVENTS) -> Trace:
-    """The run of ``scenario`` (over ``[0, scenario.horizon)``), by ``verify.sim.simulate``."""
-    return simulate(model, scenario.to_sim(model), max_events)
+def replay(model: SystemModel, scenario: ConcreteScenario, max_events: int = DEFAULT_MAX_EVENTS,
+           deadline: float | None = None) -> Trace:
+    """The run of ``scenario`` (over ``[0, scenario.horizon)``), by ``verify.sim.simulate`` (which ends
+    it with ``SimulationTimeout`` once ``deadline``, a ``time.monotonic()`` instant, has passed)."""
+    return simulate(model, scenario.to_sim(model), max_events, deadline)
 
 
 # ------------------------------------------------------------------ hyperperiod

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 from fractions import Fraction
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 
 from ..diagnostics import DiagnosticSink, Label, name_list
 from ..model import LinkModel, SystemModel, TaskModel
@@ -72,7 +72,8 @@ class TaskResponse:
     hold: Fraction | None  # Eᵢ: start to completion, what a sibling waits for
     busy_jobs: int | None
     critical_job: int | None
-    interferers: tuple[str, ...]
+    #: hp(i) in declaration order, then the remote siblings (a view of the core's tasks: ``interferers``)
+    interferers: Sequence[str]
     failure: str | None = None
 
     @property
