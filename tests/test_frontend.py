@@ -154,3 +154,16 @@ def test_the_partial_tree_holds_only_what_the_text_says():
     walk(parsed.partial)
     words = len(re.findall(r"[A-Za-z_][A-Za-z0-9_]*", text))
     assert parsed.partial is not None and 0 < len(names) <= words
+
+
+def test_load_takes_a_path_object_as_well_as_a_string():
+    from pathlib import Path
+
+    import verify
+
+    from .conftest import EXAMPLES
+
+    as_path = verify.load(Path(EXAMPLES / "navigation" / "navigation.vfy"), root=Path(EXAMPLES / "navigation"))
+    as_text = verify.load(str(EXAMPLES / "navigation" / "navigation.vfy"), root=str(EXAMPLES / "navigation"))
+    assert not as_path.diagnostics and as_path.system() is not None
+    assert as_path.diagnostics == as_text.diagnostics

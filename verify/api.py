@@ -178,7 +178,8 @@ def _clean(scope: SystemScope, sink: DiagnosticSink) -> bool:
     return True
 
 
-def load(path: str, *, root: str | None = None, include: tuple[str, ...] | list[str] = (),
+def load(path: str | os.PathLike[str], *, root: str | os.PathLike[str] | None = None,
+         include: tuple[str, ...] | list[str] = (),
          limits: Limits = DEFAULT_LIMITS, overlay: Overlay | None = None,
          config: bool = True) -> LoadResult:
     """Load, resolve and validate the project whose root file is ``path`` (imports followed).
@@ -189,6 +190,8 @@ def load(path: str, *, root: str | None = None, include: tuple[str, ...] | list[
     read (``verify.limits``). ``overlay`` gives text that takes the place of a file on disk (an editor's
     unsaved buffers): a mapping from paths, or a function of an absolute path returning the text or
     None."""
+    path = os.fspath(path)
+    root = os.fspath(root) if root is not None else None
     with paused_gc():
         sink = DiagnosticSink()
         roots, problems = project_roots(path, root, tuple(include), config=config) if path else (None, [])
