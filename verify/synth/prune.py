@@ -379,7 +379,7 @@ class ChainLowerBound:
             first, last = self.chain.tasks[0], self.chain.tasks[-1]
             if self.kind == "reaction":
                 return p_min(first) + _r_min(model.task(first))
-            return _r_min(model.task(last))
+            return model.task(last).wcet
         hop = self.chain.hops[n - 1]
         member = hop.link.target.split(".", 1)[1]
         waits, same_core_waits = [], []
@@ -391,10 +391,12 @@ class ChainLowerBound:
                 else:
                     waits.append(ZERO if triggered else pm)
                 same_core_waits.append(ZERO if act.trigger_port is not None else pm)
-            else:
-                waits.append(ZERO if triggered and act.single_port is not None else p_min(hop.writer))
-        end = hop.reader if self.kind == "reaction" else hop.writer
-        lower = hop.link.delay_max + _r_min(model.task(end)) + min(waits)
+            else:  # a data trigger (7.7b) waits for nothing; an AND join (7.7c) may not (7.3e)
+                waits.append(ZERO if triggered and act.mode != "or" else p_min(hop.writer))
+        if self.kind == "reaction":
+            lower = hop.link.delay_max + _r_min(model.task(hop.reader)) + min(waits)
+        else:  # (§7.7: a completion age may count E ≥ C⁺ rather than R from the job's read)
+            lower = hop.link.delay_max + model.task(hop.writer).wcet + min(waits)
         if self.same_core[n - 1]:
             lower = min(lower, self._same_core_term(hop, min(same_core_waits) if same_core_waits else ZERO,
                                                     p_min(hop.writer)))
