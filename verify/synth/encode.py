@@ -232,6 +232,8 @@ class Encoding:
         self.ladders: dict[str, list[z3.BoolRef | None]] = {}
         self._floors: dict[str, Fraction] | None = None
         self._cooperative = cooperative_counts(model)
+        self._mins = 0
+        self._waits: dict[str, Term] = {}
         self._build()
 
     # -------------------------------------------------------------- basics
@@ -461,6 +463,12 @@ class Encoding:
         """W⁺ = max(A⁺, F)."""
         return self.t.max(self.a_max(tid), self.events[tid][2])
 
+    def late_wait(self, tid: str) -> Term:
+        """A term at least ``W⁺`` (one-sided, for latencies: ``greatest``), one per task."""
+        if tid not in self._waits:
+            self._waits[tid] = self.greatest(self.a_max(tid), self.events[tid][2])
+        return self._waits[tid]
+
     def _schedulable(self, task: TaskModel) -> None:
         """R ≤ deadline (E312): the given deadline, else A⁺."""
         if task.wcrt_bound is not None:
@@ -602,7 +610,7 @@ class Encoding:
     def _chain(self, chain: ChainModel) -> None:
         t = self.t
         first = chain.tasks[0]
-        reaction = [t.add(self.wait(first), self.R[first])]
+        reaction = [t.add(self.late_wait(first), self.R[first])]
         # the reduced data age counts from τ₁'s read, its stamp: its job's release and read ages are 0
         ages: Ages = (0, 0, self._completion(first, 0, 0))
         for n, hop in enumerate(chain.hops):
@@ -624,10 +632,42 @@ class Encoding:
                 self.guard(st.key, t.le(totals[st.spec_kind], bound))  # type: ignore[index]
 
     def _named(self, name: str, term: Term) -> Term:
+        """A variable at least ``term`` (a latency: only its least value matters, §3)."""
         if isinstance(term, int):
             return term
         var = z3.Int(name, self.ctx)
-        self.add(self.t.eq(var, term))
+        self.add(self.t.ge(var, term))
+        return var
+
+    def least(self, *terms: Term) -> Term:
+        """A term at least the least of ``terms``: a fresh variable ``v`` with ``v ≥ a ∨ v ≥ b ∨ …``
+        (specs/synthesis.md §3). Latencies are monotone — a larger term never makes a chain bound
+        smaller — so where only the least value of a latency matters (specs, objectives) this one-sided
+        minimum keeps every configuration at its exact bound, without the case split of an
+        ``if-then-else`` in both directions."""
+        numbers = [x for x in terms if isinstance(x, int)]
+        alternatives: list[Term] = [x for x in terms if not isinstance(x, int)]
+        if numbers:
+            alternatives.append(min(numbers))
+        if len(alternatives) == 1:
+            return alternatives[0]
+        self._mins += 1
+        var = z3.Int(f"min|{self._mins}", self.ctx)
+        self.add(z3.Or(*(self.t.ge(var, x) for x in alternatives)))
+        return var
+
+    def greatest(self, *terms: Term) -> Term:
+        """A term at least the greatest of ``terms`` (one-sided, as ``least``): ``v ≥ a ∧ v ≥ b ∧ …``."""
+        numbers = [x for x in terms if isinstance(x, int)]
+        rest: list[Term] = [x for x in terms if not isinstance(x, int)]
+        if not rest:
+            return max(numbers)
+        if len(rest) == 1 and not numbers:
+            return rest[0]
+        self._mins += 1
+        var = z3.Int(f"max|{self._mins}", self.ctx)
+        for x in rest + ([max(numbers)] if numbers else []):
+            self.add(self.t.ge(var, x))
         return var
 
     def span(self, tid: str) -> Term:
@@ -657,10 +697,7 @@ class Encoding:
     def _completion(self, tid: str, release: Term, read: Term, *more: Term) -> Term:
         """The completion age of a job of ``tid`` from its release and read ages (rule (7.7a)), or ``more``."""
         t = self.t
-        out = t.min(t.add(release, self.R[tid]), t.add(read, self.span(tid)))
-        for x in more:
-            out = t.min(out, x)
-        return out
+        return self.least(t.add(release, self.R[tid]), t.add(read, self.span(tid)), *more)
 
     def _hop(self, chain: str, n: int, hop: HopModel, ages: Ages) -> tuple[Term, Ages]:
         """(reaction term, the reader's ages) of one hop, by the reader's activation (§7.3, §7.7)."""
@@ -676,9 +713,9 @@ class Encoding:
         new = tuple(z3.Int(f"age|{chain}|{n}|{x}", self.ctx) for x in names)
         for index, (r, out) in terms:  # (several options: the candidates of a choice, each with its index)
             sel = self.sel[reader.id][index]  # type: ignore[index]
-            self.guard(None, self.t.eq(hr, r), sel)
+            self.guard(None, self.t.ge(hr, r), sel)
             for var, value in zip(new, out):
-                self.guard(None, self.t.eq(var, value), sel)
+                self.guard(None, self.t.ge(var, value), sel)
         return hr, (new[0], new[1], new[2])
 
     def _hop_terms(self, hop: HopModel, act: Activation, ages: Ages) -> tuple[Term, Ages]:
@@ -687,12 +724,12 @@ class Encoding:
         p, i = hop.writer, hop.reader
         release, read, completion = ages
         d = self.ticks(hop.link.delay_max) if hop.link.delay_max else 0
-        register_r = t.add(d, self.wait(i), self.R[i])
+        register_r = t.add(d, self.late_wait(i), self.R[i])
         register_a = t.add(d, self.a_max(p), self.R[p])
         read_term = register_a
         if same_core_reason(self.model, hop) is None:
-            read_term = t.min(register_a, self.a_max(p))
-        new_read = t.add(t.min(t.min(release, read), completion), read_term)
+            read_term = self.least(register_a, self.a_max(p))
+        new_read = t.add(self.least(release, read, completion), read_term)
         new_release = new_read
         member = hop.link.target.split(".", 1)[1]
         if not act.listens_to(member):
@@ -706,13 +743,13 @@ class Encoding:
             else:
                 wait = 0
                 trig = t.add(d, self._delta_plus(p, k), self.R[i])
-            reaction = self._same_core(hop, t.min(trig, register_r))
+            reaction = self._same_core(hop, self.least(trig, register_r))
             if act.mode != "or":  # the data trigger (7.7b) and the AND join age (7.7c)
-                for age, writer in ((release, self.R[p]), (read, self.span(p)), (completion, 0)):
-                    new_release = t.min(new_release, t.add(age, d, writer, wait))
+                new_release = self.least(new_release, *(t.add(age, d, writer, wait) for age, writer in (
+                    (release, self.R[p]), (read, self.span(p)), (completion, 0))))
         pair = []
         if pair_shape(self.model, hop, act, self._cooperative):
-            pair.append(t.add(read, t.min(self._pair(hop), t.add(self.span(p), self.R[i]))))
+            pair.append(t.add(read, self.least(self._pair(hop), t.add(self.span(p), self.R[i]))))
         return reaction, (new_release, new_read, self._completion(i, new_release, new_read, *pair))
 
     def _same_core(self, hop: HopModel, reaction: Term) -> Term:
@@ -722,7 +759,7 @@ class Encoding:
         if same_core_reason(self.model, hop) is not None:
             return reaction
         t, p, i = self.t, hop.writer, hop.reader
-        return t.min(reaction, t.add(self.wait(i), self.R[i], t.mul(-1, self.R[p])))
+        return self.least(reaction, t.add(self.late_wait(i), self.R[i], t.mul(-1, self.R[p])))
 
     def _delta_plus(self, writer: str, k: int) -> Term:
         """δ⁺ₚ(k) = 0 for k = 1, else (k−1)·P⁺ₚ + J⁺ₚ + Rₚ − Bₚ."""
@@ -740,11 +777,21 @@ class Encoding:
         """``maxₘ W⁺ₘ`` of the other members, 0 where they are fresh by (7.3e) (``_cascade``)."""
         t = self.t
         member = hop.link.target.split(".", 1)[1]
-        wait = 0
+        waits: list[Term] = []
         for m, (aP, aJ, aF) in self._and_arrivals(hop, act):
             if m != member:
-                wait = t.max(wait, t.max(t.add(aP, aJ), aF))
-        return t.ite(self._cascade(hop, act), 0, wait)
+                waits += [t.add(aP, aJ), aF]
+        cascade = self._cascade(hop, act)
+        if cascade is True or not waits:
+            return 0
+        if cascade is False:
+            return self.greatest(*waits)
+        self._mins += 1
+        var = z3.Int(f"wait|{self._mins}", self.ctx)
+        self.add(self.t.ge(var, 0))
+        for x in waits:
+            self.add(z3.Or(cascade, self.t.ge(var, x)))
+        return var
 
     def _cascade(self, hop: HopModel, act: DataTriggered) -> Cond:
         """Whether the AND join ``act`` is one of a cascade whose other members are fresh when this hop's
@@ -776,9 +823,7 @@ class Encoding:
         if k == 1:
             return 0
         t = self.t
-        gap = None
-        for _, (aP, aJ, _) in self._and_arrivals(hop, act):
-            gap = t.add(aP, aJ) if gap is None else t.max(gap, t.add(aP, aJ))
+        gap = self.greatest(*(t.add(aP, aJ) for _, (aP, aJ, _) in self._and_arrivals(hop, act)))
         return t.mul(k - 1, gap)
 
 
