@@ -392,7 +392,8 @@ class ChainLowerBound:
                     waits.append(ZERO if triggered else pm)
                 same_core_waits.append(ZERO if act.trigger_port is not None else pm)
             else:  # a data trigger (7.7b) waits for nothing; an AND join (7.7c) may not (7.3e)
-                waits.append(ZERO if triggered and act.mode != "or" else p_min(hop.writer))
+                joins_or = isinstance(act, DataTriggered) and act.mode == "or"
+                waits.append(ZERO if triggered and not joins_or else p_min(hop.writer))
         if self.kind == "reaction":
             lower = hop.link.delay_max + _r_min(model.task(hop.reader)) + min(waits)
         else:  # (§7.7: a completion age may count E ≥ C⁺ rather than R from the job's read)

@@ -428,6 +428,8 @@ class Engine:
             if not objectives:
                 return Outcome("sat", *start)
             values = tuple(o.real(*start) for o in objectives)
+            if len(objectives) == 1 and values[0] == objectives[0].floor:  # nothing lies below the floor
+                return Outcome("optimal", *start, values)
             best = Outcome("sat", *start, values)
             guard = self._fresh("better")
             self.enc.add(z3.Implies(guard, strictly_better(self.enc, objectives, values)))
