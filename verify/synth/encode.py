@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import math
 from fractions import Fraction
-from typing import TypeAlias
+from typing import TypeAlias, cast
 from collections.abc import Callable, Mapping
 
 import z3
@@ -143,6 +143,11 @@ class Terms:
         else:
             left = z3.Z3_mk_and(self._ref, len(pre), (z3.Ast * len(pre))(*(x.ast for x in pre)))
         return z3.BoolRef(z3.Z3_mk_implies(self._ref, left, then.ast), self.ctx)
+
+    def any_of(self, conds: list[z3.BoolRef]) -> z3.BoolRef:
+        """``Or(*conds)`` (two or more), as z3py builds it."""
+        args = (z3.Ast * len(conds))(*(c.ast for c in conds))
+        return z3.BoolRef(z3.Z3_mk_or(self._ref, len(conds), args), self.ctx)
 
     def at_least(self, x: z3.ArithRef, k: int) -> z3.BoolRef:
         """``x >= k`` for a Python int ``k``, as z3py builds it."""
@@ -653,7 +658,7 @@ class Encoding:
             return alternatives[0]
         self._mins += 1
         var = z3.Int(f"min|{self._mins}", self.ctx)
-        self.add(z3.Or(*(self.t.ge(var, x) for x in alternatives)))
+        self.add(self.t.any_of([cast(z3.BoolRef, self.t.ge(var, x)) for x in alternatives]))  # (of a variable)
         return var
 
     def greatest(self, *terms: Term) -> Term:
