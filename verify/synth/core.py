@@ -386,13 +386,13 @@ def _holes_diagnostic(system: SystemModel, holes: tuple[Label, ...], reason: str
     """E401 on the holes, when no statement is blamed (``unsat_diagnostic``): ``blameless`` when relaxing
     every statement was shown not to help, else the search for the core did not finish."""
     sink = DiagnosticSink()
-    notes = [reason] if reason else []
-    notes += ["relaxing every tracked statement does not help: what conflicts is not a statement synth relaxes "
+    notes = ["relaxing every tracked statement does not help: what conflicts is not a statement synth relaxes "
               "(a deadline, a priority, a delay, a sporadic source)" if blameless else
               "the search for the statements that conflict ran out of its budget"]
     notes += [f"with every hole at its slowest value: {why}" for why in rejected[:5]]
-    sink.emit("E401", f"no value of the holes of `{system.name}` gives a configuration the analysis accepts",
-              holes[0].span, holes[0].message, secondary=holes[1:], notes=tuple(notes),
+    message = (f"no configuration of `{system.name}` meets every constraint: {reason}" if reason else
+               f"no value of the holes of `{system.name}` gives a configuration the analysis accepts")
+    sink.emit("E401", message, holes[0].span, holes[0].message, secondary=holes[1:], notes=tuple(notes),
               help="widen a hole's range, or change the deadlines, priorities or delays the notes name")
     return sink.items[0]
 

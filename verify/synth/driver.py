@@ -299,8 +299,9 @@ def _unsat(model: SystemModel, scope: SystemScope | None, problem: Problem, goal
         assert expl.problem is not None  # (every explanation has its problem)
         stats["core_analyses"] = expl.problem.analyses
         stats["rlimit_used"] = budget.used
-    diag = unsat_diagnostic(model, expl if expl is not None and expl.status == "unsat" else None, reason,
-                            *_holes(model, problem))
+    found = expl if expl is not None and expl.status == "unsat" else None
+    diag = unsat_diagnostic(model, found, reason, *(_holes(model, problem) if found is None or not found.core
+                                                    else ((), ())))
     return SynthResult("unsat", model.name, tuple(goals), explanation=expl, reason=reason, diagnostics=(diag,),
                        stats=stats, problem=problem)
 

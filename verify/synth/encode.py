@@ -252,6 +252,13 @@ class Encoding:
         """``x`` in ticks of the problem (``verify.timebase``)."""
         return self.base.ticks(x)
 
+    def ticks_above(self, x: Fraction, strictly: bool = False) -> int:
+        """The least number of ticks at least ``x`` (more than ``x`` when ``strictly``): what an integer
+        ``v ≥ x`` (``v > x``) in ticks means, also for an ``x`` that is no whole number of ticks (a lemma's
+        value of an analysis whose bound divides by an executor's workers, or the deadline ``A⁺``)."""
+        q = x / self.tick
+        return math.floor(q) + 1 if strictly else math.ceil(q)
+
     def add(self, c: Cond) -> None:
         if c is True:
             return

@@ -388,12 +388,12 @@ class Engine:
                 span = self.enc.E[tid]
                 if not isinstance(span, int):
                     e = timing.E(tid)
-                    facts.append(([tid], span, None if e is None else self.enc.ticks(e)))
+                    facts.append(([tid], span, None if e is None else self.enc.ticks_above(e)))
             for key in sorted(self.enc.J):
                 hop, pair = self.enc.J[key]
                 value = pair_fixed_point(timing, hop) if pair_qualifies(timing, hop) else None
                 facts.append(([hop.writer, hop.reader], pair,
-                              None if value is None else self.enc.ticks(value)))
+                              None if value is None else self.enc.ticks_above(value)))
         added = 0
         for tasks, var, bound in facts:
             if bound is None:
@@ -418,13 +418,13 @@ class Engine:
         return sum(cast("list[int]", costs)) if all(isinstance(c, int) for c in costs) else -1
 
     def _lower_bound(self, response: TaskResponse) -> int | None:
-        """The analysed WCRT in ticks; for a task without a bound (the load of its level reached 1) one tick
-        more than the deadline."""
+        """The analysed WCRT in ticks; for a task without a bound (the load of its level reached 1) the
+        least number of ticks above the deadline."""
         if response.wcrt is not None:
-            return self.enc.ticks(response.wcrt)
+            return self.enc.ticks_above(response.wcrt)
         why = response.failure or ""
         if response.deadline is not None and "utilisation" in why:
-            return self.enc.ticks(response.deadline) + 1
+            return self.enc.ticks_above(response.deadline, strictly=True)
         return None
 
     # -------------------------------------------------------------- search
