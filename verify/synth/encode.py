@@ -36,6 +36,8 @@ from ..timebase import TimeBase
 from ..timing.chains import cascade_in_time, cascade_links, pair_shape, same_core_reason
 from ..timing.rta import cooperative_counts
 from .candidates import Choice
+from .floors import first_job_bounds
+from .scale import rate_scale, tick_of
 from .statements import Statement, statement_index
 from .structure import Structure, activation_options, member_links
 
@@ -45,65 +47,6 @@ Term: TypeAlias = "int | z3.ArithRef"
 Cond: TypeAlias = "bool | z3.BoolRef"
 #: a job's data ages at its release, its read (start) and its completion (specs/timing.md §7.7)
 Ages: TypeAlias = "tuple[Term, Term, Term]"
-
-
-# ================================================================== scale
-
-
-def problem_times(model: SystemModel, choices: Mapping[str, Choice]) -> list[Fraction]:
-    times: list[Fraction | None] = []
-    for t in model.tasks:
-        times += [t.wcet, t.bcet, t.deadline, t.wcrt_bound]
-        act = t.activation
-        if act.gaps is not None:
-            times += [*act.gaps, act.fixed_phase]
-    for lk in model.links:
-        times += [lk.delay_min, lk.delay_max]
-    for ch in model.chains:
-        times += [ch.reaction_time, ch.data_age, ch.jitter]
-    for ex in model.executors:  # (a multi-threaded executor's bounds divide work by its workers, §9.4)
-        if ex.multi_threaded:
-            times += [c / len(ex.workers) for t in model.callbacks(ex.name) for c in (t.wcet, t.bcet)]
-    for choice in choices.values():
-        for c in choice.candidates:
-            times += [c.period, c.phase]
-    return [x for x in times if x]
-
-
-def tick_of(model: SystemModel, choices: Mapping[str, Choice]) -> Fraction:
-    """The largest time of which every time of the problem is a whole multiple."""
-    return TimeBase.gcd_of(problem_times(model, choices), default=Fraction(1, 1000)).unit
-
-
-def rate_scale(model: SystemModel, choices: Mapping[str, Choice], structure: Structure, tick: Fraction) -> int:
-    """M: a common multiple of the denominators of every possible rate (per tick)."""
-    den: dict[str, int] = {}
-
-    def of(task: TaskModel) -> int:
-        value = 1
-        for _, act in activation_options(task, choices.get(task.id)):
-            if act.gaps is not None:
-                d = math.lcm(int(act.gaps[0] / tick), int(act.gaps[1] / tick))
-            elif act.trigger_port is not None:
-                d = act.release_every
-                for _, link in member_links(model, task, act):
-                    if link is not None:
-                        d = math.lcm(d, den.get(link.writer, 1) * act.release_every)
-            else:
-                d = 1
-            value = math.lcm(value, d)
-        return value
-
-    rounds = {tid: (len(structure.cyclic) + 1 if tid in structure.cyclic else 1) for tid in structure.order}
-    for _ in range(max(rounds.values(), default=1)):
-        for tid in structure.order:
-            if rounds[tid] > 0:
-                den[tid] = math.lcm(den.get(tid, 1), of(model.task(tid)))
-                rounds[tid] -= 1
-    scale = 1
-    for d in den.values():
-        scale = math.lcm(scale, d)
-    return scale
 
 
 # ================================================================== term helpers
@@ -853,91 +796,6 @@ def _any(conds: list[Cond]) -> Cond:
         return True
     rest = [c for c in conds if c is not False]
     return False if not rest else rest[0] if len(rest) == 1 else z3.Or(*rest)
-
-
-def first_job_bounds(model: SystemModel, choices: Mapping[str, Choice], *,
-                     relaxed: bool = False) -> dict[str, Fraction]:
-    """A response-time lower bound per task, valid in every configuration: the first job of the
-    level-i busy window (specs/timing.md §6.2), ``w = C + Σ_{hp} η·C`` with ``η = ⌈w / T_max⌉`` for
-    an interferer that is a timer in every configuration (``T_max`` its longest candidate period) and
-    1 otherwise (every interferer is activated at least once in a window, and a causal cap is at
-    least 1), and 0 for a task on its pipeline path in some configuration (``_possible_upstream``:
-    the pipeline release offsets of §6.2 may leave it no job in the window). For a callback of an
-    executor, every bound of §9.3 counts each other callback of its executor and each higher thread at
-    least once: ``C + Σ C``; of a multi-threaded one, ``multi_threaded_floor``. ``relaxed`` (tracked
-    problems): an execution time may fall to ``bcet`` and a task may leave its core, so only the
-    task's own ``bcet`` is certain."""
-    if relaxed:
-        return {t.id: t.bcet for t in model.tasks}
-    out: dict[str, Fraction] = {}
-    by_core: dict[str, list[TaskModel]] = {}
-    for t in model.tasks:
-        by_core.setdefault(t.core, []).append(t)
-    for tasks in by_core.values():
-        cost = [t.bcet if relaxed else t.wcet for t in tasks]
-        periods = []
-        for t in tasks:
-            acts = [a for _, a in activation_options(t, choices.get(t.id))]
-            periods.append(max(a.strict_period for a in acts)  # type: ignore[type-var]  # (none is None)
-                           if all(a.strict_period is not None for a in acts) else None)
-        scale = 1
-        for x in cost + [p for p in periods if p is not None]:
-            scale = math.lcm(scale, x.denominator)
-        c = [int(x * scale) for x in cost]
-        per = [int(p * scale) if p is not None else None for p in periods]
-        limit = max([p for p in per if p is not None], default=scale) * 1000
-        for n, t in enumerate(tasks):
-            if t.executor is not None and model.executor(t.executor).multi_threaded:
-                out[t.id] = multi_threaded_floor(model, t)
-                continue
-            if t.executor is not None:  # a callback (§9.3): each other callback and higher thread once
-                others = [m for m, o in enumerate(tasks) if m != n and (o.priority > t.priority
-                                                                      or o.executor == t.executor)]
-                out[t.id] = Fraction(c[n] + sum(c[m] for m in others), scale)
-                continue
-            # (a task upstream of t on a pipeline may have no job in the window: timing.pipeline)
-            ahead = _possible_upstream(model, choices, t)
-            hp = [m for m, o in enumerate(tasks) if m != n and o.priority >= t.priority and o.id not in ahead]
-            w = c[n] + sum(c[m] for m in hp)
-            for _ in range(1000):
-                new = c[n] + sum(c[m] * (-(-w // per[m]) if per[m] else 1) for m in hp)  # type: ignore[operator, misc]  # per[m] is set
-                if new == w or new > limit:
-                    break
-                w = new
-            out[t.id] = Fraction(max(w, c[n]), scale)
-    return out
-
-
-def multi_threaded_floor(model: SystemModel, task: TaskModel) -> Fraction:
-    """A lower bound of the bound of §9.4 for a callback of a multi-threaded executor, in every
-    configuration: ``Cᵢ + B + (the m largest C)/m`` (the jobs of the window's other callbacks are not
-    certain: a callback may be silent)."""
-    from ..timing.multithreaded import carry_in, group_blocking
-
-    executor = model.executor(task.executor)  # type: ignore[arg-type]  # (a callback)
-    blocking, _ = group_blocking(model, task, executor)
-    workers = len(executor.workers)
-    return task.wcet + (blocking or Fraction(0)) + carry_in(model, model.callbacks(executor.name), workers) / workers
-
-
-def _possible_upstream(model: SystemModel, choices: Mapping[str, Choice], task: TaskModel) -> set[str]:
-    """The tasks that are on ``task``'s pipeline path (``verify.timing.pipeline.upstream``) in some
-    configuration: writers reached back through single-port triggers of any candidate, without delay,
-    on ``task``'s core at a higher priority (a superset: tokens and the depth limit are ignored)."""
-    found: set[str] = set()
-    todo = [task]
-    while todo:
-        reader = todo.pop()
-        for _, act in activation_options(reader, choices.get(reader.id)):
-            port = act.single_port
-            link = None if port is None else model.link_into(f"{reader.instance}.{port}")
-            if link is None or link.delay_max != 0 or link.writer in found:
-                continue
-            writer = model.task(link.writer)
-            if writer.core == task.core and writer.priority > task.priority:
-                found.add(writer.id)
-                todo.append(writer)
-    return found
 
 
 def _lt_pair(t: Terms, a: tuple[Term, Term], b: tuple[Term, Term]) -> Cond:

@@ -187,7 +187,7 @@ class Pruner:
     def _schedulability(self) -> set[tuple[str, int]]:
         """A timer candidate whose period (its default deadline) is below the first-job bound of its
         busy window goes (E312); a task whose given deadline is below it makes the problem infeasible."""
-        from .encode import first_job_bounds
+        from .floors import first_job_bounds
 
         dead: set[tuple[str, int]] = set()
         floors = first_job_bounds(self.model, self.choices)
