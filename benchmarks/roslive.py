@@ -111,8 +111,7 @@ def run_system(env: dict[str, str], package: str, launch: str, seconds: float, r
                launch_args: list[str] | None = None) -> str:
     """Record, launch the system with tracing for ``seconds``, stop it (SIGINT, as roslaunch is
     stopped), stop the recorder; returns roslaunch's output. ``beside``: commands that run meanwhile
-    (drivers of sporadic tasks)."""
-    summary_dir.mkdir(exist_ok=True)
+    (drivers of sporadic tasks). The nodes make ``summary_dir`` (and its parents) when it is missing."""
     drivers = [subprocess.Popen(["timeout", str(int(seconds) + 120), *command], env=env, stdout=subprocess.DEVNULL,
                                 stderr=subprocess.DEVNULL, start_new_session=True) for command in beside or []]
     recorder = subprocess.Popen(["timeout", str(int(seconds) + 120), SYSTEM_PYTHON, str(RECORDER), str(record_to),

@@ -1,4 +1,4 @@
-"""Coverage-guided fuzzing of every pipeline stage with atheris (README, "Running on untrusted input").
+"""Coverage-guided fuzzing of every pipeline stage with atheris (docs/contributing/fuzzing.md).
 
     python -m fuzz --total 1000000             # every target, seeded from examples/ and the spec examples
     python -m fuzz --targets parse --runs 5000 # one target

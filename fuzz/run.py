@@ -26,12 +26,15 @@ from .seeds import ROOT, dictionary, seeds
 from .targets import TARGETS
 
 #: how ``--total`` is shared among the targets (the later stages run fewer, slower executions)
-SHARES = {"parse": 30, "validate": 25, "fmt": 20, "analyze": 15, "synth": 5, "prove": 5, "smartmdsd": 10}
+SHARES = {"parse": 30, "validate": 25, "fmt": 20, "analyze": 15, "synth": 5, "prove": 5, "smartmdsd": 10, "caret": 10,
+          "lsp": 5}
 #: seconds one input may take before libFuzzer calls it a hang
 TIMEOUTS = {"synth": 60, "prove": 60}
 DEFAULT_TIMEOUT = 20
-#: the smoke run of tests/test_fuzz.py: executions per target, and only the example (and SmartMDSD) seeds
-SMOKE_RUNS = {"parse": 300, "validate": 200, "fmt": 200, "analyze": 100, "synth": 30, "prove": 30, "smartmdsd": 200}
+#: the smoke run of tests/test_fuzz.py: executions per target, and only the example (SmartMDSD, CARET and
+#: LSP session) seeds
+SMOKE_RUNS = {"parse": 300, "validate": 200, "fmt": 200, "analyze": 100, "synth": 30, "prove": 30, "smartmdsd": 200,
+              "caret": 200, "lsp": 30}
 FINDING = re.compile(r"^(crash|timeout|oom|leak)-")
 #: inputs slower than libFuzzer's ``-report_slow_units`` (listed, not failed: a loaded machine makes them)
 SLOW = re.compile(r"^slow-unit-")
@@ -44,7 +47,7 @@ def prepare(out: Path, target: str, smoke: bool) -> tuple[Path, Path, Path]:
     corpus.mkdir(parents=True, exist_ok=True)
     findings.mkdir(parents=True, exist_ok=True)
     for name, data in seeds().items():
-        if smoke and not name.startswith(("example-", "smartmdsd-")):
+        if smoke and not name.startswith(("example-", "smartmdsd-", "caret-", "lsp-")):
             continue
         path = corpus / f"seed-{name}"
         if not path.exists():

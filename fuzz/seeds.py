@@ -47,19 +47,21 @@ def seeds() -> dict[str, bytes]:
     for path in sorted((ROOT / "tests" / "golden" / "diagnostics").rglob("*.txt")):
         out[f"golden-{path.stem}"] = path.read_bytes()
     out.update(_smartmdsd())
+    out.update(_caret())
+    out.update(_lsp())
     return out
 
 
 def _smartmdsd() -> dict[str, bytes]:
-    """SmartMDSD inputs for the ``smartmdsd`` target: each system of ../shared/smartmdsd with every
+    """SmartMDSD inputs for the ``smartmdsd`` target: each system of examples/smartmdsd with every
     component (files after ``// file NAME`` lines), and the SmartMDSD examples of specs/diagnostics.md."""
     from .targets import SMARTMDSD_FILE
 
     out: dict[str, bytes] = {}
-    shared = ROOT.parent / "shared" / "smartmdsd"
-    components = sorted((shared / "components").glob("*.component"))
-    for arch in sorted((shared / "systems").glob("*.componentArch")):
-        files = components + sorted(p for p in (shared / "systems").glob(arch.stem + ".*"))
+    models = ROOT / "examples" / "smartmdsd"
+    components = sorted((models / "components").glob("*.component"))
+    for arch in sorted((models / "systems").glob("*.componentArch")):
+        files = components + sorted(p for p in (models / "systems").glob(arch.stem + ".*"))
         out[f"smartmdsd-{arch.stem}"] = "".join(f"{SMARTMDSD_FILE}{p.name}\n{p.read_text(encoding='utf-8')}\n"
                                                 for p in files).encode("utf-8")
     text = (ROOT / "specs" / "diagnostics.md").read_text(encoding="utf-8")
@@ -69,6 +71,21 @@ def _smartmdsd() -> dict[str, bytes]:
             out[f"smartmdsd-spec-{part.split(None, 1)[0]}"] = "".join(
                 f"{SMARTMDSD_FILE}{name}\n{body}" for name, body in blocks).encode("utf-8")
     return out
+
+
+def _caret() -> dict[str, bytes]:
+    """CARET architecture files for the ``caret`` target: the test suite's (tests/caret)."""
+    return {f"caret-{p.stem}": p.read_bytes() for p in sorted((ROOT / "tests" / "caret").glob("*.yaml"))}
+
+
+def _lsp() -> dict[str, bytes]:
+    """Client sessions for the ``lsp`` target (``lspstream.session``) on a few small examples of
+    specs/diagnostics.md: a syntax error, a misspelt name, a missed deadline, holes for synth."""
+    from .lspstream import session
+
+    examples = _spec_examples()
+    return {f"lsp-{code}": session(examples[f"spec-{code}"].decode("utf-8", "replace"))
+            for code in ("E001", "E101", "E316", "E401") if f"spec-{code}" in examples}
 
 
 def dictionary() -> list[str]:

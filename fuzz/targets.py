@@ -14,6 +14,8 @@ and every regression input through them), so this module never imports atheris.
 | ``prove`` | ``prove`` and its text, JSON and SARIF reports | the exit code follows the verdicts (and E312) |
 | ``fmt`` | ``format_text`` twice | ``fmt(fmt(x)) == fmt(x)``, and ``fmt(x)`` has the tree and the models of ``x`` |
 | ``smartmdsd`` | the SmartMDSD reader and import (``interop.smartmdsd``) | located diagnostics; its output parses |
+| ``caret`` | the CARET reader and import (``interop.caret``) | located diagnostics; its output parses |
+| ``lsp`` | a fresh language server reading the input (``fuzz.lspstream``) | every request answered, no internal error |
 
 In detail: ``parse`` checks that a tree prints (``fmt``) to text that parses to the same tree;
 ``validate`` runs resolve, validate, models, chains and rates; ``analyze`` takes every configured
@@ -21,7 +23,8 @@ system, both data-age variants; ``synth`` every system with holes (at most ``SMA
 solver budget); ``prove`` every configured system (at most ``SMALL`` tasks, budget ``PROVE_BUDGET``,
 one process). ``smartmdsd`` takes the input as SmartMDSD files, each after a line ``// file NAME.EXT``
 (without one, the kind follows the first keyword), and checks that the model it writes has no syntax
-error: names are names, numbers exact.
+error: names are names, numbers exact. ``caret`` takes the input as one architecture file (YAML) and
+checks the same of its import.
 """
 from __future__ import annotations
 
@@ -219,9 +222,34 @@ def smartmdsd(data: bytes) -> None:
     _render(sink.items, {})
 
 
+def caret(data: bytes) -> None:
+    import verify
+    from verify.diagnostics import DiagnosticSink
+    from verify.interop.caret.read import read
+    from verify.interop.caret.to_vfy import import_architecture
+    from verify.limits import DEFAULT_LIMITS
+    from verify.source import SourceFile
+
+    text, sink = _text(data), DiagnosticSink()
+    architecture = read(text, "architecture.yaml", sink, DEFAULT_LIMITS)
+    if architecture is not None and not sink.has_errors:
+        imported = import_architecture(architecture, None, sink)
+        written = verify.load_text(imported.text, "imported.vfy")
+        syntax = [d for d in written.diagnostics if d.code.startswith("E0")]
+        _check(not syntax, f"the import wrote text with a syntax error: {syntax[:1]}")
+    _located(sink.items, text)
+    _render(sink.items, {"architecture.yaml": SourceFile("architecture.yaml", text)})
+
+
+def lsp(data: bytes) -> None:
+    from .lspstream import lsp as serve
+
+    serve(data)
+
+
 TARGETS: dict[str, Callable[[bytes], None]] = {
     "parse": parse, "validate": validate, "analyze": analyze, "synth": synth, "prove": prove, "fmt": fmt,
-    "smartmdsd": smartmdsd,
+    "smartmdsd": smartmdsd, "caret": caret, "lsp": lsp,
 }
 
 

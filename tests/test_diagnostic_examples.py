@@ -128,11 +128,11 @@ def run_example(section: Section, directory: Path):
 def gen_diagnostics(model, directory: Path):
     """What `verify gen ros1 main.vfy -o out` reports for the example (its other blocks may lie in out/):
     (diagnostics, the files they show)."""
-    from verify.commands.gen import refusals, unsupported_parts
+    from verify.commands.gen import clashing_names, refusals, unsupported_parts
     from verify.gen import ros1
     from verify.gen.tree import plan
 
-    unsupported = unsupported_parts(ros1, "ros1", model)
+    unsupported = unsupported_parts(ros1, "ros1", model) + clashing_names(ros1, model)
     if unsupported:
         return unsupported, {}
     out = str(directory / "out")

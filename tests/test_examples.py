@@ -9,7 +9,8 @@ from verify.cli import main
 from .conftest import EXAMPLES
 
 #: examples that show an import's output as written, before it is completed (what `verify check` lists)
-INCOMPLETE = {EXAMPLES / "smartmdsd-gazebo" / "imported.vfy": ["E207"] + ["E217"] * 10}
+INCOMPLETE = {EXAMPLES / "smartmdsd-gazebo" / "imported.vfy": ["E207"] + ["E217"] * 10,
+              EXAMPLES / "caret-talker-listener" / "imported.vfy": ["E213", "E213", "E214", "E214", "E217", "E217"]}
 EXAMPLE_FILES = sorted(p for p in EXAMPLES.rglob("*.vfy") if p not in INCOMPLETE)
 
 
@@ -96,13 +97,20 @@ def test_example_is_canonically_formatted(path):
 
 
 def test_analyze_navigation_outline_and_chain_table(capsys):
+    """The short view has every task's rate and response time and the chain table; `--explain` (`-v`)
+    adds the derivation: how each rate comes about, sampling, each chain hop by hop."""
     path = str(EXAMPLES / "navigation" / "navigation.vfy")
     assert main(["analyze", path]) == 0
-    out = capsys.readouterr().out
-    assert "mapper.CurMapTask" in out and "4 Hz = 40 Hz / 10" in out
-    assert "undersampled ×10" in out
-    for chain in ("reactive", "planning"):
-        assert chain in out
+    brief = capsys.readouterr().out
+    assert "mapper.CurMapTask" in brief and "4 Hz" in brief and "§" not in brief
+    assert len(brief.splitlines()) < 40
+    for flag in ("--explain", "-v"):
+        assert main(["analyze", path, flag]) == 0
+        out = capsys.readouterr().out
+        assert "mapper.CurMapTask" in out and "4 Hz = 40 Hz / 10" in out
+        assert "undersampled ×10" in out
+        for chain in ("reactive", "planning"):
+            assert chain in out and f"chain {chain}: " in out
 
 
 def test_analyze_ends_with_a_verdict_per_spec_in_the_words_of_prove(capsys):
@@ -114,7 +122,7 @@ def test_analyze_ends_with_a_verdict_per_spec_in_the_words_of_prove(capsys):
     assert main(["analyze", path]) == 3
     out = capsys.readouterr().out
     assert "VIOLATED" not in out and "violated" not in out
-    last = out.rstrip("\n").split("\n")[-4:]
+    last = out.split("\n")[2:6]  # (after the system's line: the verdicts lead)
     assert last[0].startswith("3 specs: 2 proved by the bound, 1 not proved by the bound")
     assert "chain reactive: reaction time" in last[1] and "not proved by the bound: 189.3 ms exceeds it by 39.3 ms" \
         in last[1]
@@ -125,7 +133,9 @@ def test_analyze_ends_with_a_verdict_per_spec_in_the_words_of_prove(capsys):
     assert main(["prove", path]) == 1  # (the search finds a run above the spec)
     capsys.readouterr()
     assert main(["analyze", str(EXAMPLES / "navigation" / "navigation.vfy")]) == 0
-    assert capsys.readouterr().out.rstrip("\n").split("\n")[-4].startswith("3 specs: 3 proved by the bound, 0 not")
+    assert capsys.readouterr().out.split("\n")[2].startswith("3 specs: 3 proved by the bound, 0 not")
+    assert main(["analyze", path, "--explain"]) == 3  # (the derivation ends with the same verdicts)
+    assert capsys.readouterr().out.rstrip("\n").split("\n")[-4:] == last
 
 
 def test_analyze_refuses_holes_with_a_located_error(capsys):

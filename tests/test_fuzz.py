@@ -1,5 +1,5 @@
 """The fuzz targets (``fuzz.targets``): every seed and every regression input passes every stage, and a
-short coverage-guided run under atheris finds nothing (README, "Running on untrusted input").
+short coverage-guided run under atheris finds nothing (docs/guide/untrusted.md, docs/contributing/fuzzing.md).
 
 A finding of a long run (``python -m fuzz``), once fixed, is kept in ``tests/fuzz_regressions/TARGET/``
 and replayed here through its target.
@@ -16,7 +16,7 @@ from fuzz.targets import TARGETS, Finding, run
 
 from .conftest import ROOT, in_ci
 
-pytestmark = pytest.mark.slow  # (the quick loop leaves it out: README, Tests)
+pytestmark = pytest.mark.slow  # (the quick loop leaves it out: docs/contributing/tests.md)
 
 REGRESSIONS = ROOT / "tests" / "fuzz_regressions"
 SEEDS = seeds()

@@ -140,9 +140,9 @@ def test_parameters_are_exact_and_complete(tmp_path, write):
     model = verify.load(path).system(None)
     yaml = next(f.text for f in ros1.generate(model).files if f.path == "config/parameters.yaml")
     assert 'period_ns: "100000000/3"  # 1/30 s' in yaml  # 30 Hz, exactly
-    assert "trigger: both" in yaml and "prescaler: 2" in yaml
+    assert 'trigger: "both"' in yaml and "prescaler: 2" in yaml
     assert 'min_ns: "50000000"' in yaml and 'max_ns: "200000000"' in yaml
-    assert "nodes: [n_src, sink]" in yaml
+    assert 'nodes: ["n_src", "sink"]' in yaml
 
 
 def test_os_priorities_keep_the_models_order():
@@ -226,8 +226,11 @@ def test_the_monitor_library_works_from_hand_written_code(tmp_path):
                             str(ROOT / "tests" / "ros" / "monitor_check.cpp"), "-o", str(binary)],
                            capture_output=True, text=True, timeout=300)
     assert built.returncode == 0, built.stderr
-    ran = subprocess.run([str(binary)], capture_output=True, text=True, timeout=60)
+    scratch = tmp_path / "scratch"
+    scratch.mkdir()
+    ran = subprocess.run([str(binary), str(scratch)], capture_output=True, text=True, timeout=60)
     assert ran.returncode == 0, ran.stdout
+    assert (scratch / "latency" / "run1" / "n.json").is_file()  # (summary_dir:=… made when it was missing)
 
 
 def test_a_fifo_or_junk_in_the_way_is_refused_without_blocking(models, tmp_path, capsys):

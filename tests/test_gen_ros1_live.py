@@ -71,10 +71,10 @@ def live(tmp_path_factory):
     topics = [f"/{model.name}/{p.id.replace('.', '/')}" for p in model.ports if p.direction == "out"]
     with rosrun.master(project, base / "ros") as env:
         output = rosrun.run_system(env, package_name(model.name), f"{model.name}.launch", RUN_SECONDS,
-                                   base / "run.jsonl", topics, base / "summary")
+                                   base / "run.jsonl", topics, base / "latency" / "summary")
         assert "escalating" not in output, output  # every node stopped on SIGINT
     records = rosrun.recorded(base / "run.jsonl")
-    summaries = [json.loads(p.read_text()) for p in (base / "summary").glob("*.json")]
+    summaries = [json.loads(p.read_text()) for p in (base / "latency" / "summary").glob("*.json")]
     summaries = {s["node"]: s for s in summaries}
     return {"model": model, "model_dir": model_dir, "project": project, "records": records,
             "summaries": summaries, "build_log": build_log, "base": base}
@@ -199,6 +199,14 @@ def test_the_monitors_agree_with_the_recorded_messages(live):
         # the monitor keeps one reaction per new origin: the largest of the reactions it stands for
         assert summary["reaction_time"]["max_ns"] == max(seen["reaction_time"]), chain.name
         assert summary["data_age"]["violations"] == summary["reaction_time"]["violations"] == 0
+
+
+def test_the_nodes_make_a_missing_summary_directory(live):
+    """`summary_dir:=…/latency/summary`, neither of which existed: the nodes made it and wrote into it."""
+    made = live["base"] / "latency" / "summary"
+    assert made.is_dir() and {p.name for p in made.glob("*.json")} == {
+        f"{node.lstrip('/').replace('/', '_')}.json" for node in live["summaries"]}
+    assert live["summaries"]
 
 
 def test_a_too_tight_spec_is_reported_by_the_monitor(live):

@@ -3,8 +3,11 @@ explicitly in pyproject.toml, so a new subpackage must be added there)."""
 from __future__ import annotations
 
 import tomllib
+from pathlib import Path
 
-from .conftest import ROOT
+import pytest
+
+from .conftest import ROOT, in_ci
 
 
 def test_every_subpackage_is_installed():
@@ -87,3 +90,79 @@ def test_every_data_file_of_a_package_is_installed():
     assert files
     unlisted = [f for f in files if not any(fnmatch(f, pattern) for pattern in data.get("verify.gen", []))]
     assert not unlisted, f"missing from [tool.setuptools.package-data] verify.gen: {unlisted}"
+
+
+#: what a clone's root holds that the installed package must not need (the tests and data stay behind)
+_CLONE = ("verify", "grammar", "specs", "examples", "pyproject.toml")
+
+
+def _installed_venv(where):
+    """A virtual environment with verify installed from this tree as `pip install .` does it (a built
+    wheel, not editable), and the dependencies (lark, z3, ...) of the running interpreter on its path, but
+    none of that interpreter's .pth files (an editable install there would hide what is tested)."""
+    import subprocess
+    import sys
+    import venv
+
+    import lark
+    import networkx
+    import z3
+
+    venv.create(where, with_pip=False)
+    python = where / "bin" / "python"
+    site = next((where / "lib").glob("python3*/site-packages"))
+    deps = sorted({str(Path(m.__file__).resolve().parent.parent) for m in (lark, networkx, z3)})
+    (site / "deps.pth").write_text("\n".join(deps) + "\n", encoding="utf-8")
+    done = subprocess.run([sys.executable, "-m", "pip", "--python", str(python), "install", "-q", "--no-deps",
+                           str(ROOT)], capture_output=True, text=True, timeout=600)
+    if done.returncode != 0:  # (the build needs setuptools and wheel from the package index)
+        message = f"cannot build and install verify: {done.stderr.strip()[-400:]}"
+        if in_ci():
+            pytest.fail(message)
+        pytest.skip(message)
+    return python
+
+
+@pytest.mark.slow
+def test_a_non_editable_install_works_from_the_clone_root(tmp_path):
+    """`pip install .`, then `python -m verify` and `import verify` in the clone root: there the source
+    tree's `verify/` comes first on the path, before the installed package, and it has no `verify.grammar`
+    or `verify.specs` (pyproject.toml maps them from `grammar/` and `specs/`)."""
+    import shutil
+    import subprocess
+
+    python = _installed_venv(tmp_path / "venv")
+    clone = tmp_path / "clone"
+    clone.mkdir()
+    for name in _CLONE:
+        if (ROOT / name).is_dir():
+            shutil.copytree(ROOT / name, clone / name, ignore=shutil.ignore_patterns("__pycache__"))
+        else:
+            shutil.copy(ROOT / name, clone / name)
+
+    def run(*argv):
+        return subprocess.run([str(python), *argv], cwd=clone, capture_output=True, text=True, timeout=120,
+                              env={"PATH": "/usr/bin:/bin", "HOME": str(tmp_path)})
+
+    version = run("-m", "verify", "--version")
+    assert version.returncode == 0 and version.stdout.startswith("verify "), version.stderr
+    check = run("-m", "verify", "check", "examples/navigation/navigation.vfy")
+    assert check.returncode == 0, check.stderr
+    explain = run("-m", "verify", "explain", "E101")
+    assert explain.returncode == 0 and explain.stdout.startswith("## E101"), explain.stderr
+    snippet = run("-c", "import verify; r = verify.load('examples/navigation/navigation.vfy'); "
+                        "print(verify.__file__); print(r.ok, len(r.system().tasks))")
+    assert snippet.returncode == 0, snippet.stderr
+    where, result = snippet.stdout.splitlines()
+    assert Path(where).resolve().is_relative_to(clone.resolve())  # the shadowing this test is about
+    assert result.split()[0] == "True" and int(result.split()[1]) > 0
+
+
+def test_nothing_reads_beside_the_repository():
+    """The repository stands alone: no code, test, example, fuzz seed, benchmark or script refers to a
+    directory beside the clone (the test data is copied in, with its origin and licence)."""
+    beside = ("../" + "shared", 'parent / "' + 'shared"')
+    found = [str(p.relative_to(ROOT)) for top in ("verify", "tests", "fuzz", "benchmarks", "examples", "scripts")
+             for p in (ROOT / top).rglob("*") if p.is_file() and "out" not in p.relative_to(ROOT).parts[:2]
+             and p.suffix != ".pyc" and any(b in p.read_text(encoding="utf-8", errors="replace") for b in beside)]
+    assert not found

@@ -101,12 +101,13 @@ def test_a_kept_table_that_is_not_one_is_built_again(fresh):
     built = _outputs()
     directory = fresh / parsecache.CACHE_DIR
     [table] = [f for f in directory.iterdir() if f.name.startswith("fast-")]
-    for junk in ("{", "[]", json.dumps({"rows": [], "start": 0}), json.dumps({**json.loads(table.read_text()),
-                                                                                "shapes": [[0, "x"]]})):
-        table.write_text(junk)
-        parse._fast_parser.cache_clear()
-        assert _outputs() == built
-        assert parsecache.FastParser.from_data(json.loads(table.read_text())) is not None  # (written anew)
+    data = json.loads(table.read_text().partition("\n")[2])
+    for junk in ("{", "[]", json.dumps({"rows": [], "start": 0}), json.dumps({**data, "shapes": [[0, "x"]]})):
+        for text in (junk, parsecache.stamped_table(junk)):  # (changed after it was written, or written so)
+            table.write_text(text)
+            parse._fast_parser.cache_clear()
+            assert _outputs() == built
+            assert parsecache.read_table(str(table)) is not None  # (written anew)
     with pytest.raises(ValueError, match="not a parser description"):
         parsecache.FastParser.from_data({"rows": [], "start": 0})
 

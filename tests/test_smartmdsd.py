@@ -1,5 +1,6 @@
 """`verify import smartmdsd` and `verify export smartmdsd` (specs/interop.md) on the real models in
-../shared/smartmdsd (the SmartMDSD toolchain's repositories) and on small models of every construct."""
+examples/smartmdsd (from the SmartMDSD toolchain's repositories: origin and licences in its README) and on
+small models of every construct."""
 from __future__ import annotations
 
 import os
@@ -18,16 +19,15 @@ from verify.interop.smartmdsd.export import export_system
 
 from .conftest import ROOT
 
-SHARED = ROOT.parent / "shared" / "smartmdsd"
+MODELS = ROOT / "examples" / "smartmdsd"
 EXAMPLE = ROOT / "examples" / "smartmdsd-gazebo"
 GAZEBO = "SystemGazeboP3DXNavigation"
 
 
 @pytest.fixture(scope="module")
-def shared() -> Path:
-    if not SHARED.is_dir():
-        pytest.fail(f"{SHARED} is missing: the SmartMDSD models come with ../shared beside the project")
-    return SHARED
+def models() -> Path:
+    """The SmartMDSD models the repository ships (examples/smartmdsd)."""
+    return MODELS
 
 
 def imported(paths, system=None):
@@ -48,8 +48,8 @@ def signature(model):
 # ------------------------------------------------------------------ the real models
 
 
-def test_the_gazebo_navigation_system_imports_as_the_example_shows(shared):
-    result, diagnostics = imported([shared], GAZEBO)
+def test_the_gazebo_navigation_system_imports_as_the_example_shows(models):
+    result, diagnostics = imported([models], GAZEBO)
     assert result is not None and result.system == GAZEBO
     assert result.text == (EXAMPLE / "imported.vfy").read_text(encoding="utf-8")
     assert not [d for d in diagnostics if d.severity == "error"]
@@ -78,20 +78,20 @@ def test_the_gazebo_navigation_system_imports_as_the_example_shows(shared):
 
 
 @pytest.mark.parametrize("system", ["SystemGazeboP3DXNavigation", "SystemTiagoNavigation", "SystemGmapping"])
-def test_every_shared_system_imports_without_an_error(shared, system):
-    result, diagnostics = imported([shared], system)
+def test_every_shipped_system_imports_without_an_error(models, system):
+    result, diagnostics = imported([models], system)
     assert result is not None
     assert not [d for d in diagnostics if d.severity == "error"]
     written = verify.load_text(result.text, "x.vfy")  # the written model parses and its names resolve
     assert not [d for d in written.diagnostics if d.code.startswith(("E0", "E1"))]
 
 
-def test_several_systems_need_a_choice(shared):
-    result, diagnostics = imported([shared])
+def test_several_systems_need_a_choice(models):
+    result, diagnostics = imported([models])
     assert result is None and [d.code for d in diagnostics] == ["E705"]
 
 
-def test_the_completed_example_differs_from_the_import_only_where_it_says(shared):
+def test_the_completed_example_differs_from_the_import_only_where_it_says(models):
     imported_model = verify.load_text((EXAMPLE / "imported.vfy").read_text(encoding="utf-8"), "i.vfy")
     completed = verify.load(str(EXAMPLE / "completed.vfy"))
     assert completed.ok
@@ -103,14 +103,14 @@ def test_the_completed_example_differs_from_the_import_only_where_it_says(shared
     assert not [d for d in imported_model.diagnostics if d.code.startswith(("E0", "E1"))]
 
 
-def test_the_example_round_trips_through_synth_and_export(shared, tmp_path):
+def test_the_example_round_trips_through_synth_and_export(models, tmp_path):
     """import -> complete -> synth -> export --from -> import gives the synthesized model back, but for what the
     export reports it cannot hold (an input handler's execution times and priority, E707)."""
     out = tmp_path / "synth.vfy"
     assert main(["synth", str(EXAMPLE / "completed.vfy"), "-o", str(out)]) == 0
     model = verify.load(str(out)).system()
     sink = DiagnosticSink()
-    origin = read_files([str(shared / "systems" / f"{GAZEBO}.componentArch"), str(shared / "components")], sink)
+    origin = read_files([str(models / "systems" / f"{GAZEBO}.componentArch"), str(models / "components")], sink)
     exported = export_system(model, origin.files, {p: s.text for p, s in origin.sources.items()}, sink)
     assert exported is not None
     lost = {d.message.split("`")[1] for d in sink.items if d.code == "E707"}
@@ -118,7 +118,7 @@ def test_the_example_round_trips_through_synth_and_export(shared, tmp_path):
     for name, text in exported.files.items():
         (tmp_path / name).write_text(text, encoding="utf-8")
     back, diagnostics = imported([tmp_path / f"{GAZEBO}.componentArch", tmp_path / f"{GAZEBO}.activityArch",
-                                  tmp_path / f"{GAZEBO}.causeEffectChain", shared / "components"])
+                                  tmp_path / f"{GAZEBO}.causeEffectChain", models / "components"])
     assert back is not None
     again = verify.load_text(back.text, "back.vfy")
     assert not again.ok  # the handlers have no wcet: E217, and nothing else
@@ -133,15 +133,15 @@ def test_the_example_round_trips_through_synth_and_export(shared, tmp_path):
     assert len(chains) == 1
 
 
-def test_the_export_edits_the_component_architecture_minimally(shared, tmp_path):
+def test_the_export_edits_the_component_architecture_minimally(models, tmp_path):
     model = verify.load(str(EXAMPLE / "completed.vfy"))
     out = tmp_path / "synth.vfy"
     assert main(["synth", str(EXAMPLE / "completed.vfy"), "-o", str(out)]) == 0
     dest = tmp_path / "out"
     assert main(["export", "smartmdsd", str(out), "-o", str(dest),
-                 "--from", str(shared / "systems" / f"{GAZEBO}.componentArch"),
-                 "--from", str(shared / "components")]) == 0
-    original = (shared / "systems" / f"{GAZEBO}.componentArch").read_text(encoding="utf-8").split("\n")
+                 "--from", str(models / "systems" / f"{GAZEBO}.componentArch"),
+                 "--from", str(models / "components")]) == 0
+    original = (models / "systems" / f"{GAZEBO}.componentArch").read_text(encoding="utf-8").split("\n")
     written = (dest / f"{GAZEBO}.componentArch").read_text(encoding="utf-8").split("\n")
     kept = [line for line in written if line in original]
     assert kept == original
@@ -320,7 +320,7 @@ def test_syntax_errors_are_located(tmp_path, text, marker):
 @given(st.data())
 def test_any_damage_to_a_real_model_is_reported_never_raised(tmp_path_factory, data):
     """Cut, duplicate or replace a slice of a real model: the import reports (or imports) and never raises."""
-    source = sorted(SHARED.rglob("*.*"))
+    source = sorted(p for p in MODELS.rglob("*.*") if p.suffix != ".md")  # (the models, not their README)
     path = data.draw(st.sampled_from(source))
     text = path.read_text(encoding="utf-8")
     a = data.draw(st.integers(0, len(text)))
@@ -344,15 +344,15 @@ def test_any_damage_to_a_real_model_is_reported_never_raised(tmp_path_factory, d
 # ------------------------------------------------------------------ the command line
 
 
-def test_the_commands_exit_codes_and_files(shared, tmp_path, capsys):
+def test_the_commands_exit_codes_and_files(models, tmp_path, capsys):
     out = tmp_path / "nav.vfy"
-    assert main(["import", "smartmdsd", str(shared), "--system", GAZEBO, "-o", str(out)]) == 2  # incomplete
+    assert main(["import", "smartmdsd", str(models), "--system", GAZEBO, "-o", str(out)]) == 2  # incomplete
     assert out.read_text(encoding="utf-8") == (EXAMPLE / "imported.vfy").read_text(encoding="utf-8")
     err = capsys.readouterr().err
     assert "written, but incomplete" in err and "E217" in err and "Traceback" not in err
-    assert main(["import", "smartmdsd", str(shared), "--system", GAZEBO, "-o", str(out)]) == 2
+    assert main(["import", "smartmdsd", str(models), "--system", GAZEBO, "-o", str(out)]) == 2
     assert "refusing to overwrite" in capsys.readouterr().err
-    assert main(["import", "smartmdsd", str(shared)]) == 2  # three systems: E705, nothing written
+    assert main(["import", "smartmdsd", str(models)]) == 2  # three systems: E705, nothing written
     assert "E705" in capsys.readouterr().err
     assert main(["import", "smartmdsd", str(tmp_path / "nowhere")]) == 2
     assert "E004" in capsys.readouterr().err

@@ -10,7 +10,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-pytestmark = pytest.mark.slow  # (the quick loop leaves it out: README, Tests)
+pytestmark = pytest.mark.slow  # (the quick loop leaves it out: docs/contributing/tests.md)
 
 ROOT = Path(__file__).resolve().parent.parent
 

@@ -127,8 +127,9 @@ def _project(tmp_path):
 
 
 def test_output_elsewhere_names_the_same_imported_files(tmp_path, capsys, monkeypatch):
-    """The README's ``synth examples/navigation/navigation-holes.vfy -o configured.vfy``, from the
-    repository root: the written file imports the components from where it is, and nothing else moves."""
+    """``synth examples/navigation/navigation-holes.vfy -o configured.vfy`` from the repository root
+    (docs/guide/ros.md writes to ``out/`` the same way): the written file imports the components from
+    where it is, and nothing else moves."""
     models = _project(tmp_path)
     monkeypatch.chdir(tmp_path)
     assert main(["synth", "models/holes.vfy", "-o", "configured.vfy"]) == 0

@@ -1,4 +1,4 @@
-"""Untrusted input (README, "Running on untrusted input"): imports are confined to the allowed
+"""Untrusted input (docs/guide/untrusted.md): imports are confined to the allowed
 directories and refused before any file outside is opened; nothing of a file that is not a model is
 shown but its offending token; snippets are cut to a bounded width; every limit is a located E008."""
 from __future__ import annotations
@@ -23,7 +23,9 @@ SECRET = "hunter2-very-secret-value"
 
 @pytest.fixture
 def opened(monkeypatch):
-    """Every path opened for reading during the test (``os.open`` and ``open``), as real paths."""
+    """Every path opened for reading during the test (``os.open`` and ``open``), as real paths (the parser
+    is loaded before: its tables come from the user's cache directory)."""
+    verify.load_text(COMPONENT)
     seen: list[str] = []
     real_os_open, real_open = os.open, builtins.open
 
@@ -125,8 +127,8 @@ def test_an_import_of_a_file_that_is_not_vfy_is_refused(tmp_path, opened, target
 
 def test_root_widens_and_include_adds_library_directories(tmp_path, capsys):
     models = tmp_path / "repo" / "models"
-    main_file = _project(models, {"main.vfy": 'import "../shared/laser.vfy"\nimport "camera.vfy"\n'})
-    _project(tmp_path / "repo" / "shared", {"laser.vfy": COMPONENT})
+    main_file = _project(models, {"main.vfy": 'import "../common/laser.vfy"\nimport "camera.vfy"\n'})
+    _project(tmp_path / "repo" / "common", {"laser.vfy": COMPONENT})
     _project(tmp_path / "lib", {"camera.vfy": 'import "sub/cam.vfy"\n',
                                 "sub/cam.vfy": COMPONENT.replace("Laser", "Camera")})
     assert _codes(verify.load(str(main_file))) == ["E006", "E004"]  # (camera.vfy: not in the project)
@@ -153,8 +155,8 @@ def test_a_library_directory_confines_its_own_imports(tmp_path):
 
 def test_pyproject_settings_choose_root_and_include_within_their_directory(tmp_path, capsys):
     repo = tmp_path / "repo"
-    main_file = _project(repo / "models", {"main.vfy": 'import "../shared/laser.vfy"\nimport "camera.vfy"\n'})
-    _project(repo, {"shared/laser.vfy": COMPONENT, "vendor/camera.vfy": COMPONENT.replace("Laser", "Camera")})
+    main_file = _project(repo / "models", {"main.vfy": 'import "../common/laser.vfy"\nimport "camera.vfy"\n'})
+    _project(repo, {"common/laser.vfy": COMPONENT, "vendor/camera.vfy": COMPONENT.replace("Laser", "Camera")})
     (repo / ".git").mkdir()
     (repo / "pyproject.toml").write_text('[project]\nname = "robot"\n\n[tool.verify]\nroot = "."\n'
                                          'include = ["vendor"]\n')

@@ -1,7 +1,7 @@
 """verify: formal verification of the timing of component-based robotics software.
 
 The public façade: ``load`` / ``load_text`` return a :class:`LoadResult` holding the parsed project,
-every diagnostic and the semantic model of each valid system. See README.md for a tour. The names are
+every diagnostic and the semantic model of each valid system. See docs/guide/library.md. The names are
 imported when first used (PEP 562), so that a command that needs none of the front end (``verify
 --help``, ``--version``) starts without it.
 """

@@ -123,8 +123,26 @@ def _finish(project: Project, sink: DiagnosticSink) -> LoadResult:
         check_propagated_rates(model, sink)
         if len(sink.items) == before:
             models[name] = model
-    diagnostics = tuple(sorted(sink.items, key=Diagnostic.sort_key))
+    diagnostics = tuple(sorted(without_follow_on_errors(sink.items), key=Diagnostic.sort_key))
     return LoadResult(project, resolution, models, diagnostics)
+
+
+#: errors after which part of a file is unread: a syntax error (what follows it up to where the parser
+#: recovers) or a file, imported or not, that cannot be read, decoded or opened
+UNREAD = frozenset({"E001", "E002", "E003", "E004", "E006", "E007", "E008"})
+#: the same, for the file the error is in (an unreadable import is reported in the importing file)
+UNPARSED = frozenset({"E001", "E002", "E003"})
+
+
+def without_follow_on_errors(diagnostics: list[Diagnostic]) -> list[Diagnostic]:
+    """Only the root errors while part of the project is unread (as rustc and mypy report): no "unknown
+    name" (E101: its declaration may be in what was not read), and in a file with a syntax error none
+    but its syntax errors (the rest may follow from the parser's recovery). Warnings stay."""
+    if not any(d.code in UNREAD for d in diagnostics):
+        return diagnostics
+    unparsed = {d.span.file for d in diagnostics if d.code in UNPARSED}
+    return [d for d in diagnostics if d.severity != "error" or d.code.startswith("E0")
+            or (d.code != "E101" and d.span.file not in unparsed)]
 
 
 #: what ``check_propagated_rates`` reports: the constraints of triggered tasks (E305/E306) and of

@@ -22,7 +22,11 @@ __all__ = ["main", "prove_main", "synth_main"]
 def _model_options(p: argparse.ArgumentParser, module: ModuleType) -> None:
     from .outputs import formats
 
-    p.add_argument("file", metavar="FILE", help="the .vfy file (imports are followed); `-`: standard input")
+    if getattr(module, "FILES", False):
+        p.add_argument("file", metavar="FILE", nargs="+", help="a .vfy file (imports are followed) or a directory "
+                       "of them; `-`: standard input")
+    else:
+        p.add_argument("file", metavar="FILE", help="the .vfy file (imports are followed); `-`: standard input")
     choices = getattr(module, "FORMATS", None) or formats(module.RESULT)
     p.add_argument("--format", choices=choices, default=choices[0], action=_FormatGiven,
                    help=getattr(module, "FORMAT_HELP", "output format"))
@@ -39,10 +43,14 @@ def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="verify", description="Timing verification for component-based "
                                      "robotics software: check, analyze, synthesize and prove.")
     parser.add_argument("--version", action=_Version, help="print the version and those of the libraries, and exit")
+    _color_option(parser, "auto")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name in COMMANDS:
         module = command(name)
         p = sub.add_parser(name, help=module.HELP, description=getattr(module, "DESCRIPTION", module.HELP))
+        _color_option(p, argparse.SUPPRESS)  # (after the command too; given there, it wins)
+        if getattr(module, "PARSER", False):  # (a command about the command line itself: `completion`)
+            p.set_defaults(parser=parser)
         if hasattr(module, "add_leading_arguments"):  # (positionals before FILE: `gen TARGET FILE`)
             module.add_leading_arguments(p)
         if module.MODEL:
@@ -50,6 +58,14 @@ def _parser() -> argparse.ArgumentParser:
         module.add_arguments(p)
         p.set_defaults(run=name)
     return parser
+
+
+def _color_option(p: argparse.ArgumentParser, default: str) -> None:
+    from .colour import CHOICES
+
+    p.add_argument("--color", choices=CHOICES, default=default,
+                   help="colour diagnostics: auto (on a terminal, unless NO_COLOR is set; the default), always, "
+                        "never")
 
 
 class _FormatGiven(argparse.Action):
@@ -81,6 +97,9 @@ def _run(name: str, args: argparse.Namespace) -> int:
 def main(argv: list[str] | None = None) -> int:
     try:
         args = _parser().parse_args(argv)
+        from .colour import choose
+
+        choose(args.color)
         return _run(args.run, args)
     except KeyboardInterrupt:
         return 130
@@ -93,7 +112,9 @@ def main(argv: list[str] | None = None) -> int:
     except Exception as err:  # the last line of defence: never a traceback for the user
         if os.environ.get("VERIFY_DEBUG"):
             raise
-        print(f"internal error: {type(err).__name__}: {err}\n"
+        from .sanitize import shown
+
+        print(f"internal error: {type(err).__name__}: {shown(str(err))}\n"
               "This is a bug in verify; please report it with the input file. "
               "Set VERIFY_DEBUG=1 to see the traceback.", file=sys.stderr)
         return EXIT_INTERNAL

@@ -92,6 +92,7 @@ _ALL = [
     # E6xx: code generation
     Code("E601", "file in the way of generated code"),
     Code("E602", "system the code-generation target cannot run"),
+    Code("E603", "names that become one in generated code"),
     # E7xx: import and export of other tools' models
     Code("E701", "syntax error in an imported model"),
     Code("E702", "unresolved reference in an imported model", Severity.WARNING),

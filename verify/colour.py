@@ -2,9 +2,11 @@
 
 ``paint`` adds ANSI escapes to text that ``verify.render.render_all_text`` made — severity and code,
 the ``-->`` locations, the gutter, the carets under the source, ``help`` and ``note`` — and removing
-them gives the text back unchanged. ``wanted(stream)`` says whether a stream gets colour: only a
-terminal, never a pipe or a file, and never when ``NO_COLOR`` is set to anything (no-color.org) or
-``TERM`` is ``dumb``.
+them gives the text back unchanged. ``wanted(stream)`` says whether a stream gets colour: by default
+(``--color auto``) only a terminal, never a pipe or a file, and never when ``NO_COLOR`` is set to
+anything (no-color.org) or ``TERM`` is ``dumb``; ``--color always`` colours wherever the text goes (a
+command-line choice overrides ``NO_COLOR``, as no-color.org has it), ``--color never`` nowhere
+(``choose``).
 """
 from __future__ import annotations
 
@@ -29,9 +31,22 @@ _EXTRA = re.compile(r"^( *= )(help|note)(:.*)$")
 _SUMMARY = re.compile(r"^(\d+ errors?)(, \d+ warnings?)?$|^(\d+ warnings?)$")
 ANSI = re.compile(r"\x1b\[[0-9;]*m")
 
+#: the choices of ``--color``
+CHOICES = ("auto", "always", "never")
+_choice = ["auto"]
+
+
+def choose(choice: str) -> None:
+    """Set ``--color``: "auto" (a terminal, unless NO_COLOR or TERM=dumb), "always" or "never"."""
+    if choice not in CHOICES:
+        raise ValueError(f"--color takes {', '.join(CHOICES)}, not {choice!r}")
+    _choice[0] = choice
+
 
 def wanted(stream: TextIO) -> bool:
     """Whether text written to ``stream`` should be coloured."""
+    if _choice[0] != "auto":
+        return _choice[0] == "always"
     if os.environ.get("NO_COLOR") or os.environ.get("TERM") == "dumb":
         return False
     isatty = getattr(stream, "isatty", None)

@@ -217,7 +217,7 @@ class GraphvizFailed(Exception):
 
 
 def layout(dot_text: str, fmt: str) -> bytes:
-    """``dot_text`` laid out by Graphviz as ``fmt`` ("svg" or "png")."""
+    """``dot_text`` laid out by Graphviz as ``fmt`` ("svg", "png" or "pdf")."""
     dot = shutil.which("dot")
     if dot is None:
         raise GraphvizMissing("Graphviz's `dot` is not installed")

@@ -2,14 +2,13 @@
 from __future__ import annotations
 
 import re
-from importlib import resources
-
 from .codes import CODES, spec_anchor
+from .resources import data_text
 
 
 def spec_sections() -> dict[str, str]:
     """Every ``## CODE`` section of specs/diagnostics.md, by code."""
-    text = resources.files("verify.specs").joinpath("diagnostics.md").read_text(encoding="utf-8")
+    text = data_text("specs", "diagnostics.md")
     sections: dict[str, str] = {}
     parts = re.split(r"^## ", text, flags=re.MULTILINE)
     for part in parts[1:]:

@@ -141,6 +141,20 @@ def _lexeme(punct: Mapping[str, str]) -> re.Pattern[str]:
     )
 
 
+def _consistent(rows: list[dict[str, int]], shapes: list[_Shape], names: list[str | None]) -> bool:
+    """Every state and rule a table names exists, every rule's kept children lie among its children, and
+    every rule whose value a callback builds names one (a table read from a file may be corrupt)."""
+    states, rules = len(rows), len(shapes)
+    if not all(0 <= code < states if code >= 0 else ~code < rules for row in rows for code in row.values()):
+        return False
+    for (mode, _origin, size, include, _empty), name in zip(shapes, names, strict=True):
+        if mode not in (_NODE, _INLINE, _EXPAND1, _PASS, _APPEND) or size < 0:
+            return False
+        if not all(0 <= i < size for i, _ in include) or (mode in (_NODE, _EXPAND1) and name is None):
+            return False
+    return True
+
+
 class FastParser:
     """Lark's LALR table for one grammar with the lexer above; ``parse`` is reentrant."""
 
@@ -179,6 +193,8 @@ class FastParser:
             raise ValueError(f"not a parser description: {err}") from None
         if len(names) != len(shapes) or not all(0 <= s < len(rows) for s in (parser.start, parser.end)):
             raise ValueError("not a parser description: inconsistent sizes")
+        if not _consistent(rows, shapes, names):
+            raise ValueError("not a parser description: a state, rule or child out of range")
         return parser
 
     @classmethod

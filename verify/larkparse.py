@@ -12,7 +12,6 @@ import functools
 import os
 import re
 from collections.abc import Iterable, Iterator
-from importlib import resources
 from typing import cast
 
 from lark import Lark, Token
@@ -22,7 +21,8 @@ from lark.parsers.lalr_interactive_parser import InteractiveParser
 
 from .diagnostics import DiagnosticSink, Label
 from .lalr import _SKIP, _WORD_RE, TooManyTokens, position
-from .parsecache import private_cache_dir
+from .parsecache import clear_if_not_regular, private_cache_dir
+from .resources import data_text
 from .source import Span
 
 MAX_EXPECTED_SHOWN = 4  # (E002: a longer list says little about a stray character)
@@ -39,7 +39,7 @@ _TOKEN_WORDS = {
 
 @functools.lru_cache(maxsize=1)
 def grammar_text() -> str:
-    return resources.files("verify.grammar").joinpath("verify.lark").read_text(encoding="utf-8")
+    return data_text("grammar", "verify.lark")
 
 
 class _WholeWords(PostLex):
@@ -107,7 +107,9 @@ def _cache_file() -> str | bool:
     directory = private_cache_dir()
     if directory is None:
         return False
-    return os.path.join(directory, f"lark-{lark.__version__}-parser.cache")
+    path = os.path.join(directory, f"lark-{lark.__version__}-parser.cache")
+    clear_if_not_regular(path)  # (Lark opens the file itself: never a FIFO it would wait on, never a link)
+    return path
 
 
 @functools.lru_cache(maxsize=1)

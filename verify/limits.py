@@ -1,5 +1,5 @@
 """The limits on what one run reads: stated here, enforced by the loader and the parser, each a located
-error when exceeded (E008; a number's length is E005). README.md ("Running on untrusted input") and
+error when exceeded (E008; a number's length is E005). docs/guide/untrusted.md ("Limits") and
 specs/diagnostics.md (E008) list them; a library user may pass tighter ones to ``verify.load``.
 
 The defaults leave room for real models: a generated 10,000-task system (``benchmarks.generate``) is one

@@ -2,20 +2,21 @@
 
 Files are read as bytes and decoded as strict UTF-8; unreadable, missing or non-UTF-8 files become
 located diagnostics (E003, E004), never exceptions. An import is confined to the project's allowed
-directories before anything is opened (``verify.roots``: E006, E007), and what one run reads is bounded
-(``verify.limits``: E008). Text held in memory (an editor's unsaved buffers) takes the place of a file
-of the same path (``overlay``).
+directories before anything is opened (``verify.roots``: E006, E007), every file read — the root file
+too — obeys the rule of ``verify.fileaccess`` (inside those directories once links are followed, a
+regular file: E006, E004), and what one run reads is bounded (``verify.limits``: E008). Text held in
+memory (an editor's unsaved buffers) takes the place of a file of the same path (``overlay``).
 """
 from __future__ import annotations
 
 import os
-import stat
 from dataclasses import dataclass, field
 from collections.abc import Callable, Mapping
 from typing import BinaryIO
 
 from . import syntax as s
 from .diagnostics import DiagnosticSink
+from .fileaccess import Area, Refused, read_regular
 from .limits import DEFAULT_LIMITS, Limits
 from .parse import looks_like_model, parse_source
 from .roots import Refusal, Roots
@@ -53,45 +54,46 @@ class Project:
 
 def _shown(path: str) -> str:
     """``path`` for a message: characters that cannot be shown (NUL, control characters) escaped."""
-    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in path)
+    from .sanitize import shown
+
+    return shown(path)
 
 
 def read_bytes(path: str, sink: DiagnosticSink, at: Span | None,
-               limit: int = DEFAULT_LIMITS.file_bytes) -> bytes | None:
+               limit: int = DEFAULT_LIMITS.file_bytes, area: Area | None = None) -> bytes | None:
     """The bytes of regular file ``path``, at most ``limit`` + 1 of them (more than ``limit``: the file is
-    too large), or None after reporting why it cannot be read."""
-    where = at or Span(path, 1, 1, 1, 1)
+    too large), or None after reporting why it cannot be read. Within ``area`` (when given) as written
+    and once links are followed (``verify.fileaccess``: the one rule of every file read)."""
+    where = at or Span(path, 0, 0, 0, 0)  # (a file named on the command line: no line to point at)
     shown = _shown(path)
     try:
-        # a FIFO, a device or a socket would block or never end: only regular files are read, checked
-        # before opening and again on the open descriptor (opened non-blocking, so a FIFO swapped in
-        # between cannot hang the read either)
-        if not stat.S_ISREG(os.stat(path).st_mode):
-            _not_regular(shown, path, where, sink)
-            return None
-        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0))
-        with os.fdopen(fd, "rb") as fh:
-            if not stat.S_ISREG(os.fstat(fd).st_mode):
-                _not_regular(shown, path, where, sink)
-                return None
-            data = fh.read(limit + 1)
-    except ValueError:  # e.g. a NUL character in the path: no file can have that name
-        sink.emit("E004", f"invalid file name {shown}: it contains a NUL character", where, "cannot be read",
-                  help="correct the file name")
-        return None
-    except FileNotFoundError:
-        sink.emit("E004", f"file not found: {shown}", where, "cannot be read",
-                  help="check the path; imports are relative to the importing file")
-        return None
-    except IsADirectoryError:
-        sink.emit("E004", f"{shown} is a directory, not a file", where, "cannot be read",
-                  help="name a .vfy file")
-        return None
+        return read_regular(path, limit, area)
+    except Refused as refused:
+        _refused(refused.reason, shown, where, sink, imported=at is not None)
     except OSError as err:
         sink.emit("E004", f"cannot read {shown}: {err.strerror or err}", where, "cannot be read",
                   help="check that the file exists and is readable")
-        return None
-    return data
+    return None
+
+
+def _refused(reason: str, shown: str, where: Span, sink: DiagnosticSink, imported: bool = True) -> None:
+    """The diagnostic of a file ``verify.fileaccess`` refuses: its name, never its content."""
+    if reason in ("outside", "link"):
+        sink.emit("E006", f"{shown} is a symbolic link to a file outside the allowed directories; it is not read",
+                  where, "leads outside", help="copy the file into the project, or name the directory it lies in "
+                  "on the command line")
+    elif reason == "name":
+        sink.emit("E004", f"invalid file name {shown}: it contains a NUL character", where, "cannot be read",
+                  help="correct the file name")
+    elif reason == "missing":
+        sink.emit("E004", f"file not found: {shown}", where, "cannot be read",
+                  help="check the path; imports are relative to the importing file" if imported else
+                  f"check the path (relative to the working directory, {_shown(os.getcwd())})")
+    elif reason == "directory":
+        sink.emit("E004", f"{shown} is a directory, not a file", where, "cannot be read", help="name a .vfy file")
+    else:
+        sink.emit("E004", f"{shown} is not a regular file (a pipe, device or socket)", where, "cannot be read",
+                  help="name a regular .vfy file; to check generated text, write it to a file first")
 
 
 def read_stream(stream: BinaryIO, path: str, sink: DiagnosticSink, limits: Limits = DEFAULT_LIMITS) -> str | None:
@@ -135,10 +137,10 @@ def decode(data: bytes, path: str, sink: DiagnosticSink, sources: dict[str, Sour
         return None
 
 
-def _read(path: str, sink: DiagnosticSink, at: Span | None,
-          sources: dict[str, SourceFile] | None = None, limits: Limits = DEFAULT_LIMITS) -> str | None:
-    """The text of one file ``path``, or None after reporting why not (E003, E004, E008)."""
-    data = read_bytes(path, sink, at, limits.file_bytes)
+def _read(path: str, sink: DiagnosticSink, at: Span | None, sources: dict[str, SourceFile] | None = None,
+          limits: Limits = DEFAULT_LIMITS, area: Area | None = None) -> str | None:
+    """The text of one file ``path``, or None after reporting why not (E003, E004, E006, E008)."""
+    data = read_bytes(path, sink, at, limits.file_bytes, area)
     if data is None:
         return None
     if len(data) > limits.file_bytes:
@@ -148,23 +150,15 @@ def _read(path: str, sink: DiagnosticSink, at: Span | None,
 
 
 def read_text(path: str, sink: DiagnosticSink, sources: dict[str, SourceFile] | None = None,
-              limits: Limits = DEFAULT_LIMITS) -> str | None:
+              limits: Limits = DEFAULT_LIMITS, area: Area | None = None) -> str | None:
     """The text of file ``path`` (any format: importers read theirs with it), or None after reporting why
-    not (E003, E004, E008), under the same guards as a model file."""
-    return _read(path, sink, None, sources, limits)
+    not (E003, E004, E006, E008), under the same guards as a model file (within ``area`` when given)."""
+    return _read(path, sink, None, sources, limits, area)
 
 
 def _file_too_large(path: str, limits: Limits, at: Span | None, sink: DiagnosticSink) -> None:
     sink.emit("E008", f"{_shown(path)} is larger than {_size(limits.file_bytes)}, the limit for one file",
               at or Span(path, 1, 1, 1, 1), "too large", help="split the model into several files joined by `import`")
-
-
-def _not_regular(shown: str, path: str, where: Span, sink: DiagnosticSink) -> None:
-    if os.path.isdir(path):
-        sink.emit("E004", f"{shown} is a directory, not a file", where, "cannot be read", help="name a .vfy file")
-        return
-    sink.emit("E004", f"{shown} is not a regular file (a pipe, device or socket)", where, "cannot be read",
-              help="name a regular .vfy file; to check generated text, write it to a file first")
 
 
 class _Loading:
@@ -194,7 +188,8 @@ class _Loading:
                 return None
             self.total += size
             return held
-        data = read_bytes(path, self.sink, at, min(self.limits.file_bytes, self.limits.project_bytes - self.total))
+        data = read_bytes(path, self.sink, at, min(self.limits.file_bytes, self.limits.project_bytes - self.total),
+                          self.roots.area)
         if data is None or not self._fits(path, len(data), at):
             return None
         self.total += len(data)

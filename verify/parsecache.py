@@ -1,4 +1,4 @@
-"""The fast parser's tables, kept between processes without Lark (README, "Running on untrusted input").
+"""The fast parser's tables, kept between processes without Lark (docs/guide/untrusted.md, "The cache").
 
 A command that parses valid text needs only ``verify.lalr.FastParser``: Lark's LALR table for the
 grammar and the lexer of ``lalr.py``. Building it needs Lark (about 20 ms to import, 9 ms to load
@@ -6,8 +6,10 @@ its own cache of the tables); this module keeps the finished table as JSON in th
 cache directory, so that a later process builds the parser from that file alone and imports Lark
 only when a text needs the error path. The file's name holds a digest of the grammar and of
 ``lalr.py`` (which decides what the table holds): editing either makes a new file. A file that does
-not describe a parser is ignored and written anew; nothing is read from a directory another user
-could write (the same rule as Lark's own cache, ``larkparse._cache_file``).
+not describe a parser — not a regular file, too large, changed since it was written (its first line
+is the SHA-256 of the rest), not JSON of a parser's shape — is ignored and written anew; nothing is
+read from a directory another user could write (the same rule as Lark's own cache,
+``larkparse._cache_file``), and only regular files are read there (``verify.fileaccess``).
 """
 from __future__ import annotations
 
@@ -17,15 +19,20 @@ import json
 import os
 import stat
 
+from .fileaccess import Refused, read_regular
 from .lalr import FastParser
 
 #: the directory (under ``$XDG_CACHE_HOME``, else ``~/.cache``) that holds the parser's tables
 CACHE_DIR = "verify-timing"
+#: the largest table file read (the grammar's is about 30 kB)
+MAX_TABLE_BYTES = 4 * 1024 * 1024
 
 
 def private_cache_dir() -> str | None:
-    """The cache directory, made if need be, or None when it is not a directory only this user can
-    write to (or cannot be made)."""
+    """The cache directory, made if need be (mode 0700), or None when it is not such a private directory
+    of this user (or cannot be made). Any permission for others is refused, not only writing: a
+    directory that a checkout made (0755) — ``$XDG_CACHE_HOME`` pointing into a repository — may hold
+    files a pull request committed, and Lark's cache is a pickle."""
     base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
     directory = os.path.join(base, CACHE_DIR)
     try:
@@ -35,7 +42,7 @@ def private_cache_dir() -> str | None:
         return None
     getuid = getattr(os, "getuid", None)
     mine = getuid is None or info.st_uid == getuid()
-    if not stat.S_ISDIR(info.st_mode) or not mine or info.st_mode & 0o022:
+    if not stat.S_ISDIR(info.st_mode) or not mine or info.st_mode & 0o077:
         return None
     return directory
 
@@ -71,17 +78,55 @@ def load_fast_parser() -> FastParser | None:
     directory = private_cache_dir()
     path = table_file(directory) if directory is not None else None
     if path is not None:
-        try:
-            with open(path, encoding="utf-8") as fh:
-                return FastParser.from_data(json.load(fh))
-        except (OSError, ValueError):
-            pass
+        cached = read_table(path)
+        if cached is not None:
+            return cached
     from .larkparse import _parser
 
     fast = FastParser.build(_parser())
     if fast is not None and path is not None:
-        _write(path, json.dumps(fast.to_data(), separators=(",", ":")))
+        _write(path, stamped_table(json.dumps(fast.to_data(), separators=(",", ":"))))
     return fast
+
+
+def stamped_table(text: str) -> str:
+    """The cache file's text for the table ``text`` (JSON): a first line with its SHA-256, then ``text``."""
+    return hashlib.sha256(text.encode("utf-8")).hexdigest() + "\n" + text
+
+
+def read_table(path: str) -> FastParser | None:
+    """The parser the cache file ``path`` describes, or None for anything else: a file that is not a
+    regular file (a FIFO is never waited on, a link never followed), is too large, whose first line is
+    not the SHA-256 of the rest (a file changed after it was written), or that does not describe a
+    parser (``FastParser.from_data``). The caller then builds the table and writes the file anew."""
+    try:
+        raw = read_regular(path, MAX_TABLE_BYTES, follow_links=False)
+    except (Refused, OSError):
+        return None
+    digest, newline, body = raw.partition(b"\n")
+    if len(raw) > MAX_TABLE_BYTES or not newline or hashlib.sha256(body).hexdigest().encode("ascii") != digest:
+        return None
+    try:
+        data = json.loads(body)
+        return FastParser.from_data(data) if isinstance(data, dict) else None
+    except (ValueError, RecursionError):
+        return None
+
+
+def clear_if_not_regular(path: str) -> None:
+    """Remove what stands at ``path`` in the private cache directory unless it is a regular file (a FIFO,
+    a link, a directory): Lark opens its cache file itself, and would wait on a FIFO or write through a
+    link."""
+    try:
+        if stat.S_ISREG(os.lstat(path).st_mode):
+            return
+    except OSError:
+        return
+    with contextlib.suppress(OSError):
+        if os.path.isdir(path) and not os.path.islink(path):
+            os.rmdir(path)
+        else:
+            os.unlink(path)
 
 
 def _write(path: str, text: str) -> None:

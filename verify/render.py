@@ -8,9 +8,13 @@ JSON schema ``verify.diagnostics/1``::
                       "end_column", "message"}], "notes": [...], "help": str | null, "spec": str}],
      "summary": {"errors": int, "warnings": int}}
 
-Lines and columns are 1-based; ``end_column`` is exclusive. A snippet of source text shows at most
+Lines and columns are 1-based; ``end_column`` is exclusive; 0 for a diagnostic about a whole file (one
+named on the command line that cannot be read) or about no file. A snippet of source text shows at most
 ``source.SNIPPET_WIDTH`` characters of a line (``source.excerpt``), and nothing of a file that is not a
-model but its offending token (``SourceFile.only``).
+model but its offending token (``SourceFile.only``). In text, every field (file names, message, labels,
+notes, help) and every snippet is shown through ``verify.sanitize``: a character that is not printable
+(ESC, BEL, CR, a newline in a name from another tool's file) appears as its escape (``\\x1b``), never
+raw; JSON escapes them itself.
 """
 from __future__ import annotations
 
@@ -19,6 +23,7 @@ from typing import Any
 
 from .codes import spec_anchor
 from .diagnostics import Diagnostic, Label, Severity
+from .sanitize import shown, shown_columns
 from .source import SourceFile, Span, excerpt
 
 
@@ -35,12 +40,12 @@ def _snippet(label: Label, marker: str, sources: Mapping[str, SourceFile], width
     text = source.line(span.line).replace("\t", " ")
     start = max(span.column, 1)
     end = span.end_column if span.end_line == span.line else len(text) + 1
-    text, start, end = excerpt(text, start, end)
+    text, start, end = shown_columns(*excerpt(text, start, end))
     length = max(1, min(end, len(text) + 1) - start)
     pad = " " * width
     underline = " " * (start - 1) + marker * length
     if label.message:
-        underline += " " + label.message
+        underline += " " + shown(label.message)
     return [f"{str(span.line).rjust(width)} | {text}", f"{pad} | {underline}"]
 
 
@@ -48,7 +53,7 @@ def render_text(d: Diagnostic, sources: Mapping[str, SourceFile]) -> str:
     """One diagnostic, rustc-style."""
     width = _gutter_width(d)
     pad = " " * width
-    out = [f"{d.severity.value}[{d.code}]: {d.message}", f"{pad}--> {_where(d.primary.span)}"]
+    out = [f"{d.severity.value}[{d.code}]: {shown(d.message)}", f"{pad}--> {_where(d.primary.span)}"]
     snippet = _snippet(d.primary, "^", sources, width)
     if snippet:
         out.append(f"{pad} |")
@@ -63,14 +68,14 @@ def render_text(d: Diagnostic, sources: Mapping[str, SourceFile]) -> str:
     if snippet or d.secondary:
         out.append(f"{pad} |")
     for note in d.notes:
-        out.append(f"{pad} = note: {note}")
+        out.append(f"{pad} = note: {shown(note)}")
     if d.help:
-        out.append(f"{pad} = help: {d.help}")
+        out.append(f"{pad} = help: {shown(d.help)}")
     return "\n".join(out)
 
 
 def _where(span: Span) -> str:
-    return f"{span.file}:{span.line}:{span.column}" if span.line > 0 else span.file
+    return f"{shown(span.file)}:{span.line}:{span.column}" if span.line > 0 else shown(span.file)
 
 
 def summary_line(diagnostics: Sequence[Diagnostic]) -> str:

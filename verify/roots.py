@@ -4,7 +4,9 @@ A model's files are untrusted input (``prove`` runs on pull requests), so an imp
 any file is opened. It names a ``.vfy`` file by a relative path, looked up relative to the importing
 file, then in each library directory in order. The file must lie inside an *allowed directory* — the
 project root or a library directory — both as written (a ``..`` that climbs out is refused) and once
-symbolic links are followed (a link that leads out is refused). An absolute path is refused.
+symbolic links are followed (a link that leads out is refused). An absolute path is refused. The file
+given on the command line obeys the same rule, and so does the ``pyproject.toml`` (inside its own
+directory): ``verify.fileaccess`` states it once for every file verify reads or writes.
 
 The project root is the directory of the file given on the command line, unless ``--root DIR`` or the
 ``root`` of a ``[tool.verify]`` table in the nearest ``pyproject.toml`` says otherwise; library
@@ -17,6 +19,7 @@ import os
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
+from .fileaccess import Area, Refused, inside, read_regular
 from .source import Span
 
 
@@ -30,15 +33,6 @@ class Refusal:
     help: str
 
 
-def _real(path: str) -> str:
-    return os.path.realpath(path)
-
-
-def _inside(path: str, directory: str) -> bool:
-    """``path`` is ``directory`` or lies below it (both absolute and normalised)."""
-    return path == directory or path.startswith(directory.rstrip(os.sep) + os.sep)
-
-
 @dataclass(frozen=True)
 class Roots:
     """The allowed directories of one project: ``root`` first, then the library directories."""
@@ -47,14 +41,11 @@ class Roots:
     include: tuple[str, ...] = ()
     #: how messages name the root (default: its path)
     label: str = field(default="", compare=False)
-    #: the allowed directories as absolute paths, and once links are followed
-    absolute: tuple[str, ...] = field(init=False, repr=False, compare=False)
-    real: tuple[str, ...] = field(init=False, repr=False, compare=False)
+    #: the allowed directories, as written and once links are followed (``verify.fileaccess``)
+    area: Area = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
-        dirs = (self.root, *self.include)
-        object.__setattr__(self, "absolute", tuple(os.path.abspath(d) for d in dirs))
-        object.__setattr__(self, "real", tuple(_real(d) for d in dirs))
+        object.__setattr__(self, "area", Area((self.root, *self.include)))
 
     @classmethod
     def of_file(cls, path: str, root: str | None = None, include: tuple[str, ...] = ()) -> Roots:
@@ -65,15 +56,11 @@ class Roots:
 
     def contains_as_written(self, path: str) -> bool:
         """``path`` lies inside an allowed directory, links not followed."""
-        absolute = os.path.abspath(path)
-        return any(_inside(absolute, d) for d in self.absolute)
+        return self.area.holds_as_written(path)
 
     def contains(self, path: str) -> bool:
         """``path`` lies inside an allowed directory as written and once links are followed."""
-        if not self.contains_as_written(path):
-            return False
-        real = _real(path)
-        return any(_inside(real, d) for d in self.real)
+        return self.area.holds(path)
 
     def describe(self) -> str:
         """The allowed directories for a message: "the project root `R`" (and "or the library ...")."""
@@ -86,7 +73,9 @@ class Roots:
     def resolve(self, importer: str, target: str) -> str | Refusal:
         """The file that ``import "target"`` in file ``importer`` names, or why it is refused. The file is
         not opened; it need not exist (the loader then reports E004)."""
-        shown = "".join(c if c.isprintable() else repr(c)[1:-1] for c in target)
+        from .sanitize import shown as printable
+
+        shown = printable(target)
         if "\0" in target:
             return Refusal("E004", f"invalid file name `{shown}`: it contains a NUL character", "cannot be read",
                            "correct the file name")
@@ -105,7 +94,7 @@ class Roots:
         candidates = [local]
         for library in self.include:
             found = os.path.normpath(os.path.join(library, target))
-            if _inside(os.path.abspath(found), os.path.abspath(library)):
+            if inside(os.path.abspath(found), os.path.abspath(library)):
                 candidates.append(found)
         chosen = next((c for c in candidates if os.path.lexists(c)), local)
         if not self.contains(chosen):
@@ -118,6 +107,10 @@ class Roots:
 #: the keys a ``[tool.verify]`` table may hold
 SETTING_KEYS = ("root", "include")
 MAX_PYPROJECT_BYTES = 1024 * 1024
+#: why a ``pyproject.toml`` is not read, by ``fileaccess.Refused.reason`` (its content is never shown)
+REFUSED_SETTINGS = {"outside": "is a symbolic link to a file outside its own directory",
+                    "link": "is a symbolic link", "special": "is not a regular file (a pipe, device or socket)",
+                    "directory": "is a directory", "missing": "does not exist", "name": "is not a valid file name"}
 
 
 @dataclass(frozen=True)
@@ -145,7 +138,7 @@ def find_pyproject(start: str) -> str | None:
     here = os.path.abspath(start)
     while True:
         candidate = os.path.join(here, "pyproject.toml")
-        if os.path.isfile(candidate):
+        if os.path.lexists(candidate) and not os.path.isdir(candidate):  # (a link or FIFO: found, then refused)
             return candidate
         if os.path.exists(os.path.join(here, ".git")):
             return None
@@ -161,11 +154,15 @@ def read_settings(pyproject: str) -> Settings | SettingsError:
 
     start = Span(pyproject, 1, 1, 1, 1)
     try:
-        with open(pyproject, "rb") as fh:
-            raw = fh.read(MAX_PYPROJECT_BYTES + 1)
+        raw = read_regular(pyproject, MAX_PYPROJECT_BYTES, Area((os.path.dirname(pyproject),)))
         text = raw.decode("utf-8")
+    except Refused as refused:
+        return SettingsError(start, f"{pyproject} {REFUSED_SETTINGS[refused.reason]}; it is not read", "not read",
+                             "a pyproject.toml is a regular file in the directory it configures: replace the "
+                             "link or special file with one, or remove it")
     except (OSError, UnicodeDecodeError) as err:
-        return SettingsError(start, f"cannot read {pyproject}: {err}", "cannot be read", "fix the file, or remove it")
+        return SettingsError(start, f"cannot read {pyproject}: {getattr(err, 'strerror', None) or err}",
+                             "cannot be read", "fix the file, or remove it")
     if len(raw) > MAX_PYPROJECT_BYTES:
         return SettingsError(start, f"{pyproject} is larger than 1 MiB", "too large",
                              "a pyproject.toml is a small file: check that this is the right one")
@@ -204,11 +201,12 @@ def read_settings(pyproject: str) -> Settings | SettingsError:
         return fail(where("include"), "`include` must be a list of strings (directories)", "not a list of strings",
                     'write `include = ["DIR", ...]`, relative to this file')
     base = os.path.dirname(pyproject)
+    own = Area((base,))
     named = ([("root", root)] if root is not None else []) + [("include", d) for d in include]
     resolved = []
     for key, value in named:
         path = os.path.normpath(os.path.join(base, value))
-        if "\0" in value or os.path.isabs(value) or not _inside(_real(path), _real(base)):
+        if "\0" in value or os.path.isabs(value) or not own.holds(path):
             return fail(where(key), f"`{key}` names `{value}`, which lies outside the directory of {pyproject}",
                         "leads outside", "a pyproject.toml may only name directories inside its own directory; "
                         "pass a directory elsewhere on the command line (`--root`, `--include`)")
@@ -286,10 +284,15 @@ def project_roots(path: str, root: str | None = None, include: tuple[str, ...] =
     if problems:
         return None, problems
     if not roots.contains_as_written(path):
-        # (lexically: the file named on the command line is trusted, a link to it may lead anywhere)
         where = Span("<command line>", 1, 1, 1, 1)
         origin = "`--root`" if root is not None else f"the `root` of {settings.path}"
         return None, [RootsProblem("E006", f"{path} lies outside the project root `{roots.root}` ({origin})", where,
                                    "outside the root", "run on a file inside the root, or choose the root with "
                                    "`--root DIR`")]
+    if not roots.contains(path):
+        # (the name on the command line is trusted, the file it names is the project's: a link committed in
+        # its place may lead anywhere, and what it leads to is never read)
+        return None, [RootsProblem("E006", f"{path} is a symbolic link to a file outside {roots.describe()}; it "
+                                   "is not read", Span(path, 1, 1, 1, 1), "leads outside",
+                                   "run on the model file itself, or choose a root that holds it with `--root DIR`")]
     return roots, []

@@ -9,7 +9,9 @@ hops), notes and help appended to the message, and ``partialFingerprints`` that 
 lines are added above it (``verifyFingerprint/v1``: the code, the file and the text of the primary
 line, numbered among equal ones). URIs are relative to the working directory with
 forward slashes (percent-encoded); a file outside it gets an absolute ``file:`` URI. The output is
-deterministic (no timestamps; no absolute paths for files below the working directory).
+deterministic (no timestamps; no absolute paths for files below the working directory). Message texts
+are shown as the text renderer shows them (``verify.sanitize.shown``: no control character, no line
+break from a name; notes and help each on a line of their own).
 """
 from __future__ import annotations
 
@@ -25,6 +27,7 @@ from . import __version__ as VERSION
 from .codes import CODES, spec_anchor
 from .diagnostics import Diagnostic, Severity
 from .explain import explain
+from .sanitize import shown
 from .source import SourceFile, Span
 
 SCHEMA_URI = "https://json.schemastore.org/sarif-2.1.0.json"
@@ -55,7 +58,7 @@ def _location(span: Span, message: str | None = None, ident: int | None = None) 
     if ident is not None:
         loc["id"] = ident
     if message:
-        loc["message"] = {"text": message}
+        loc["message"] = {"text": shown(message)}
     return loc
 
 
@@ -108,10 +111,10 @@ def to_sarif(diagnostics: list[Diagnostic] | tuple[Diagnostic, ...],
     results = []
     seen: dict[str, int] = {}
     for d in diagnostics:
-        text = d.message
+        text = shown(d.message)
         if d.primary.message:
-            text += f" ({d.primary.message})"
-        extra = [f"note: {n}" for n in d.notes] + ([f"help: {d.help}"] if d.help else [])
+            text += f" ({shown(d.primary.message)})"
+        extra = [f"note: {shown(n)}" for n in d.notes] + ([f"help: {shown(d.help)}"] if d.help else [])
         if extra:
             text += "\n" + "\n".join(extra)
         result = {"ruleId": d.code, "ruleIndex": index[d.code], "level": LEVELS[d.severity],

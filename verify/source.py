@@ -43,8 +43,8 @@ class SourceFile:
 
     ``only``, when set, is the one region of the file whose text may be shown: a file that is not text
     of the language from its first token (a file that is not a model at all: ``/etc/passwd``) is
-    reported without showing anything of it but the offending token (README, "Running on untrusted
-    input")."""
+    reported without showing anything of it but the offending token (docs/guide/untrusted.md,
+    "What is confined")."""
 
     path: str
     text: str

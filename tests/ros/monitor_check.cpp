@@ -1,7 +1,9 @@
 // A hand-written program on the monitor library alone (no ROS, no generated code): known answers of
-// ChainMonitor (specs/codegen.md §5) and a round trip of the envelope. Exits 0 when every check holds,
-// else prints the failed check and exits 1. Built and run by tests/test_gen_ros1.py.
+// ChainMonitor (specs/codegen.md §5), a round trip of the envelope, and the summary directory made where
+// it can be and refused where it cannot (argv[1]: an empty scratch directory). Exits 0 when every check
+// holds, else prints the failed check and exits 1. Built and run by tests/test_gen_ros1.py.
 #include <cstdio>
+#include <fstream>
 #include <string>
 
 #include "verify_ros1/envelope.hpp"
@@ -20,8 +22,23 @@ void check(bool ok, const char* what) {
 
 }  // namespace
 
-int main() {
+int main(int argc, char** argv) {
   using verify_ros1::Stamp;
+  if (argc != 2) {
+    std::printf("usage: monitor_check SCRATCH_DIR\n");
+    return 2;
+  }
+  const std::string scratch = argv[1];
+  const std::string nested = scratch + "/latency/run1";
+  check(verify_ros1::prepare_summary_directory(nested).empty(), "a missing summary directory is made");
+  check(std::ofstream(nested + "/n.json").good(), "the summary directory takes a file");
+  check(verify_ros1::prepare_summary_directory(nested).empty(), "an existing summary directory is fine");
+  std::ofstream(scratch + "/file") << "x";
+  const std::string under_file = verify_ros1::prepare_summary_directory(scratch + "/file/sub");
+  check(under_file.rfind("cannot create the summary directory " + scratch + "/file/sub: ", 0) == 0,
+        "a directory under a file is refused with the reason");
+  check(verify_ros1::prepare_summary_directory(scratch + "/file").find("is not a directory") != std::string::npos,
+        "a file is not a summary directory");
   // reads of the first task at 100, 200, 300, 400; reaction bound 250, data age bound 150
   verify_ros1::ChainMonitor m("c", verify_ros1::Bounds{250, 150, 60});
   // the data of read 200 reaches the end first, at 330: age 130; reaction from the first read (100): 230

@@ -3,8 +3,9 @@
 A command module holds ``HELP`` (one line), ``RESULT`` (the kind of report it renders, whose formats
 ``verify.outputs`` lists for ``--format``; None for a command without one), ``MODEL`` (it reads a model
 FILE and takes ``--root``/``--include``), ``SYSTEM`` (it takes ``--system``), ``add_arguments(parser)``
-for its own options and ``run(args) -> int`` (the exit code, ``common``). A new command is one module
-listed in ``COMMANDS``.
+for its own options and ``run(args) -> int`` (the exit code, ``common``); optionally ``FILES`` (FILE is one
+or more paths) and ``PARSER`` (``args.parser`` is the whole command line's parser). A new command is one
+module listed in ``COMMANDS``.
 """
 from __future__ import annotations
 
@@ -13,7 +14,7 @@ from types import ModuleType
 
 #: the commands, in the order ``verify --help`` lists them
 COMMANDS = ("check", "analyze", "synth", "prove", "gen", "graph", "report", "import", "export", "lsp", "fmt",
-            "explain")
+            "explain", "completion")
 #: a command whose name is a Python keyword lives in ``NAME_``
 _MODULES = {"import": "import_"}
 

@@ -1,7 +1,7 @@
 """What the commands share: exit codes, loading the model a command names, showing a report, and
 writing files without ever losing what the user wrote.
 
-Exit codes (stable, documented in README.md):
+Exit codes (stable, documented in README.md and docs/reference/commands.md):
   0  ok: the model is valid / every spec holds
   1  a spec is violated, or synthesis is unsatisfiable
   2  invalid input or usage (diagnostics say where)
@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING
 from ..diagnostics import Diagnostic, DiagnosticSink
 from ..outputs import Output, Report, render
 from ..render import render_all_text
+from ..sanitize import shown
 from ..source import SourceFile, Span
 
 if TYPE_CHECKING:  # (the front end is imported when a command runs: `--help` stays quick)
@@ -71,9 +72,12 @@ def show(output: Output) -> None:
 
 def to_stderr(text: str, end: str = "\n") -> None:
     """``text`` (diagnostics as ``render_all_text`` makes them) on standard error, coloured when that is
-    a terminal and colour is not turned off (``verify.colour.wanted``)."""
+    a terminal and colour is not turned off (``verify.colour.wanted``); a control character in it is
+    shown escaped (``verify.sanitize.shown_lines``)."""
     from ..colour import paint, wanted
+    from ..sanitize import shown_lines
 
+    text = shown_lines(text)  # (no control character reaches the terminal, whatever a message quotes)
     sys.stderr.write((paint(text) if wanted(sys.stderr) else text) + end)
 
 
@@ -133,17 +137,27 @@ def load_configured(args: argparse.Namespace, command: str) -> tuple[api.LoadRes
     return result, system
 
 
+def wrote(path: str) -> None:
+    """The one-line confirmation of a file written (on standard error: standard output stays the result)."""
+    to_stderr(f"wrote {shown(path)}")
+
+
 def fail(message: str) -> int:
-    """A usage error (exit 2)."""
-    to_stderr(f"error: {message}")
+    """A usage error (exit 2): ``message`` is one line, whatever a file name in it holds."""
+    to_stderr(f"error: {shown(message)}")
     return EXIT_INVALID
 
 
-def cannot_write(path: str, err: OSError) -> int:
-    """E004 for a file that cannot be written (exit 2); the file itself is left as it was."""
+def cannot_write(path: str, err: OSError, written: Sequence[str] = ()) -> int:
+    """E004 for a file that cannot be written (exit 2); the file itself is left as it was. ``written``:
+    what the command wrote before the failure (each in a note), so the message says exactly what
+    changed: nothing, or those."""
     sink = DiagnosticSink()
+    count = "the path in the note" if len(written) == 1 else f"the {len(written)} paths in the notes"
+    done = f"before the failure only {count} changed" if written else "nothing was changed"
     sink.emit("E004", f"cannot write {path}: {err.strerror or err}", Span(path, 1, 1, 1, 1), "cannot be written",
-              help="check that the file and its directory are writable; nothing was changed")
+              notes=[f"{'made' if os.path.isdir(w) else 'written'} before the failure: {w}" for w in written],
+              help=f"check that the file and its directory are writable; {done}")
     to_stderr(render_all_text(sink.items, {}))
     return EXIT_INVALID
 
@@ -170,17 +184,32 @@ def replace_file(path: str, text: str) -> int:
         if tmp is not None:
             with contextlib.suppress(OSError):
                 os.unlink(tmp)
+    wrote(path)
+    return EXIT_OK
+
+
+def exists(path: str) -> bool:
+    """Something is at ``path``: a file, a directory, or a symbolic link (even one that leads nowhere)."""
+    return os.path.lexists(path)
+
+
+def write_output(path: str, data: str | bytes, force: bool) -> int:
+    """Write ``data`` to ``path``, which must not exist unless ``force`` (E004 when it cannot be written).
+    A symbolic link there is never written through (``verify.fileaccess.write_output``): without
+    ``force`` it is in the way, with ``force`` it is replaced by the file."""
+    from ..fileaccess import write_output as write
+
+    if exists(path) and not force:
+        to_stderr(f"error: {shown(path)} exists; refusing to overwrite it (pass --force to replace it)")
+        return EXIT_INVALID
+    try:
+        write(path, data, replace=force)
+    except OSError as err:
+        return cannot_write(path, err)
+    wrote(path)
     return EXIT_OK
 
 
 def write_new_file(path: str, text: str, force: bool) -> int:
     """Write ``text`` to ``path``, which must not exist unless ``force``."""
-    if os.path.exists(path) and not force:
-        to_stderr(f"error: {path} exists; refusing to overwrite it (pass --force to replace it)")
-        return EXIT_INVALID
-    try:
-        with open(path, "w", encoding="utf-8") as fh:
-            fh.write(text)
-    except OSError as err:
-        return cannot_write(path, err)
-    return EXIT_OK
+    return write_output(path, text, force)

@@ -1,4 +1,5 @@
-"""``verify explain CODE``: the meaning of a diagnostic code, with its minimal failing example."""
+"""``verify explain CODE``: the meaning of a diagnostic code, with its minimal failing example;
+``verify explain --list``: every code with its title."""
 from __future__ import annotations
 
 import argparse
@@ -13,12 +14,19 @@ MODEL, SYSTEM = False, False
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("code", metavar="CODE")
+    p.add_argument("code", metavar="CODE", nargs="?", help="a diagnostic code, e.g. E101")
+    p.add_argument("--list", action="store_true", help="list every code with its title")
 
 
 def run(args: argparse.Namespace) -> int:
     from ..explain import explain
 
+    if args.list or args.code is None:
+        if args.code is not None or not args.list:
+            print("error: give a CODE (e.g. `verify explain E101`) or --list", file=sys.stderr)
+            return EXIT_INVALID
+        print("".join(f"{c.code}  {c.title}\n" for c in CODES.values()), end="")
+        return EXIT_OK
     code = args.code.upper()
     if code not in CODES:
         from ..diagnostics import suggest

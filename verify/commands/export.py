@@ -14,7 +14,9 @@ import argparse
 import os
 
 from ..diagnostics import DiagnosticSink
-from .common import EXIT_INVALID, EXIT_OK, cannot_write, load_configured, show_diagnostics, to_stderr
+from ..fileaccess import write_output
+from ..sanitize import shown
+from .common import EXIT_INVALID, EXIT_OK, cannot_write, exists, load_configured, show_diagnostics, to_stderr, wrote
 
 HELP = "write a configured system as another tool's models (SmartMDSD, CARET)"
 RESULT = "diagnostics"
@@ -60,20 +62,25 @@ def run(args: argparse.Namespace) -> int:
     if exported is None:
         return EXIT_INVALID
     if os.path.exists(args.output) and not os.path.isdir(args.output):
-        to_stderr(f"error: {args.output} exists and is not a directory")
+        to_stderr(f"error: {shown(args.output)} exists and is not a directory")
         return EXIT_INVALID
-    in_the_way = [n for n in exported.files if os.path.exists(os.path.join(args.output, n))]
+    in_the_way = [n for n in exported.files if exists(os.path.join(args.output, n))]
     if in_the_way and not args.force:
-        to_stderr(f"error: {', '.join(in_the_way)} exist{'s' if len(in_the_way) == 1 else ''} in {args.output}; "
+        to_stderr(f"error: {', '.join(map(shown, in_the_way))} exist{'s' if len(in_the_way) == 1 else ''} in "
+                  f"{shown(args.output)}; "
                   "nothing was written (pass --force to replace)")
         return EXIT_INVALID
+    written: list[str] = []
     try:
-        os.makedirs(args.output, exist_ok=True)
-        for name, text in exported.files.items():
-            with open(os.path.join(args.output, name), "w", encoding="utf-8") as fh:
-                fh.write(text)
+        if not os.path.isdir(args.output):
+            os.makedirs(args.output)
+            written.append(args.output)
+        for name, text in exported.files.items():  # (never through a link: ``fileaccess.write_output``)
+            path = os.path.join(args.output, name)
+            write_output(path, text, replace=args.force)  # (whole or not at all)
+            written.append(path)
     except OSError as err:
-        return cannot_write(args.output, err)
+        return cannot_write(getattr(err, "filename", None) or args.output, err, written)
     for name in exported.files:
-        print(os.path.join(args.output, name))
+        wrote(os.path.join(args.output, name))
     return EXIT_OK

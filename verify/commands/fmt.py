@@ -7,6 +7,7 @@ import sys
 
 from ..diagnostics import DiagnosticSink
 from ..render import render_all_text
+from ..sanitize import shown
 from ..source import SourceFile
 from .common import EXIT_INVALID, EXIT_OK, EXIT_VIOLATED, STDIN, read_stdin, replace_file, to_stderr, write_new_file
 
@@ -27,7 +28,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from ..fmt import format_text
-    from ..loader import _read
+    from ..fileaccess import area_of
+    from ..loader import read_text
 
     sink = DiagnosticSink()
     if args.file == "-":
@@ -37,7 +39,9 @@ def run(args: argparse.Namespace) -> int:
         args.file = STDIN
         text = read_stdin(sink)
     else:
-        text = _read(os.path.normpath(args.file), sink, None)
+        path = os.path.normpath(args.file)
+        # (the rule of every model file: a link that leads out of the file's directory is refused, E006)
+        text = read_text(path, sink, area=area_of([path]))
     if text is None:
         to_stderr(render_all_text(sink.items, {}))
         return EXIT_INVALID
@@ -50,7 +54,7 @@ def run(args: argparse.Namespace) -> int:
         return EXIT_INVALID
     if args.check:
         if formatted != text:
-            print(f"{args.file}: not canonically formatted (run `verify fmt --in-place {args.file}`)",
+            print(f"{shown(args.file)}: not canonically formatted (run `verify fmt --in-place {shown(args.file)}`)",
                   file=sys.stderr)
             return EXIT_VIOLATED
         return EXIT_OK

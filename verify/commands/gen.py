@@ -4,9 +4,11 @@ Glue files (the generator's) are rewritten when their text changes; user files (
 skeletons, message types, build additions) are written once and never overwritten. A glue file that was
 edited by hand, or a file in the way that the generator did not write, is never replaced (E601) unless
 ``--force`` is given; then nothing at all is written. A system with synthesis holes is refused (E218:
-run ``synth`` first).
+run ``synth`` first), and so is one the target cannot run (E602) or whose names would become one in the
+generated code (E603). A write that fails midway reports what it wrote before the failure (E004).
 
-Exit codes: 0 generated; 2 invalid input, holes, or a file in the way; 70 internal error.
+Exit codes: 0 generated; 2 invalid input, holes, clashing names, a file in the way or a failed write;
+70 internal error.
 """
 from __future__ import annotations
 
@@ -15,8 +17,10 @@ import os
 
 from typing import TYPE_CHECKING
 
-from ..diagnostics import Diagnostic, DiagnosticSink
-from ..loader import _shown as printable
+from ..diagnostics import Diagnostic, DiagnosticSink, Label
+from ..fileaccess import Area, Refused, read_regular
+from ..gen.tree import LINK
+from ..sanitize import shown as printable
 from ..outputs import Report, render
 from ..source import SourceFile, Span
 from .common import EXIT_INVALID, EXIT_OK, cannot_write, load_configured, show, show_diagnostics
@@ -55,20 +59,25 @@ def refusals(outcome: Outcome, directory: str) -> tuple[list[Diagnostic], dict[s
     for path, why in outcome.refused:
         full = os.path.join(directory, *path.split("/"))
         shown = printable(full)
-        first = ""
-        if os.path.isfile(full):  # (never a FIFO or a device: opening one could block)
-            try:
-                with open(full, encoding="utf-8", errors="replace", newline="") as fh:
-                    first = printable(fh.readline(200).rstrip("\r\n"))
-            except OSError:
-                pass
+        first = _first_line(full, directory) if why != LINK else ""
         span = Span(shown, 1, 1, 1, len(first) + 1)
         if first:
             sources[shown] = SourceFile(shown, first + "\n", only=span)
-        sink.emit("E601", f"{shown} {why}; it is not replaced", span, why,
-                  help="move your changes into the user files (user/), or pass --force to replace it; "
-                       "nothing was written")
+        help = ("remove the link; generated files are written only below the output directory, never through a "
+                "link (--force does not change that); nothing was written") if why == LINK else \
+            "move your changes into the user files (user/), or pass --force to replace it; nothing was written"
+        sink.emit("E601", f"{shown} {why}; it is not replaced", span, why, help=help)
     return sink.items, sources
+
+
+def _first_line(path: str, directory: str) -> str:
+    """The first line of the regular file ``path`` in ``directory`` (at most 200 characters), or "" for
+    anything else: a link is never followed, a FIFO or a device never opened (``verify.fileaccess``)."""
+    try:
+        data = read_regular(path, 200, Area((directory,)), follow_links=False)
+    except (Refused, OSError):
+        return ""
+    return printable(data[:200].decode("utf-8", errors="replace").split("\n")[0].rstrip("\r"))
 
 
 def unsupported_parts(module: ModuleType, name: str, system: SystemModel) -> list[Diagnostic]:
@@ -76,6 +85,17 @@ def unsupported_parts(module: ModuleType, name: str, system: SystemModel) -> lis
     sink = DiagnosticSink()
     for span, what, help in getattr(module, "unsupported", lambda _model: [])(system):
         sink.emit("E602", what, span, f"not supported by the {name} target", help=help)
+    return sink.items
+
+
+def clashing_names(module: ModuleType, system: SystemModel) -> list[Diagnostic]:
+    """E603 for every name of ``system`` that becomes, in target ``module``'s code, the name of another
+    (a class, a file, a parameter, a node): one would overwrite or hide the other."""
+    sink = DiagnosticSink()
+    for span, other, what in getattr(module, "clashes", lambda _model: [])(system):
+        sink.emit("E603", what, span, "clashes in the generated code", secondary=[Label(other, "the other name")],
+                  help="rename one of them (specs/codegen.md, \"Names\": the generated code appends `_` to a name "
+                       "C++ or ROS reserves); nothing was written")
     return sink.items
 
 
@@ -88,7 +108,7 @@ def run(args: argparse.Namespace) -> int:
         return loaded
     result, system = loaded
     module = target(args.target)
-    unsupported = unsupported_parts(module, args.target, system)
+    unsupported = unsupported_parts(module, args.target, system) + clashing_names(module, system)
     if unsupported:
         show_diagnostics(args, unsupported, result.sources)
         return EXIT_INVALID
@@ -101,10 +121,12 @@ def run(args: argparse.Namespace) -> int:
         diagnostics, files = refusals(outcome, directory)
         show_diagnostics(args, diagnostics, {**result.sources, **files})
         return EXIT_INVALID
+    written: list[str] = []
     try:
-        write(tree, directory, outcome)
+        for path in write(tree, directory, outcome):
+            written.append(path)
     except OSError as err:
-        return cannot_write(getattr(err, "filename", None) or directory, err)
+        return cannot_write(getattr(err, "filename", None) or directory, err, written)
     show(render(RESULT, args.format, Report(RESULT, args.file, (), result.sources, outcome, system,
                                             {"directory": directory, "target": args.target})))
     return EXIT_OK

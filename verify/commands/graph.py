@@ -1,13 +1,15 @@
 """``verify graph FILE``: the system as a picture (specs/codegen.md is not involved: ``verify.diagram``).
 
-    verify graph FILE [--format dot|svg|png] [-o OUT [--force]]
+    verify graph FILE [--format dot|svg|png|pdf] [-o OUT [--force]]
 
-DOT (the default) needs nothing; SVG and PNG are laid out by Graphviz's ``dot``
+DOT (the default) needs nothing; SVG, PNG and PDF are laid out by Graphviz's ``dot``
 (``scripts/install-tools`` installs it). A configured system is drawn with its analysis
 (rates, response times, chain bounds against their specs, over/undersampling); one with synthesis
 holes is drawn without it. Without ``--format``, ``-o OUT`` takes the format from OUT's extension
-(``.svg``, ``.png``; else DOT). Without ``-o`` the picture goes to standard output (PNG only to a file
-or a pipe, never to a terminal). ``-o`` writes a new file (``--force`` replaces one).
+(``EXTENSIONS``: ``.dot``/``.gv`` or none DOT, ``.svg``, ``.png``, ``.pdf``); another extension is
+refused rather than given text it does not name. Without ``-o`` the picture goes to standard output
+(PNG and PDF only to a file or a pipe, never to a terminal). ``-o`` writes a new file (``--force``
+replaces one) and says so on standard error.
 
 Exit codes: 0 drawn; 2 invalid input or usage (Graphviz missing for SVG/PNG); 70 internal error.
 """
@@ -18,15 +20,19 @@ import os
 import sys
 from typing import TYPE_CHECKING
 
-from .common import EXIT_OK, cannot_write, fail, load_system
+from .common import EXIT_OK, exists, fail, load_system, write_output
 
 if TYPE_CHECKING:
     from ..model import SystemModel
 
-HELP = "draw the system: instances, ports, data flow, activations, chains (DOT, SVG, PNG)"
+HELP = "draw the system: instances, ports, data flow, activations, chains (DOT, SVG, PNG, PDF)"
 RESULT = None
-FORMATS = ("dot", "svg", "png")
-FORMAT_HELP = "dot (Graphviz's text, the default), svg or png (laid out by Graphviz)"
+FORMATS = ("dot", "svg", "png", "pdf")
+FORMAT_HELP = "dot (Graphviz's text, the default), svg, png or pdf (laid out by Graphviz)"
+#: the format ``-o OUT`` gives without ``--format``, by OUT's extension
+EXTENSIONS = {"": "dot", ".dot": "dot", ".gv": "dot", ".svg": "svg", ".png": "png", ".pdf": "pdf"}
+#: formats that are not text, never written to a terminal
+BINARY = ("png", "pdf")
 MODEL, SYSTEM = True, True
 
 
@@ -50,12 +56,16 @@ def run(args: argparse.Namespace) -> int:
     from ..diagram import GraphvizFailed, GraphvizMissing
 
     if not args.format_given and args.output:  # (the format from OUT's extension: nav.svg, nav.png)
-        ext = os.path.splitext(args.output)[1].lower().lstrip(".")
-        args.format = ext if ext in FORMATS else "dot"
+        ext = os.path.splitext(args.output)[1].lower()
+        if ext not in EXTENSIONS:
+            return fail(f"cannot tell which picture to write from the extension `{ext}` of {args.output}: "
+                        "name it .dot (or .gv), .svg, .png or .pdf, or give --format")
+        args.format = EXTENSIONS[ext]
 
-    if args.format == "png" and not args.output and sys.stdout.isatty():
-        return fail("a PNG is not shown on a terminal: write it with `-o FILE.png` (or pipe it)")
-    if args.output and os.path.exists(args.output) and not args.force:
+    if args.format in BINARY and not args.output and sys.stdout.isatty():
+        return fail(f"a {args.format.upper()} is not shown on a terminal: write it with `-o FILE.{args.format}` "
+                    "(or pipe it)")
+    if args.output and exists(args.output) and not args.force:
         return fail(f"{args.output} exists; refusing to overwrite it (pass --force to replace it)")
     loaded = load_system(args)
     if isinstance(loaded, int):
@@ -73,9 +83,4 @@ def run(args: argparse.Namespace) -> int:
         sys.stdout.buffer.write(data)
         sys.stdout.buffer.flush()
         return EXIT_OK
-    try:
-        with open(args.output, "wb") as fh:
-            fh.write(data)
-    except OSError as err:
-        return cannot_write(args.output, err)
-    return EXIT_OK
+    return write_output(args.output, data, args.force)

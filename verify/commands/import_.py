@@ -19,6 +19,7 @@ from collections.abc import Mapping, Sequence
 
 from ..diagnostics import Diagnostic, DiagnosticSink
 from ..outputs import Report, render
+from ..sanitize import shown
 from ..source import SourceFile
 from .common import EXIT_INVALID, EXIT_OK, show, to_stderr, write_new_file
 
@@ -69,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
     _show(args, diagnostics, {**sources, **checked.sources})
     if not checked.ok:
         errors = sum(1 for d in checked.diagnostics if d.severity == "error")
-        to_stderr(f"{out}: written, but incomplete: `verify check` reports {errors} error"
+        to_stderr(f"{shown(out)}: written, but incomplete: `verify check` reports {errors} error"
                   f"{'s' if errors != 1 else ''} (above) to complete")
         return EXIT_INVALID
     return EXIT_OK

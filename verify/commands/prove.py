@@ -16,9 +16,11 @@ from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING
 
 from ..diagnostics import Diagnostic
+from ..fileaccess import write_output
 from ..outputs import Output, Report, render
+from ..sanitize import shown, shown_lines
 from ..source import SourceFile
-from .common import EXIT_INVALID, EXIT_OK, fail, load_args, to_stderr
+from .common import EXIT_INVALID, EXIT_OK, fail, load_args, to_stderr, wrote
 
 if TYPE_CHECKING:
     from ..model import SystemModel
@@ -55,14 +57,14 @@ def _emit(output: Output, args: argparse.Namespace) -> int:
     status = EXIT_OK
     if args.output and output.stdout:
         try:
-            with open(args.output, "w", encoding="utf-8") as fh:
-                fh.write(output.stdout)
+            write_output(args.output, output.stdout, replace=args.force)
+            wrote(args.output)
         except OSError as err:
             status = fail(f"cannot write {args.output}: {err.strerror or err}")
     elif output.stdout:
         sys.stdout.write(output.stdout)
     if output.stderr:
-        sys.stderr.write(output.stderr)
+        sys.stderr.write(shown_lines(output.stderr))
     return status
 
 
@@ -78,7 +80,7 @@ def _check_paths(args: argparse.Namespace) -> int | None:
             continue
         if os.path.realpath(path) == os.path.realpath(args.file):
             return fail(f"{what} {path} is the model being proved; name another file")
-        if os.path.exists(path) and not args.force:
+        if os.path.lexists(path) and not args.force:  # (a link, even to nothing, is never written through)
             return fail(f"{path} exists; refusing to overwrite it (pass --force to replace it)")
         if not os.path.isdir(os.path.dirname(os.path.abspath(path))):
             return fail(f"{what} {path}: the directory {os.path.dirname(os.path.abspath(path))} does not exist")
@@ -125,13 +127,13 @@ def run(args: argparse.Namespace) -> int:
 def _trace_svg(model: SystemModel, proof: ProofResult, args: argparse.Namespace) -> int | None:
     drawn = [v for v in proof.verdicts if v.counterexample is not None]
     if not drawn:
-        to_stderr(f"note: no counterexample, so nothing was drawn to {args.trace_svg}")
+        to_stderr(f"note: no counterexample, so nothing was drawn to {shown(args.trace_svg)}")
         return None
     from ..prove.gantt import to_svg_all
 
     try:
-        with open(args.trace_svg, "w", encoding="utf-8") as fh:
-            fh.write(to_svg_all(model, drawn))
+        write_output(args.trace_svg, to_svg_all(model, drawn), replace=args.force)
     except OSError as err:
         return fail(f"cannot write {args.trace_svg}: {err.strerror or err}")
+    wrote(args.trace_svg)
     return None

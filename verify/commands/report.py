@@ -8,9 +8,8 @@ input or usage (holes: E218, run ``synth`` first); 70 internal error.
 from __future__ import annotations
 
 import argparse
-import os
 
-from .common import EXIT_OK, cannot_write, fail, load_configured
+from .common import exists, fail, load_configured, write_output
 
 HELP = "one self-contained HTML page: diagram, outline, chains with margins, counterexamples"
 RESULT = None
@@ -29,7 +28,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    if os.path.exists(args.output) and not args.force:
+    if exists(args.output) and not args.force:
         return fail(f"{args.output} exists; refusing to overwrite it (pass --force to replace it)")
     if args.budget < 0:
         return fail("--budget must be 0 or more")
@@ -42,9 +41,4 @@ def run(args: argparse.Namespace) -> int:
     from ..timing import analyze
 
     page = to_html(system, analyze(system), prove(system, budget=args.budget), args.file)
-    try:
-        with open(args.output, "w", encoding="utf-8") as fh:
-            fh.write(page)
-    except OSError as err:
-        return cannot_write(args.output, err)
-    return EXIT_OK
+    return write_output(args.output, page, args.force)

@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING
 
 from ..diagnostics import Diagnostic, DiagnosticSink
 from ..outputs import Report, render
+from ..sanitize import shown
 from .common import (EXIT_INVALID, EXIT_OK, EXIT_UNDECIDED, EXIT_VIOLATED, load_system, replace_file, show,
                      show_diagnostics, to_stderr, write_new_file)
 
@@ -80,7 +81,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         goals = parse_objective(args.objective, system)
     except ObjectiveError as err:
-        to_stderr(f"error: --objective: {err}")
+        to_stderr(f"error: --objective: {shown(str(err))}")
         return EXIT_INVALID
     try:
         result = synthesize(loaded, system.name, objective=goals, rlimit=args.rlimit, timeout=args.timeout)

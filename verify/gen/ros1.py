@@ -17,11 +17,13 @@ specs/codegen.md. The layout of the generated project:
 from __future__ import annotations
 
 import re
+from collections.abc import Callable
 from fractions import Fraction
 from importlib import resources
 
 from ..activations import DataTriggered, Periodic, SporadicSource
 from ..model import ComponentModel, SystemModel, TaskDecl, TaskModel
+from ..sanitize import c_string, comment, yaml_string
 from ..source import Span
 from .tree import File, Tree, stamped
 
@@ -29,7 +31,9 @@ TARGET = "ros1"
 HELP = "ROS 1 (roscpp) nodes, parameters and a launch file, built with plain CMake"
 GENERATOR = "verify gen ros1"
 
-#: names a C++ identifier must not take (keywords, and macros of the C library); ``_`` is appended
+#: names a C++ identifier must not take (keywords and alternative tokens, lower-case macros of the C
+#: library, POSIX and the headers the glue includes — ``g++ -dM -E`` of runtime.hpp on Debian 12 —,
+#: the namespaces the glue refers to, and ``main``); ``_`` is appended (``cpp``)
 _RESERVED = frozenset((
     "alignas", "alignof", "and", "and_eq", "asm", "auto", "bitand", "bitor", "bool", "break", "case", "catch",
     "char", "char8_t", "char16_t", "char32_t", "class", "compl", "concept", "const", "consteval", "constexpr",
@@ -41,24 +45,50 @@ _RESERVED = frozenset((
     "switch", "template", "this", "thread_local", "throw", "true", "try", "typedef", "typeid", "typename",
     "union", "unsigned", "using", "virtual", "void", "volatile", "wchar_t", "while", "xor", "xor_eq", "NULL",
     "EOF", "errno", "assert", "major", "minor", "stdin", "stdout", "stderr", "unix", "linux", "main",
+    # lower-case macros of glibc and POSIX (upper-case ones: ``macro_like``)
+    "alloca", "assert_perror", "be16toh", "be32toh", "be64toh", "htobe16", "htobe32", "htobe64", "htole16",
+    "htole32", "htole64", "le16toh", "le32toh", "le64toh", "htonl", "htons", "ntohl", "ntohs", "issubnormal",
+    "math_errhandling", "offsetof", "pthread_cleanup_pop", "pthread_cleanup_pop_restore_np",
+    "pthread_cleanup_push", "pthread_cleanup_push_defer_np", "sa_handler", "sa_sigaction", "sched_priority",
+    "si_addr", "si_addr_lsb", "si_arch", "si_band", "si_call_addr", "si_fd", "si_int", "si_lower", "si_overrun",
+    "si_pid", "si_pkey", "si_ptr", "si_status", "si_stime", "si_syscall", "si_timerid", "si_uid", "si_upper",
+    "si_utime", "si_value", "sigev_notify_attributes", "sigev_notify_function", "sigmask", "strdupa", "strndupa",
+    "timeradd", "timerclear", "timercmp", "timerisset", "timersub", "va_arg", "va_copy", "va_end", "va_start",
+    "setjmp", "st_atime", "st_mtime", "st_ctime", "i386",
+    # the namespaces the generated code and its runtime name (a class of that name would hide them)
+    "glue", "msg", "ros", "std", "boost", "verify_gen", "verify_ros1", "std_msgs", "XmlRpc",
 ))
+
+#: the keys beside the instances in the parameters of a system (an instance of that name is renamed)
+_SYSTEM_KEYS = frozenset(("nodes",))
 
 #: SCHED_FIFO priorities of the tasks: the model's priorities in order, spread over this range
 #: (the middleware's threads run above it, at 97; the timers at 98)
 OS_PRIORITY_LOW, OS_PRIORITY_HIGH = 10, 90
 
 
+def macro_like(name: str) -> bool:
+    """Whether ``name`` is spelt as macros are (C++ Core Guidelines ES.9): two characters or more, and
+    no lower-case letter before its first underscore (``SIGINT``, ``NULL``, ``EOF``, ``ROS_INFO``,
+    ``M_PIf``, ``IMU``)."""
+    head = name.split("_", 1)[0]
+    return len(name) >= 2 and any(c.isupper() for c in head) and not any(c.islower() for c in head)
+
+
 def cpp(name: str) -> str:
-    """``name`` as a C++ identifier: a reserved word, or a name C++ reserves (a leading underscore, a
-    double one), gets a trailing ``_``."""
-    if name in _RESERVED or name.startswith("_") or "__" in name:
+    """``name`` as a C++ identifier: a reserved word or a macro's name (``_RESERVED``, ``macro_like``),
+    or a name C++ reserves (a leading underscore, a double one), gets a trailing ``_``. Two names that
+    become one are refused before anything is generated (``clashes``, E603)."""
+    if name in _RESERVED or name.startswith("_") or "__" in name or macro_like(name):
         return name + "_"
     return name
 
 
 def ros_name(name: str) -> str:
-    """``name`` as a ROS graph name (which must start with a letter)."""
-    return name if name[:1].isalpha() else "n" + name
+    """``name`` as a ROS graph name (which must start with a letter); ``nodes``, the key of the list
+    of a system's nodes in the parameters, gets a trailing ``_``."""
+    name = name if name[:1].isalpha() else "n" + name
+    return name + "_" if name in _SYSTEM_KEYS else name
 
 
 def package_name(system: str) -> str:
@@ -93,6 +123,41 @@ def unsupported(model: SystemModel) -> list[tuple[Span, str, str]]:
              "bind its callbacks with a priority and a core (each becomes a thread of the generated node), "
              "or keep the executor for the analysis and write its ROS 2 code yourself")
             for ex in model.executors]
+
+
+def clashes(model: SystemModel) -> list[tuple[Span, Span, str]]:
+    """Names the generated code would make one (E603): (the later declaration, the earlier one, what
+    clashes). Components (classes, headers, executables) and message types (aliases, headers) are
+    compared case-insensitively, as a file system may compare file names; the ports of a component
+    (the parameters of its ``on_TASK``) and the instances (nodes, keys of the parameters) exactly."""
+    types: dict[str, Span] = {}
+    for comp in model.components:
+        for port in comp.ports:
+            types.setdefault(port.message_type, port.span)
+    found = _clashes_among("component", [(c.name, c.span) for c in model.components], cpp, fold=True)
+    found += _clashes_among("message type", list(types.items()), cpp, fold=True)
+    for comp in model.components:
+        found += _clashes_among(f"component `{comp.name}`'s port", [(p.name, p.span) for p in comp.ports], cpp)
+    found += _clashes_among("instance", [(i.name, i.span) for i in model.instances], ros_name)
+    return found
+
+
+def _clashes_among(kind: str, names: list[tuple[str, Span]], made: Callable[[str], str],
+                   fold: bool = False) -> list[tuple[Span, Span, str]]:
+    seen: dict[str, tuple[str, Span]] = {}
+    found = []
+    for name, span in names:
+        key = made(name).casefold() if fold else made(name)
+        if key not in seen:
+            seen[key] = (name, span)
+            continue
+        first, first_span = seen[key]
+        if made(first) == made(name):
+            how = f"as {kind} `{first}` does"
+        else:
+            how = f"which a case-insensitive file system takes for `{made(first)}`, {kind} `{first}`'s"
+        found.append((span, first_span, f"{kind} `{name}` becomes `{made(name)}` in the generated code, {how}"))
+    return found
 
 
 def generate(model: SystemModel) -> Tree:
@@ -181,7 +246,7 @@ def _includes(comp: ComponentModel) -> list[str]:
 
 def _glue_class(comp: ComponentModel) -> str:
     name = cpp(comp.name)
-    lines = ["// The glue of component " + comp.name + ": its ports, compound in-ports and tasks, with the",
+    lines = ["// The glue of component " + comment(comp.name) + ": its ports, compound in-ports and tasks, with the",
              "// activation and communication semantics of specs/timing.md (specs/codegen.md). The functional",
              f"// code is the user's, in user/{name}.hpp.",
              "#pragma once", "", "#include <mutex>", "#include <utility>", "",
@@ -189,36 +254,38 @@ def _glue_class(comp: ComponentModel) -> str:
              "namespace verify_gen {", "namespace glue {", "",
              f"class {name} : public verify_ros1::Component {{", " public:",
              f"  {name}(ros::NodeHandle nh, ros::NodeHandle pnh)",
-             f"      : verify_ros1::Component(std::move(nh), std::move(pnh), \"{comp.name}\") {{"]
+             f"      : verify_ros1::Component(std::move(nh), std::move(pnh), {c_string(comp.name)}) {{"]
     lines += [f"    subscribe(port_{p.name}_);" for p in comp.in_ports]
     lines += [f"    advertise(port_{p.name}_);" for p in comp.out_ports]
     for c in comp.compounds:
-        members = ", ".join(f'"{m}"' for m in c.members)
-        lines.append(f'    declare_compound("{c.name}", {"true" if c.mode == "and" else "false"}, {{{members}}});')
+        members = ", ".join(c_string(m) for m in c.members)
+        mode = "true" if c.mode == "and" else "false"
+        lines.append(f"    declare_compound({c_string(c.name)}, {mode}, {{{members}}});")
     for t in comp.tasks:
         coop = "true" if t.kind == "cooperative" else "false"
-        lines.append(f'    declare_task("{t.name}", {coop}, [this](verify_ros1::Job& job) {{ job_{t.name}(job); }});')
+        lines.append(f"    declare_task({c_string(t.name)}, {coop}, "
+                     f"[this](verify_ros1::Job& job) {{ job_{t.name}(job); }});")
     lines += ["  }", "", " protected:"]
     for t in comp.tasks:
-        lines.append(f"  // {_task_comment(t)}")
+        lines.append(f"  // {comment(_task_comment(t))}")
         lines.append(f"  virtual void on_{t.name}({_signature(comp, t, False)}) = 0;")
     lines += ["", " private:"]
     for t in comp.tasks:
         lines += _job_method(comp, t)
     for p in comp.in_ports:
-        lines.append(f'  verify_ros1::InPort<{_type(p.message_type)}> port_{p.name}_{{"{p.name}"}};')
+        lines.append(f"  verify_ros1::InPort<{_type(p.message_type)}> port_{p.name}_{{{c_string(p.name)}}};")
     for p in comp.out_ports:
-        lines.append(f'  verify_ros1::OutPort<{_type(p.message_type)}> port_{p.name}_{{"{p.name}"}};')
+        lines.append(f"  verify_ros1::OutPort<{_type(p.message_type)}> port_{p.name}_{{{c_string(p.name)}}};")
     lines += ["};", "", "}  // namespace glue", "}  // namespace verify_gen", ""]
     return "\n".join(lines)
 
 
 def _main(comp: ComponentModel) -> str:
     name = cpp(comp.name)
-    return "\n".join([f"// The node of component {comp.name}: one process per instance (launch/*.launch).",
+    return "\n".join([f"// The node of component {comment(comp.name)}: one process per instance (launch/*.launch).",
                       f'#include "user/{name}.hpp"', "",
                       "int main(int argc, char** argv) {",
-                      f'  return verify_ros1::main_of<verify_gen::{name}>(argc, argv, "{comp.name.lower()}");',
+                      f"  return verify_ros1::main_of<verify_gen::{name}>(argc, argv, {c_string(comp.name.lower())});",
                       "}", ""])
 
 
@@ -226,8 +293,8 @@ def _main(comp: ComponentModel) -> str:
 
 
 def _skeleton(comp: ComponentModel) -> str:
-    name = cpp(comp.name)
-    lines = [f"// Component {comp.name}: your functional code. `verify gen ros1` wrote this file once and never",
+    name, title = cpp(comp.name), comment(comp.name)
+    lines = [f"// Component {title}: your functional code. `verify gen ros1` wrote this file once and never",
              "// overwrites it; the glue it builds on (glue/" + name + ".hpp) is regenerated. Each on_TASK runs",
              "// one job: its inputs are the values read when the job started (`in.has_value()`: whether one",
              "// has arrived), its outputs are published when it returns.",
@@ -235,7 +302,7 @@ def _skeleton(comp: ComponentModel) -> str:
              f"class {name} : public glue::{name} {{", " public:", f"  using glue::{name}::{name};", "",
              " protected:"]
     for t in comp.tasks:
-        lines.append(f"  // {_task_comment(t)}")
+        lines.append(f"  // {comment(_task_comment(t))}")
         lines.append(f"  void on_{t.name}({_signature(comp, t, True)}) override {{")
         lines.append("  }")
     lines += ["};", "", "}  // namespace verify_gen", ""]
@@ -244,7 +311,7 @@ def _skeleton(comp: ComponentModel) -> str:
 
 def _type_header(type_name: str) -> str:
     return "\n".join([
-        f"// The C++ type of message type {type_name}. `verify gen ros1` wrote this file once and never",
+        f"// The C++ type of message type {comment(type_name)}. `verify gen ros1` wrote this file once and never",
         "// overwrites it: make it any type ros::serialization can serialize (a ROS message such as",
         "// sensor_msgs::LaserScan, with its package added in user/user.cmake), or keep the bytes.",
         "#pragma once", "", "#include <cstdint>", "#include <vector>", "",
@@ -349,53 +416,54 @@ def chain_roles(model: SystemModel) -> dict[str, list[dict[str, object]]]:
 def _activation(task: TaskModel) -> list[str]:
     act = task.activation
     if isinstance(act, Periodic):
-        lines = ["activation: timer", f'period_ns: "{nanoseconds(act.period)}"  # {human(act.period)}']
+        lines = ['activation: "timer"', f"period_ns: {yaml_string(nanoseconds(act.period))}  # {human(act.period)}"]
         if act.phase is not None:
-            lines.append(f'phase_ns: "{nanoseconds(act.phase)}"')
+            lines.append(f"phase_ns: {yaml_string(nanoseconds(act.phase))}")
         return lines
     if isinstance(act, DataTriggered):
-        return ["activation: trigger", f"trigger: {act.port}", f"prescaler: {act.prescaler}"]
+        return ['activation: "trigger"', f"trigger: {yaml_string(act.port)}", f"prescaler: {act.prescaler}"]
     assert isinstance(act, SporadicSource)
-    return ["activation: sporadic", f'min_ns: "{nanoseconds(act.min_interarrival)}"',
-            f'max_ns: "{nanoseconds(act.max_interarrival)}"']
+    return ['activation: "sporadic"', f"min_ns: {yaml_string(nanoseconds(act.min_interarrival))}",
+            f"max_ns: {yaml_string(nanoseconds(act.max_interarrival))}"]
 
 
 def _yaml_scalar(value: object) -> str:
-    if isinstance(value, int):
-        return str(value)
-    text = str(value)
-    return '""' if not text else (f'"{text}"' if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", text) else text)
+    """A number as it is, anything else a double-quoted string (``yes``, ``null`` and ``1e3`` stay strings)."""
+    return str(value) if isinstance(value, int) else yaml_string(str(value))
 
 
 def _parameters(model: SystemModel) -> str:
     cpus = {core.name: i for i, core in enumerate(model.cores)}
     prio = os_priorities(model)
     roles = chain_roles(model)
-    lines = [f"# The configuration of system {model.name}: rosparam loads it (launch/*.launch); the nodes read",
-             "# it at start. Times are exact, in ns (\"N\" or \"N/D\").", f"{ros_name(model.name)}:",
-             "  nodes: [" + ", ".join(ros_name(i.name) for i in model.instances) + "]  # they start together"]
+    lines = [f"# The configuration of system {comment(model.name)}: rosparam loads it (launch/*.launch); the nodes",
+             "# read it at start. Times are exact, in ns (\"N\" or \"N/D\"). Every string is quoted.",
+             f"{yaml_string(ros_name(model.name))}:",
+             "  nodes: [" + ", ".join(yaml_string(ros_name(i.name)) for i in model.instances) + "]"
+             "  # they start together"]
     for inst in model.instances:
         comp = model.component(inst.component)
-        lines.append(f"  {ros_name(inst.name)}:")
+        lines.append(f"  {yaml_string(ros_name(inst.name))}:")
         topics = []
         for p in comp.in_ports:
             link = model.link_into(f"{inst.name}.{p.name}")
             if link is not None:
                 src_inst, src_port = link.source.split(".", 1)
-                topics.append(f"      {p.name}: /{ros_name(model.name)}/{ros_name(src_inst)}/{src_port}")
+                topic = f"/{ros_name(model.name)}/{ros_name(src_inst)}/{src_port}"
+                topics.append(f"      {yaml_string(p.name)}: {yaml_string(topic)}")
         if topics:
             lines += ["    topics:  # the topic each connected in-port subscribes to", *topics]
         readers = {p.name: len({lk.target.split(".")[0] for lk in model.links_from(f"{inst.name}.{p.name}")})
                    for p in comp.out_ports}
         if any(readers.values()):
             lines += ["    subscribers:  # the nodes each out-port is connected to (the node starts once all are)",
-                      *(f"      {port}: {n}" for port, n in readers.items() if n)]
+                      *(f"      {yaml_string(port)}: {n}" for port, n in readers.items() if n)]
         lines.append("    tasks:")
         for task_id in inst.tasks:
             task = model.task(task_id)
-            lines.append(f"      {task.name}:")
+            lines.append(f"      {yaml_string(task.name)}:")
             body = _activation(task) + [f"priority: {task.priority}", f"os_priority: {prio[task.priority]}",
-                                        f"cpu: {cpus[task.core]}  # core {task.core}"]
+                                        f"cpu: {cpus[task.core]}  # core {comment(task.core)}"]
             lines += [f"        {line}" for line in body]
             if task_id in roles:
                 lines.append("        chains:")

@@ -9,15 +9,19 @@ work), so regenerating after ``synth`` rewrites only what changed: the parameter
 """
 from __future__ import annotations
 
-import contextlib
 import hashlib
 import os
-import stat
-import tempfile
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Literal
 
+from ..fileaccess import Refused, links_below, read_regular, write_output
+
 MARK = "verify-gen sha256 "
+#: why a symbolic link in the output directory is refused (E601, even with ``--force``)
+LINK = "is a symbolic link, which generated files are never written through"
+#: the most of a file in the way that is read to tell whether it is glue (generated files are far smaller)
+MAX_GLUE_BYTES = 16 * 1024 * 1024
 
 #: comment syntax per file extension, for the first line of a glue file
 _COMMENTS = {".hpp": ("// ", ""), ".cpp": ("// ", ""), ".txt": ("# ", ""), ".cmake": ("# ", ""),
@@ -66,26 +70,28 @@ def intact(text: str) -> bool:
 
 def _existing(path: str) -> str | None:
     """The text at ``path``: None if nothing is there, "" if it is not a readable text file (not ours:
-    a FIFO or a device is never opened, so reading cannot block)."""
+    a FIFO or a device is never opened, so reading cannot block; ``verify.fileaccess``)."""
     try:
-        info = os.stat(path)
-    except FileNotFoundError:
-        return None
-    except OSError:
-        return ""
-    if not stat.S_ISREG(info.st_mode):
-        return ""
-    try:
-        with open(path, encoding="utf-8", newline="") as fh:
-            return fh.read()
+        return read_regular(path, MAX_GLUE_BYTES, follow_links=False).decode("utf-8")
+    except Refused as refused:
+        return None if refused.reason == "missing" else ""
     except (OSError, UnicodeDecodeError):
         return ""
 
 
 def plan(tree: Tree, directory: str, force: bool) -> Outcome:
-    """What ``write`` would do, without writing: refused glue paths are in ``refused``."""
+    """What ``write`` would do, without writing: refused paths are in ``refused`` (a symbolic link on the
+    way to a file once, as the link's own path: nothing is ever written through one)."""
     outcome = Outcome()
     for f in tree.files:
+        link = links_below(directory, f.path)
+        if link == f.path and f.owner == "user":  # (a user file is never written: a link is kept, not read)
+            outcome.kept.append(f.path)
+            continue
+        if link is not None:
+            if link not in [p for p, _ in outcome.refused]:
+                outcome.refused.append((link, LINK))
+            continue
         path = os.path.join(directory, *f.path.split("/"))
         old = _existing(path)
         if os.path.isdir(path):
@@ -104,24 +110,36 @@ def plan(tree: Tree, directory: str, force: bool) -> Outcome:
     return outcome
 
 
-def write(tree: Tree, directory: str, outcome: Outcome) -> None:
-    """Write the files ``outcome.written`` names (each atomically: a temporary file renamed over it)."""
+def write(tree: Tree, directory: str, outcome: Outcome) -> Iterator[str]:
+    """Write the files ``outcome.written`` names (each atomically: a temporary file renamed over it),
+    yielding each directory made and each file written as soon as it is in place: a failure midway
+    (an ``OSError`` from the iteration) leaves exactly what was yielded changed."""
     wanted = set(outcome.written)
     for f in tree.files:
         if f.path not in wanted:
             continue
         path = os.path.join(directory, *f.path.split("/"))
-        os.makedirs(os.path.dirname(path), exist_ok=True)
-        if f.owner == "user":  # (created only: never over a file that appeared meanwhile)
-            with open(path, "x", encoding="utf-8", newline="") as fh:
-                fh.write(f.text)
-            continue
-        fd, tmp = tempfile.mkstemp(prefix=".", suffix=".tmp", dir=os.path.dirname(path))
+        yield from _make_directories(os.path.dirname(path))
+        # (whole or not at all, never through a link; a user file is created only: never over a file,
+        # or a link, that appeared meanwhile)
+        write_output(path, f.text, replace=f.owner == "glue")
+        yield path
+
+
+def _make_directories(directory: str) -> Iterator[str]:
+    """Make ``directory`` and its missing parents, yielding each one made (outermost first)."""
+    missing = []
+    while directory and not os.path.isdir(directory):
+        missing.append(directory)
+        parent = os.path.dirname(directory)
+        if parent == directory:
+            break
+        directory = parent
+    for made in reversed(missing):
         try:
-            with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
-                fh.write(f.text)
-            os.replace(tmp, path)
-        except BaseException:
-            with contextlib.suppress(OSError):
-                os.unlink(tmp)
+            os.mkdir(made)
+        except FileExistsError:
+            if os.path.isdir(made):  # (made by someone else meanwhile: not ours to report)
+                continue
             raise
+        yield made

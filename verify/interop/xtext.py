@@ -14,6 +14,8 @@ from dataclasses import dataclass
 from fractions import Fraction
 
 from ..diagnostics import DiagnosticSink
+from ..limits import DEFAULT_LIMITS
+from ..sanitize import shown
 from ..source import Span
 
 _TOKEN = re.compile(r"""
@@ -27,6 +29,8 @@ _TOKEN = re.compile(r"""
 
 #: the most tokens one imported file may hold (as the language's own limit: verify.limits)
 MAX_TOKENS = 2_000_000
+#: the largest exponent of a number (``1e-3``) in an imported file (10^40: far beyond any time or rate)
+MAX_EXPONENT = 40
 
 
 @dataclass(frozen=True)
@@ -53,8 +57,7 @@ def tokenize(text: str, path: str, sink: DiagnosticSink) -> list[Tok] | None:
         if m is None:
             col = pos - line_start + 1
             ch = text[pos]
-            shown = ch if ch.isprintable() else repr(ch)[1:-1]
-            sink.emit("E701", f"unexpected character `{shown}` in {path}", Span(path, line, col, line, col + 1),
+            sink.emit("E701", f"unexpected character `{shown(ch)}` in {path}", Span(path, line, col, line, col + 1),
                       "not part of the format", help="the file must be a SmartMDSD model as its editor writes it")
             return None
         kind = m.lastgroup or ""
@@ -134,6 +137,7 @@ class Cursor:
         tok = self.peek()
         if tok.kind != "num" or not tok.text.isdigit():
             raise self.fail(tok, what)
+        self.bounded(tok)
         self.next()
         value = int(tok.text)
         return (-value if neg else value), (neg.span.to(tok.span) if neg else tok.span)
@@ -144,10 +148,25 @@ class Cursor:
         tok = self.peek()
         if tok.kind != "num":
             raise self.fail(tok, what)
+        self.bounded(tok)
         self.next()
         mantissa, _, exponent = tok.text.lower().partition("e")
+        if abs(int(exponent or "0")) > MAX_EXPONENT:
+            raise self.out_of_range(tok, f"its exponent is larger than {MAX_EXPONENT}", "write the value in a "
+                                    "larger or smaller unit")
         value = Fraction(mantissa) * (Fraction(10) ** int(exponent or "0"))
         return (-value if neg else value), (neg.span.to(tok.span) if neg else tok.span)
+
+    def bounded(self, tok: Tok) -> None:
+        """E005 (and ``Stop``) for a number of more than ``number_length`` characters, the language's own
+        limit (``verify.limits``): no number is ever converted whole if it is longer."""
+        if len(tok.text) > DEFAULT_LIMITS.number_length:
+            raise self.out_of_range(tok, f"it has {len(tok.text):,} characters; at most "
+                                    f"{DEFAULT_LIMITS.number_length} are allowed", "write a shorter number")
+
+    def out_of_range(self, tok: Tok, why: str, help: str) -> Stop:
+        self.sink.emit("E005", f"invalid number in {self.what}: {why}", tok.span, "out of range", help=help)
+        return Stop()
 
     def block(self) -> Span:
         """Skip a balanced ``{ … }`` (the cursor is at its ``{``); its span."""

@@ -2,13 +2,14 @@
 LSP): diagnostics, document symbols (the paper's outline), hover, definitions, references, rename,
 completion and code actions. Every function is pure: it reads a ``LoadResult`` (and an analysis) and
 returns lsprotocol values. Positions: spans are 1-based lines and code-point columns; LSP counts
-UTF-16 code units from 0 (``to_range``, ``from_position``).
+UTF-16 code units from 0, a byte order mark not counted; one map converts them (``source.SourceMap``:
+``to_range``, ``from_position``, ``offset_at``).
 """
 from __future__ import annotations
 
 import os
 import re
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 
 from lsprotocol import types as lsp
@@ -17,7 +18,7 @@ from .. import syntax as s
 from ..api import LoadResult
 from ..diagnostics import Diagnostic, Severity
 from ..model import SystemModel
-from ..source import Span
+from ..source import SourceMap, Span
 from ..symbols import Symbol
 from ..timing import AnalysisResult
 from ..timing.report import sampling_marks
@@ -35,53 +36,60 @@ def same_file(a: str, b: str) -> bool:
 # ------------------------------------------------------------------ positions
 
 
-class Lines:
-    """The lines of a buffer, for converting between spans and LSP positions (UTF-16)."""
-
-    def __init__(self, text: str) -> None:
-        self.lines = text.split("\n")
-
-    def utf16(self, line: int, column: int) -> int:
-        """The UTF-16 offset of 1-based code-point ``column`` on 1-based ``line``."""
-        if not 1 <= line <= len(self.lines):
-            return max(column - 1, 0)
-        prefix = self.lines[line - 1][:max(column - 1, 0)]
-        return len(prefix.encode("utf-16-le")) // 2
-
-    def column(self, line0: int, character: int) -> int:
-        """The 1-based code-point column of UTF-16 offset ``character`` on 0-based line ``line0``."""
-        if not 0 <= line0 < len(self.lines):
-            return character + 1
-        units = 0
-        for i, ch in enumerate(self.lines[line0]):
-            if units >= character:
-                return i + 1
-            units += 2 if ord(ch) > 0xFFFF else 1
-        return len(self.lines[line0]) + 1
-
-    def offset(self, line0: int, character: int) -> int:
-        """The index into the text of an LSP position."""
-        before = sum(len(x) + 1 for x in self.lines[:line0])
-        return before + self.column(line0, character) - 1
+def offset_at(smap: SourceMap, position: lsp.Position) -> int:
+    """The index into the text of an LSP position, clamped as LSP asks: a character past the end of
+    its line is the line's end, a line past the last one the end of the text."""
+    if position.line >= smap.lines:
+        return len(smap.text)
+    return smap.offset(*smap.from_lsp(position.line, position.character))
 
 
-def to_range(span: Span, lines: Lines) -> lsp.Range:
-    return lsp.Range(lsp.Position(max(span.line - 1, 0), lines.utf16(span.line, span.column)),
-                     lsp.Position(max(span.end_line - 1, 0), lines.utf16(span.end_line, span.end_column)))
+def to_range(span: Span, smap: SourceMap) -> lsp.Range:
+    (sl, sc), (el, ec) = smap.to_lsp(span.line, span.column), smap.to_lsp(span.end_line, span.end_column)
+    return lsp.Range(lsp.Position(sl, sc), lsp.Position(el, ec))
 
 
-def from_position(position: lsp.Position, lines: Lines) -> tuple[int, int]:
+def from_position(position: lsp.Position, smap: SourceMap) -> tuple[int, int]:
     """(1-based line, 1-based code-point column)."""
-    return position.line + 1, lines.column(position.line, position.character)
+    return smap.from_lsp(position.line, position.character)
+
+
+def offset_range(smap: SourceMap, start: int, end: int) -> lsp.Range:
+    """The LSP range of ``text[start:end]``."""
+    (sl, sc), (el, ec) = smap.to_lsp(*smap.position(start)), smap.to_lsp(*smap.position(end))
+    return lsp.Range(lsp.Position(sl, sc), lsp.Position(el, ec))
+
+
+def reversed_range(change: lsp.TextDocumentContentChangeEvent) -> lsp.Range | None:
+    """The range of ``change`` when its start comes after its end (a change no text expresses)."""
+    if not isinstance(change, lsp.TextDocumentContentChangePartial):
+        return None
+    start, end = change.range.start, change.range.end
+    return change.range if (start.line, start.character) > (end.line, end.character) else None
+
+
+def apply_changes(text: str, changes: Iterable[lsp.TextDocumentContentChangeEvent]) -> str:
+    """``text`` after ``changes``, in order (``reversed_range`` of each is None): a range is clamped to
+    the text (``offset_at``)."""
+    for change in changes:
+        if isinstance(change, lsp.TextDocumentContentChangePartial):
+            smap = SourceMap(text)
+            start, end = offset_at(smap, change.range.start), offset_at(smap, change.range.end)
+            text = text[:start] + change.text + text[end:]
+        else:
+            text = change.text
+    return text
 
 
 # ------------------------------------------------------------------ diagnostics
 
 
-def diagnostics_for(path: str, diagnostics: Iterable[Diagnostic], lines: Lines,
+def diagnostics_for(path: str, diagnostics: Iterable[Diagnostic], map_of: Callable[[str], SourceMap],
                     uri_of: Mapping[str, str]) -> list[lsp.Diagnostic]:
     """The diagnostics whose primary location is in ``path``, as LSP diagnostics: the same code,
-    message and help as the command line, the secondary locations as related information."""
+    message and help as the command line, the secondary locations as related information. ``map_of``
+    gives the positions of a file's text (the open buffer's, else the text as loaded)."""
+    here = map_of(path)
     out = []
     for d in diagnostics:
         if not same_file(d.span.file, path):
@@ -89,10 +97,10 @@ def diagnostics_for(path: str, diagnostics: Iterable[Diagnostic], lines: Lines,
         message = d.message + "".join(f"\n{n}" for n in d.notes) + (f"\nhelp: {d.help}" if d.help else "")
         related = []
         for lb in d.secondary:
-            where = to_range(lb.span, lines if same_file(lb.span.file, path) else Lines(""))
+            where = to_range(lb.span, here if same_file(lb.span.file, path) else map_of(lb.span.file))
             uri = uri_of.get(os.path.realpath(lb.span.file), _file_uri(lb.span.file))
             related.append(lsp.DiagnosticRelatedInformation(lsp.Location(uri, where), lb.message or d.message))
-        out.append(lsp.Diagnostic(range=to_range(d.span, lines), message=message, severity=_SEVERITY[d.severity],
+        out.append(lsp.Diagnostic(range=to_range(d.span, here), message=message, severity=_SEVERITY[d.severity],
                                   code=d.code, source="verify", related_information=related or None))
     return out
 
@@ -106,7 +114,7 @@ def _file_uri(path: str) -> str:
 # ------------------------------------------------------------------ outline
 
 
-def _symbol(name: str, kind: lsp.SymbolKind, whole: Span, at: Span, lines: Lines, detail: str = "",
+def _symbol(name: str, kind: lsp.SymbolKind, whole: Span, at: Span, lines: SourceMap, detail: str = "",
             children: list[lsp.DocumentSymbol] | None = None) -> lsp.DocumentSymbol:
     full = to_range(whole, lines)
     sel = to_range(at, lines)
@@ -154,7 +162,7 @@ def chain_summary(analysis: AnalysisResult | None, name: str) -> str:
     return " · ".join(parts)
 
 
-def outline(module: s.Module, lines: Lines, analyses: Mapping[str, AnalysisResult]) -> list[lsp.DocumentSymbol]:
+def outline(module: s.Module, lines: SourceMap, analyses: Mapping[str, AnalysisResult]) -> list[lsp.DocumentSymbol]:
     """Components with their ports and tasks; systems with their instances (tasks with their evaluated
     rates and sampling marks) and chains (with their latencies)."""
     out = []
@@ -242,7 +250,7 @@ def rename_edits(symbol: Symbol, result: LoadResult, new_name: str, uri_of: Mapp
             source = result.sources.get(span.file)
             text = source.text if source is not None else ""
         uri = uri_of.get(os.path.realpath(span.file), _file_uri(span.file))
-        edit = lsp.TextEdit(to_range(span, Lines(text)), new_name)
+        edit = lsp.TextEdit(to_range(span, SourceMap(text)), new_name)
         if edit not in changes.setdefault(uri, []):
             changes[uri].append(edit)
     return lsp.WorkspaceEdit(changes=changes)
@@ -368,16 +376,6 @@ def quick_fixes(uri: str, diagnostics: Iterable[lsp.Diagnostic]) -> list[lsp.Cod
     return actions
 
 
-def offset_range(text: str, start: int, end: int) -> lsp.Range:
-    """The LSP range of ``text[start:end]``."""
-    def position(offset: int) -> lsp.Position:
-        line = text.count("\n", 0, offset)
-        line_start = text.rfind("\n", 0, offset) + 1
-        return lsp.Position(line, len(text[line_start:offset].encode("utf-16-le")) // 2)
-
-    return lsp.Range(position(start), position(end))
-
-
 def text_edits(old: str, new: str) -> list[lsp.TextEdit]:
     """Edits that turn ``old`` into ``new``, one per run of changed lines (none when they are equal):
     an editor keeps its cursor and undo history everywhere else."""
@@ -388,7 +386,8 @@ def text_edits(old: str, new: str) -> list[lsp.TextEdit]:
     for line in a:
         starts.append(starts[-1] + len(line))
     edits = []
+    smap = SourceMap(old)
     for tag, i1, i2, j1, j2 in difflib.SequenceMatcher(None, a, b, autojunk=False).get_opcodes():
         if tag != "equal":
-            edits.append(lsp.TextEdit(offset_range(old, starts[i1], starts[i2]), "".join(b[j1:j2])))
+            edits.append(lsp.TextEdit(offset_range(smap, starts[i1], starts[i2]), "".join(b[j1:j2])))
     return edits

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 from ..diagnostics import has_errors
+from ..sanitize import shown
 from . import Output, Report
 from .diagnostics_text import render as diagnostics
 
@@ -11,5 +12,5 @@ def render(report: Report) -> Output:
     if has_errors(report.diagnostics) or report.result is None:
         return out
     comps, systems = len(report.result.project.components), len(report.result.project.systems)
-    return Output(f"{report.file}: ok ({comps} component{'s' * (comps != 1)}, "
+    return Output(f"{shown(report.file)}: ok ({comps} component{'s' * (comps != 1)}, "
                   f"{systems} system{'s' * (systems != 1)})\n", out.stderr)

@@ -3,6 +3,7 @@ standard output, the diagnostics (E501–E503, or why the input is invalid) on s
 from __future__ import annotations
 
 from ..prove.report import to_text
+from ..sanitize import shown_lines
 from . import Output, Report
 from .diagnostics_text import render as diagnostics
 
@@ -11,4 +12,4 @@ def render(report: Report) -> Output:
     stderr = diagnostics(report).stderr
     if report.result is None:
         return Output(stderr=stderr)
-    return Output(to_text(report.model, report.result), stderr)
+    return Output(shown_lines(to_text(report.model, report.result)), stderr)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from ..render import render_all_text
+from ..sanitize import shown_lines
 from ..synth.report import to_text
 from . import Output, Report
 
@@ -12,7 +13,7 @@ def render(report: Report) -> Output:
     diagnostics = render_all_text(report.diagnostics, report.sources) + "\n" if report.diagnostics else ""
     if dsl is None:
         return Output(stderr=diagnostics)
-    summary = to_text(report.result)
+    summary = shown_lines(to_text(report.result))  # (the model text itself is the user's, kept as it is)
     if report.extra.get("written") is not None:
         return Output(summary, diagnostics)
     diff = report.extra.get("diff")

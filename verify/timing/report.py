@@ -6,10 +6,12 @@ JSON (``to_json``), schema ``"verify.analysis/1"`` (the JSON Schema is ``JSON_SC
 exists (``"0.025"``), else null. No floats. Times are seconds, rates hertz, factors unitless. A
 number that is not bounded is ``null``.
 
-Text (``to_text``): the outline of the system — every task with its rate and response times, every
-connection marked over- or undersampled with its factor — then a chain table (worst/best reaction
-time and data age, jitter, spec, margin, dominating hop) and each chain's per-step breakdown naming
-the rule that produced each term.
+Text, short (``to_brief``, what ``analyze`` prints): the verdict of every spec by its bound first, then
+each core's utilisation, each task's rate and response times, and the chain table. Text, whole
+(``to_text``, ``analyze --explain``): the outline of the system — every task with its rate and response
+times, every connection marked over- or undersampled with its factor — then a chain table (worst/best
+reaction time and data age, jitter, spec, margin, dominating hop) and each chain's per-step breakdown
+naming the rule that produced each term, and the verdicts last.
 """
 from __future__ import annotations
 
@@ -453,4 +455,39 @@ def to_text(result: AnalysisResult) -> str:
     return "\n".join(out)
 
 
-__all__ = ["JSON_SCHEMA", "SCHEMA", "exact", "to_json", "to_text"]
+def _brief_task_row(t: TaskTiming) -> list[str]:
+    r = t.response
+    where = t.core + (f", executor {t.executor}" if t.executor is not None else "")
+    rate = "?" if t.activation.rate is None else str(t.activation.rate)
+    worst = _t(r.wcrt) if r.wcrt is not None else (r.failure or "unbounded")
+    deadline = "" if r.wcrt is None or r.deadline is None else ("" if r.wcrt <= r.deadline else "  > deadline")
+    return [t.id, where, str(t.priority), rate, f"{_t(r.bcrt)} .. {worst}{deadline}"]
+
+
+def _brief_chain_rows(c: ChainBounds) -> list[list[str]]:
+    return [row[:7] for row in _chain_rows(c)]
+
+
+def to_brief(result: AnalysisResult) -> str:
+    """The short view: the verdict of every spec first, then the cores' loads, one line per task (rate,
+    response time) and the chain table; ``to_text`` is the whole derivation (``analyze --explain``)."""
+    out = [f"system {result.system}  (data age {result.data_age_variant}"
+           f"{'' if result.converged else '; NOT converged'})", ""]
+    out += _spec_verdicts(result)
+    if result.diagnostics:
+        out += ["", f"{len(result.diagnostics)} problem{'s' if len(result.diagnostics) != 1 else ''}: "
+                + ", ".join(sorted({d.code for d in result.diagnostics})) + " (on standard error)"]
+    out += ["", "cores"]
+    for c in result.cores:
+        u = "unbounded" if c.utilisation is None else percent(c.utilisation)
+        out.append(f"  {c.core}  utilisation {u}{'  OVERLOADED' if c.overloaded else ''}")
+    out += ["", "tasks"] + _table([["task", "core", "priority", "rate", "response time"]]
+                                  + [_brief_task_row(t) for t in result.tasks])
+    if result.chains:
+        header = ["chain", "latency", "worst", "best", "jitter", "spec", "margin"]
+        out += ["", "chains"] + _table([header] + [row for c in result.chains for row in _brief_chain_rows(c)])
+    out += ["", "(`verify analyze --explain`: the derivation of every number, with the rules of specs/timing.md)"]
+    return "\n".join(out)
+
+
+__all__ = ["JSON_SCHEMA", "SCHEMA", "exact", "to_brief", "to_json", "to_text"]

@@ -32,8 +32,10 @@ class Read:
 
 def read_files(paths: Sequence[str], sink: DiagnosticSink, limits: Limits = DEFAULT_LIMITS) -> Read:
     """Every architecture file named by ``paths`` (files, or directories searched recursively in name order)."""
+    from ...fileaccess import area_of
     from ...loader import read_text as read_file
 
+    area = area_of(paths)  # (a file found there that is a link leading out is refused: E006)
     found: list[str] = []
     for path in paths:
         if os.path.isdir(path):
@@ -42,7 +44,7 @@ def read_files(paths: Sequence[str], sink: DiagnosticSink, limits: Limits = DEFA
             found.append(path)
     out = Read([], {})
     for path in found[:limits.files]:
-        text = read_file(path, sink, out.sources, limits)
+        text = read_file(path, sink, out.sources, limits, area)
         if text is None:
             continue
         out.sources[path] = SourceFile(path, text)

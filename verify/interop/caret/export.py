@@ -54,6 +54,10 @@ def export_system(model: SystemModel, origin: list[Architecture] | None, origin_
     paths = [p for c in model.chains if (p := _named_path(model, c, generated, sink)) is not None]
     if any(d.code == "E706" for d in sink.items):
         return None
+    sink.emit("E707", f"system `{model.name}` is written as a whole new architecture file: its callbacks' symbols "
+              "are placeholders (`verify:INSTANCE.TASK`), which match no callback CARET traces", model.span,
+              "no original architecture file", help="pass `--from ARCHITECTURE.yaml`, the file the system was "
+              "imported from, to keep CARET's own nodes, symbols and topics and replace only its named paths")
     document = {"named_paths": paths, "executors": _executors(model, sink), "nodes": _nodes(model, generated, sink)}
     return Exported({"architecture.yaml": dump(document)})
 

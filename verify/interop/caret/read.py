@@ -14,10 +14,12 @@ from dataclasses import dataclass, field
 import yaml
 
 from ...diagnostics import DiagnosticSink
-from ...limits import Limits
+from ...limits import DEFAULT_LIMITS, Limits
 from ...source import Span
 
 UNDEFINED = "UNDEFINED"
+#: the most characters of a number (the language's own limit, ``verify.limits``: E005)
+NUMBER_LENGTH = DEFAULT_LIMITS.number_length
 #: topics CARET leaves out of every architecture
 IGNORED_TOPICS = ("/parameter_events", "/rosout", "/clock")
 
@@ -25,9 +27,9 @@ IGNORED_TOPICS = ("/parameter_events", "/rosout", "/clock")
 class Malformed(Exception):
     """The file is not an architecture file: E701 at ``span``."""
 
-    def __init__(self, message: str, span: Span, help: str):
+    def __init__(self, message: str, span: Span, help: str, code: str = "E701"):
         super().__init__(message)
-        self.span, self.help = span, help
+        self.span, self.help, self.code = span, help, code
 
 
 @dataclass(frozen=True)
@@ -216,12 +218,28 @@ def _topic(m: Y, key: str) -> str | None:
 
 def read_architecture(root: Y, path: str) -> Architecture:
     """The architecture of a parsed file (Malformed on a shape CARET would not read)."""
+    if _is_early(root):
+        nodes = [_node(y) for y in _list(_key(root, "nodes", "the file"), "`nodes`")]
+        for node in nodes:  # (its subscriptions are those of its subscription callbacks)
+            node.subscribes += [Subscribe(c.topic, c.name, c.span) for c in node.callbacks
+                                if c.topic is not None and c.topic not in IGNORED_TOPICS]
+        paths = [_path(y) for y in _optional_list(root, "named_paths", "the architecture file")]
+        return Architecture([n for n in nodes if "caret_trace_" not in n.name], [], paths, path)
     for key in ("named_paths", "executors", "nodes"):
         _list(_key(root, key, "the architecture file"), f"`{key}`")
     nodes = [_node(y) for y in _list(_key(root, "nodes", "the file"), "`nodes`")]
     executors = [_executor(y) for y in _list(_key(root, "executors", "the file"), "`executors`")]
     paths = [_path(y) for y in _list(_key(root, "named_paths", "the file"), "`named_paths`")]
     return Architecture([n for n in nodes if "caret_trace_" not in n.name], executors, paths, path)
+
+
+def _is_early(root: Y) -> bool:
+    """A file of CARET's early format (before named paths and executors were recorded, 2021): top-level
+    ``path_name_aliases`` instead of ``named_paths``, no ``executors``; a callback's ``type``, a
+    publisher's one ``callback_name``, no ``subscribes`` (a subscription callback's topic is the node's
+    subscription). Its aliases name no path; ``named_paths`` are those ``export caret --from`` added."""
+    keys = _map(root, "the architecture file")
+    return "path_name_aliases" in keys and "executors" not in keys
 
 
 def _node(y: Y) -> Node:
@@ -242,8 +260,7 @@ def _node(y: Y) -> Node:
         if UNDEFINED not in (write, read):
             node.passings.append((write, read, v.span))
     for p in _optional_list(y, "publishes", what):
-        callbacks = [_text(c, "a callback name") for c in _list(_key(p, "callback_names", "a publisher"),
-                                                                "`callback_names`")]
+        callbacks = _publishers(p)
         topic = _text(_key(p, "topic_name", "a publisher"), "`topic_name`")
         if topic not in IGNORED_TOPICS:
             node.publishes.append(Publish(topic, [c for c in callbacks if c != UNDEFINED], p.span))
@@ -260,6 +277,14 @@ def _node(y: Y) -> Node:
     return node
 
 
+def _publishers(p: Y) -> list[str]:
+    """The callbacks a publisher names: ``callback_names``, or the early format's one ``callback_name``."""
+    fields = _map(p, "a publisher")
+    if "callback_names" not in fields and "callback_name" in fields:
+        return [_text(fields["callback_name"], "`callback_name`")]
+    return [_text(c, "a callback name") for c in _list(_key(p, "callback_names", "a publisher"), "`callback_names`")]
+
+
 def _callback(c: Y, what: str) -> Callback:
     fields = _map(c, f"a callback of {what}")
     kind_y = fields.get("callback_type") or fields.get("type")  # (`type`: the format before CARET 1.0)
@@ -271,7 +296,11 @@ def _callback(c: Y, what: str) -> Callback:
     symbol = fields["symbol"].value if "symbol" in fields and isinstance(fields["symbol"].value, str) else None
     if kind == "timer_callback":
         period = _text(_key(c, "period_ns", f"timer callback `{name}`"), "`period_ns`")
-        if not period.isdigit() or int(period) <= 0:
+        if len(period) > NUMBER_LENGTH:  # (never converted whole: no number is longer in the language either)
+            raise Malformed(f"the period of timer callback `{name}` has {len(period):,} characters; at most "
+                            f"{NUMBER_LENGTH} are allowed", fields["period_ns"].span,
+                            "write `period_ns` as a whole number of nanoseconds, e.g. 100000000", "E005")
+        if not period.isascii() or not period.isdigit() or int(period) <= 0:
             raise Malformed(f"the period of timer callback `{name}` is not a positive number of nanoseconds",
                             fields["period_ns"].span, "write `period_ns` as a whole number, e.g. 100000000")
         return Callback(name, "timer", c.span, period_ns=int(period), symbol=symbol)
@@ -301,7 +330,7 @@ def read(text: str, path: str, sink: DiagnosticSink, limits: Limits) -> Architec
     try:
         return read_architecture(parse(text, path, limits), path)
     except Malformed as err:
-        sink.emit("E701", f"{path} is not a CARET architecture file: {err}", err.span, "here", help=err.help)
+        sink.emit(err.code, f"{path} is not a CARET architecture file: {err}", err.span, "here", help=err.help)
     except RecursionError:
         sink.emit("E701", f"{path} is nested too deeply", Span(path, 1, 1, 1, 2), "too deep",
                   help="an architecture file nests four levels")

@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 
 from ...diagnostics import DiagnosticSink
+from ...sanitize import comment
 from ...units import fmt_time
 from .read import Architecture, Callback, Group, NamedPath, Node
 
@@ -274,15 +275,15 @@ class _Importer:
     # ------------------------------------------------------------ text
 
     def text(self, system: str) -> str:
-        lines = [f"// Imported from the CARET architecture file {self.arch.path} by `verify import caret`.",
+        lines = [f"// Imported from the CARET architecture file {comment(self.arch.path)} by `verify import caret`.",
                  "// Execution times, and the cores and priorities of the executors' threads, are not in it.", ""]
         for n in self.nodes.values():
             lines += self._component(n) + [""]
         lines.append(f"system {system} {{")
-        lines += [f"  executor {name} {kind}  // {source}" for name, kind, source in self.executors]
+        lines += [f"  executor {name} {kind}  // {comment(source)}" for name, kind, source in self.executors]
         for n in self.nodes.values():
             lines.append(f"  instance {n.instance} : {n.component} {{")
-            lines += [f"    group {name} {kind}  // {source}" for name, kind, source in n.groups]
+            lines += [f"    group {name} {kind}  // {comment(source)}" for name, kind, source in n.groups]
             for cb in n.node.callbacks:
                 if cb.name in n.tasks:
                     lines.append(f"    task {n.tasks[cb.name]}" + self._binding(n, cb))
@@ -294,7 +295,7 @@ class _Importer:
         return "\n".join(lines) + "\n"
 
     def _component(self, n: _Node) -> list[str]:
-        lines = [f"// node {n.node.name}", f"component {n.component} {{"]
+        lines = [f"// node {comment(n.node.name)}", f"component {n.component} {{"]
         lines += [f"  in {p} : Message" for p in n.topic_in.values()]
         lines += [f"  out {p} : Message" for p in n.topic_out.values()]
         for (_w, _r), (out, into) in n.passing.items():
@@ -302,7 +303,7 @@ class _Importer:
         for cb in n.node.callbacks:
             if cb.name not in n.tasks:
                 continue
-            lines.append(f"  task {n.tasks[cb.name]} {{  // {cb.name}")
+            lines.append(f"  task {n.tasks[cb.name]} {{  // {comment(cb.name)}")
             lines += [f"    reads {p}" for p in dict.fromkeys(n.reads[cb.name])]
             if n.produces[cb.name]:
                 lines.append("    produces " + ", ".join(dict.fromkeys(n.produces[cb.name])))

@@ -49,8 +49,10 @@ def model_files(paths: Sequence[str], sink: DiagnosticSink, limits: Limits = DEF
 
 
 def read_files(paths: Sequence[str], sink: DiagnosticSink, limits: Limits = DEFAULT_LIMITS) -> Read:
+    from ...fileaccess import area_of
     from ...loader import read_text as read_file
 
+    area = area_of(paths)  # (a file found there that is a link leading out is refused: E006)
     files, sources = Files(), dict[str, SourceFile]()
     total = 0
     for path in model_files(paths, sink, limits):
@@ -58,7 +60,7 @@ def read_files(paths: Sequence[str], sink: DiagnosticSink, limits: Limits = DEFA
             sink.emit("E004", f"{path} is not a SmartMDSD model file (expected one of {', '.join(KINDS)})",
                       Span(path, 1, 1, 1, 1), "not a model file", help="name the model files or their directory")
             continue
-        text = read_file(path, sink, sources, limits)
+        text = read_file(path, sink, sources, limits, area)
         if text is None:
             continue
         total += len(text)

@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 
 from ...diagnostics import DiagnosticSink, Label, Severity
+from ...sanitize import comment
 from ...source import Span
 from ...units import fmt_number, fmt_time
 from .read import (Activity, ActivityArch, Chain, ChainModel, Component, ComponentArch, Files, Instance, Name, Node,
@@ -264,7 +265,8 @@ class _Builder:
 
     def component_text(self, comp: Component) -> str:
         name = self.name(comp.name)
-        lines = [f"// {comp.name.text}: imported from {os.path.basename(comp.name.span.file)}", f"component {name} {{"]
+        lines = [f"// {comment(comp.name.text)}: imported from {comment(os.path.basename(comp.name.span.file))}",
+                 f"component {name} {{"]
         for port in comp.ports:
             lines.append(f"  {port.direction} {self.name(port.name)} : {self.type_name(port.service)}")
         for act in comp.activities:
@@ -352,7 +354,7 @@ class _Builder:
         chains = list(self.chain_texts(links))
         if chains:
             body += [""] + chains
-        header = (f"// imported from {os.path.basename(self.arch.path)} by `verify import smartmdsd` "
+        header = (f"// imported from {comment(os.path.basename(self.arch.path))} by `verify import smartmdsd` "
                   "(specs/interop.md)\n")
         return header + f"system {self.name(self.arch.name)} {{\n" + "\n".join(body) + "\n}\n"
 

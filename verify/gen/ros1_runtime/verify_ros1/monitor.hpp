@@ -3,12 +3,18 @@
 // nodes feed it, and so can hand-written ones.
 #pragma once
 
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
+#include <filesystem>
 #include <mutex>
 #include <sstream>
 #include <string>
+#include <system_error>
 #include <utility>
 #include <vector>
 
@@ -181,6 +187,24 @@ inline std::string violation_json(const Violation& v) {
   o << "{\"chain\": " << json_string(v.chain) << ", \"metric\": " << json_string(v.metric)
     << ", \"value_ns\": " << v.value << ", \"bound_ns\": " << v.bound << ", \"at_ns\": " << v.at << "}";
   return o.str();
+}
+
+// The directory for the monitors' summaries (`summary_dir`), made with its parents if need be: "" when
+// it is a directory this process may write into, else what is wrong. A node asks when it starts, so that
+// a summary that could not be written is reported before the run, not lost after it.
+inline std::string prepare_summary_directory(const std::string& directory) {
+  std::error_code error;
+  if (std::filesystem::exists(directory, error) && !std::filesystem::is_directory(directory, error)) {
+    return "the summary directory " + directory + " is not a directory";
+  }
+  std::filesystem::create_directories(directory, error);
+  if (error) {
+    return "cannot create the summary directory " + directory + ": " + error.message();
+  }
+  if (::access(directory.c_str(), W_OK | X_OK) != 0) {
+    return "cannot write into the summary directory " + directory + ": " + std::strerror(errno);
+  }
+  return "";
 }
 
 }  // namespace verify_ros1

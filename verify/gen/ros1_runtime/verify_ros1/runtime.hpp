@@ -814,6 +814,15 @@ inline int Component::run() {
   if (!configure()) {
     return 1;
   }
+  std::string summary_dir;  // (made now, or the node stops now: a summary is not lost after the run)
+  if (!monitors_.empty() && ros::param::get("/verify/summary_dir", summary_dir) && !summary_dir.empty()) {
+    const std::string problem = prepare_summary_directory(summary_dir);
+    if (!problem.empty()) {
+      ROS_FATAL("%s: summary_dir:=%s: %s (choose a directory the node may create or write into)", name().c_str(),
+                summary_dir.c_str(), problem.c_str());
+      return 1;
+    }
+  }
   if (trace_) {  // a trace is for a recorder: wait (up to 10 s) until one listens, so that it sees every job
     for (int i = 0; i < 1000 && jobs_.getNumSubscribers() == 0 && ros::ok() && !stop_requested(); ++i) {
       ros::WallDuration(0.01).sleep();
