@@ -53,8 +53,8 @@ class Row:
 
 
 ROWS = (
-    Row("synth-optimum navigation-holes", synth_optimum(lambda: verify.load(EXAMPLES / "navigation"
-                                                                           / "navigation-holes.vfy")),
+    Row("synth-optimum navigation-holes", synth_optimum(lambda: verify.load(str(EXAMPLES / "navigation"
+                                                                               / "navigation-holes.vfy"))),
         {"rlimit": 1_748_368, "solver calls": 9}),
     Row("synth-optimum waters-200-s1", synth_optimum(lambda: _waters_holes(200, 1)),
         {"rlimit": 3_233_391, "solver calls": 11}, slow=True),
