@@ -330,10 +330,16 @@ def _range_hint(st: Statement, problem: Problem, budget: Budget) -> str:
 # ================================================================== the diagnostic
 
 
-def unsat_diagnostic(system: SystemModel, expl: Explanation | None, reason: str | None) -> Diagnostic:
-    """E401: primary label on a violated spec of the core, secondary labels on the other members."""
+def unsat_diagnostic(system: SystemModel, expl: Explanation | None, reason: str | None,
+                     holes: tuple[Label, ...] = (), rejected: tuple[str, ...] = ()) -> Diagnostic:
+    """E401: primary label on a violated spec of the core, secondary labels on the other members. Without
+    a core (no tracked statement is to blame: the conflict lies in what is not a statement, e.g. a
+    deadline or a priority) it stands on the ``holes`` — no value of theirs is accepted — with the
+    analysis' ``rejected`` reasons of the slowest configuration as notes."""
     sink = DiagnosticSink()
     core = expl.core if expl is not None else ()
+    if not core and holes:
+        return _holes_diagnostic(system, holes, reason, rejected, expl is not None and expl.status == "unsat")
     specs = [st for st in core if st.kind == "spec"]
     primary = specs[0] if specs else (core[0] if core else None)
     where = primary.span if primary is not None else system.span
@@ -372,6 +378,22 @@ def unsat_diagnostic(system: SystemModel, expl: Explanation | None, reason: str 
     help_ = "; ".join(expl.hints) if expl is not None and expl.hints else (
         "relax a spec bound, a fixed rate or an activation constraint" if core else None)
     sink.emit("E401", message, where, label, secondary=secondary, notes=tuple(notes), help=help_)
+    return sink.items[0]
+
+
+def _holes_diagnostic(system: SystemModel, holes: tuple[Label, ...], reason: str | None,
+                      rejected: tuple[str, ...], blameless: bool) -> Diagnostic:
+    """E401 on the holes, when no statement is blamed (``unsat_diagnostic``): ``blameless`` when relaxing
+    every statement was shown not to help, else the search for the core did not finish."""
+    sink = DiagnosticSink()
+    notes = ["relaxing every tracked statement does not help: what conflicts is not a statement synth relaxes "
+              "(a deadline, a priority, a delay, a sporadic source)" if blameless else
+              "the search for the statements that conflict ran out of its budget"]
+    notes += [f"with every hole at its slowest value: {why}" for why in rejected[:5]]
+    message = (f"no configuration of `{system.name}` meets every constraint: {reason}" if reason else
+               f"no value of the holes of `{system.name}` gives a configuration the analysis accepts")
+    sink.emit("E401", message, holes[0].span, holes[0].message, secondary=holes[1:], notes=tuple(notes),
+              help="widen a hole's range, or change the deadlines, priorities or delays the notes name")
     return sink.items[0]
 
 

@@ -11,7 +11,6 @@ unsatisfiable, rebuild with tracked statements and explain (unsat core and repai
 """
 from __future__ import annotations
 
-import itertools
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
@@ -20,7 +19,7 @@ from typing import cast
 import z3
 
 from ..api import LoadResult
-from ..diagnostics import Diagnostic, DiagnosticSink
+from ..diagnostics import Diagnostic, DiagnosticSink, Label
 from ..model import SystemModel
 from ..resolve import SystemScope
 from ..source import Span
@@ -29,6 +28,7 @@ from ..units import fmt_time
 from .candidates import Candidate
 from .core import Explanation, explain_unsat, unsat_diagnostic
 from .encode import Encoding
+from .exhaust import EXHAUSTIVE_LIMIT, Enumerated, Key, enumerate_best, space
 from .problem import Config, Evaluation, Problem, build_problem
 from .solve import Budget, Engine, Objective, Outcome, lex_better, quick_answer
 from .statements import Statement
@@ -200,11 +200,39 @@ def synthesize(source: LoadResult | SystemModel, system: str | None = None, *,
             assert out.config is not None and out.evaluation is not None  # (a found configuration)
             return _answer(model, problem, goals, out.config, out.evaluation, not goals or out.status == "optimal",
                            stats)
-        if out.status == "unknown":
+        size = space(problem)
+        found = _exhaust(problem, goals, budget) if size <= EXHAUSTIVE_LIMIT else None
+        if found is not None:  # small: the analysis of every configuration decides it (specs/synthesis.md §7)
+            stats["enumerated"] = found.evaluated
+            stats["analyses"] = problem.analyses
+            if found.config is not None:
+                assert found.evaluation is not None  # (set with the configuration)
+                return _answer(model, problem, goals, found.config, found.evaluation, True, stats)
+            reason = f"the analysis rejects every one of the {size} candidate configurations"
+        elif out.status == "unknown":
             where = scope.system.name.span if scope is not None else model.span
             return _undecided(model, problem, goals, out, budget, stats, where)
-        reason = "no configuration meets every constraint"
+        else:
+            reason = "no configuration meets every constraint"
     return _unsat(model, scope, problem, goals, reason, budget, stats, explain)
+
+
+def goal_key(goals: Sequence[Goal]) -> Key:
+    """A configuration's objective values as a key, smaller is better (a "max" goal negated); None when
+    one is unbounded (no answer, as in ``Engine.run``)."""
+    def key(ev: Evaluation) -> tuple[Fraction, ...] | None:
+        values = [goal_value(g, ev.result) for g in goals]
+        if any(v is None for v in values):
+            return None
+        return tuple(cast(Fraction, v) if g.sense == "min" else -cast(Fraction, v) for g, v in zip(goals, values))
+    return key
+
+
+def _exhaust(problem: Problem, goals: Sequence[Goal], budget: Budget) -> Enumerated | None:
+    """Every configuration of the pruned ``problem`` analysed: the best accepted one by the objectives
+    (its ``config`` None when there is none); None when the wall-clock limit stopped it first."""
+    found = enumerate_best(problem, goal_key(goals), first=not goals, deadline=budget.deadline)
+    return found if found.complete else None
 
 
 def _engine_stats(engine: Engine, problem: Problem, budget: Budget) -> dict[str, int]:
@@ -271,9 +299,22 @@ def _unsat(model: SystemModel, scope: SystemScope | None, problem: Problem, goal
         assert expl.problem is not None  # (every explanation has its problem)
         stats["core_analyses"] = expl.problem.analyses
         stats["rlimit_used"] = budget.used
-    diag = unsat_diagnostic(model, expl if expl is not None and expl.status == "unsat" else None, reason)
+    found = expl if expl is not None and expl.status == "unsat" else None
+    diag = unsat_diagnostic(model, found, reason, *(_holes(model, problem) if found is None or not found.core
+                                                    else ((), ())))
     return SynthResult("unsat", model.name, tuple(goals), explanation=expl, reason=reason, diagnostics=(diag,),
                        stats=stats, problem=problem)
+
+
+def _holes(model: SystemModel, problem: Problem) -> tuple[tuple[Label, ...], tuple[str, ...]]:
+    """Labels on the holes (source order) and why the analysis rejects them all at their slowest, for an
+    E401 that no statement is blamed for (``core.unsat_diagnostic``)."""
+    holes = sorted(((ch.hole.span.file, ch.hole.span.line, ch.hole.span.column), tid, ch.hole.span)
+                   for tid, ch in problem.choices.items() if ch.hole is not None)
+    labels = tuple(Label(span, f"no value accepted (`{tid}`)") for _, tid, span in holes)
+    if not labels or any(not ch.candidates for ch in problem.choices.values()):
+        return labels, ()
+    return labels, problem.seed()[1].reasons
 
 
 # ================================================================== baseline
@@ -298,30 +339,12 @@ def brute_force(source: LoadResult | SystemModel, system: str | None = None, *,
     model, scope = _inputs(source, system, scope)
     goals = objective if isinstance(objective, list) else parse_objective(objective, model)
     problem = build_problem(model, scope, prune=prune)
-    names = list(problem.choices)
-    ranges = [range(len(problem.choices[n].candidates)) for n in names]
-    best: tuple[tuple[Fraction | None, ...], tuple[int, ...], tuple[Fraction | None, ...]] | None = None
-    count = 0
-    complete = True
-    for combo in itertools.product(*ranges):
-        if limit is not None and count >= limit:
-            complete = False
-            break
-        count += 1
-        ev = problem.evaluate(Config(tuple(zip(names, combo))))
-        if not ev.accepted:
-            continue
-        values = tuple(goal_value(g, ev.result) for g in goals)
-        # (slack, the one "max" goal: the configuration is accepted, so every spec holds and no margin is None)
-        key = tuple(v if g.sense == "min" else -cast(Fraction, v) for g, v in zip(goals, values))
-        if best is None or key < best[0]:
-            best = (key, combo, values)
-            if not goals:
-                break
-    if best is None:
-        return BruteResult("unsat" if complete else "limit", None, (), count, complete)
-    choices = {n: problem.choices[n].candidates[i] for n, i in zip(names, best[1])}
-    return BruteResult("sat", choices, best[2], count, complete)
+    found = enumerate_best(problem, goal_key(goals), first=not goals, limit=limit)
+    if found.config is None:
+        return BruteResult("unsat" if found.complete else "limit", None, (), found.evaluated, found.complete)
+    assert found.evaluation is not None  # (set with the configuration)
+    values = tuple(goal_value(g, found.evaluation.result) for g in goals)
+    return BruteResult("sat", problem.candidates(found.config), values, found.evaluated, found.complete)
 
 
 __all__ = ["BruteResult", "DEFAULT_RLIMIT", "Goal", "ObjectiveError", "SynthResult", "brute_force",

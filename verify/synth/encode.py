@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import math
 from fractions import Fraction
-from typing import TypeAlias
+from typing import TypeAlias, cast
 from collections.abc import Callable, Mapping
 
 import z3
@@ -36,6 +36,8 @@ from ..timebase import TimeBase
 from ..timing.chains import cascade_in_time, cascade_links, pair_shape, same_core_reason
 from ..timing.rta import cooperative_counts
 from .candidates import Choice
+from .floors import first_job_bounds
+from .scale import rate_scale, tick_of
 from .statements import Statement, statement_index
 from .structure import Structure, activation_options, member_links
 
@@ -45,65 +47,6 @@ Term: TypeAlias = "int | z3.ArithRef"
 Cond: TypeAlias = "bool | z3.BoolRef"
 #: a job's data ages at its release, its read (start) and its completion (specs/timing.md §7.7)
 Ages: TypeAlias = "tuple[Term, Term, Term]"
-
-
-# ================================================================== scale
-
-
-def problem_times(model: SystemModel, choices: Mapping[str, Choice]) -> list[Fraction]:
-    times: list[Fraction | None] = []
-    for t in model.tasks:
-        times += [t.wcet, t.bcet, t.deadline, t.wcrt_bound]
-        act = t.activation
-        if act.gaps is not None:
-            times += [*act.gaps, act.fixed_phase]
-    for lk in model.links:
-        times += [lk.delay_min, lk.delay_max]
-    for ch in model.chains:
-        times += [ch.reaction_time, ch.data_age, ch.jitter]
-    for ex in model.executors:  # (a multi-threaded executor's bounds divide work by its workers, §9.4)
-        if ex.multi_threaded:
-            times += [c / len(ex.workers) for t in model.callbacks(ex.name) for c in (t.wcet, t.bcet)]
-    for choice in choices.values():
-        for c in choice.candidates:
-            times += [c.period, c.phase]
-    return [x for x in times if x]
-
-
-def tick_of(model: SystemModel, choices: Mapping[str, Choice]) -> Fraction:
-    """The largest time of which every time of the problem is a whole multiple."""
-    return TimeBase.gcd_of(problem_times(model, choices), default=Fraction(1, 1000)).unit
-
-
-def rate_scale(model: SystemModel, choices: Mapping[str, Choice], structure: Structure, tick: Fraction) -> int:
-    """M: a common multiple of the denominators of every possible rate (per tick)."""
-    den: dict[str, int] = {}
-
-    def of(task: TaskModel) -> int:
-        value = 1
-        for _, act in activation_options(task, choices.get(task.id)):
-            if act.gaps is not None:
-                d = math.lcm(int(act.gaps[0] / tick), int(act.gaps[1] / tick))
-            elif act.trigger_port is not None:
-                d = act.release_every
-                for _, link in member_links(model, task, act):
-                    if link is not None:
-                        d = math.lcm(d, den.get(link.writer, 1) * act.release_every)
-            else:
-                d = 1
-            value = math.lcm(value, d)
-        return value
-
-    rounds = {tid: (len(structure.cyclic) + 1 if tid in structure.cyclic else 1) for tid in structure.order}
-    for _ in range(max(rounds.values(), default=1)):
-        for tid in structure.order:
-            if rounds[tid] > 0:
-                den[tid] = math.lcm(den.get(tid, 1), of(model.task(tid)))
-                rounds[tid] -= 1
-    scale = 1
-    for d in den.values():
-        scale = math.lcm(scale, d)
-    return scale
 
 
 # ================================================================== term helpers
@@ -143,6 +86,11 @@ class Terms:
         else:
             left = z3.Z3_mk_and(self._ref, len(pre), (z3.Ast * len(pre))(*(x.ast for x in pre)))
         return z3.BoolRef(z3.Z3_mk_implies(self._ref, left, then.ast), self.ctx)
+
+    def any_of(self, conds: list[z3.BoolRef]) -> z3.BoolRef:
+        """``Or(*conds)`` (two or more), as z3py builds it."""
+        args = (z3.Ast * len(conds))(*(c.ast for c in conds))
+        return z3.BoolRef(z3.Z3_mk_or(self._ref, len(conds), args), self.ctx)
 
     def at_least(self, x: z3.ArithRef, k: int) -> z3.BoolRef:
         """``x >= k`` for a Python int ``k``, as z3py builds it."""
@@ -232,6 +180,8 @@ class Encoding:
         self.ladders: dict[str, list[z3.BoolRef | None]] = {}
         self._floors: dict[str, Fraction] | None = None
         self._cooperative = cooperative_counts(model)
+        self._mins = 0
+        self._waits: dict[str, Term] = {}
         self._build()
 
     # -------------------------------------------------------------- basics
@@ -244,6 +194,13 @@ class Encoding:
     def ticks(self, x: Fraction) -> int:
         """``x`` in ticks of the problem (``verify.timebase``)."""
         return self.base.ticks(x)
+
+    def ticks_above(self, x: Fraction, strictly: bool = False) -> int:
+        """The least number of ticks at least ``x`` (more than ``x`` when ``strictly``): what an integer
+        ``v ≥ x`` (``v > x``) in ticks means, also for an ``x`` that is no whole number of ticks (a lemma's
+        value of an analysis whose bound divides by an executor's workers, or the deadline ``A⁺``)."""
+        q = x / self.tick
+        return math.floor(q) + 1 if strictly else math.ceil(q)
 
     def add(self, c: Cond) -> None:
         if c is True:
@@ -461,6 +418,12 @@ class Encoding:
         """W⁺ = max(A⁺, F)."""
         return self.t.max(self.a_max(tid), self.events[tid][2])
 
+    def late_wait(self, tid: str) -> Term:
+        """A term at least ``W⁺`` (one-sided, for latencies: ``greatest``), one per task."""
+        if tid not in self._waits:
+            self._waits[tid] = self.greatest(self.a_max(tid), self.events[tid][2])
+        return self._waits[tid]
+
     def _schedulable(self, task: TaskModel) -> None:
         """R ≤ deadline (E312): the given deadline, else A⁺."""
         if task.wcrt_bound is not None:
@@ -602,7 +565,7 @@ class Encoding:
     def _chain(self, chain: ChainModel) -> None:
         t = self.t
         first = chain.tasks[0]
-        reaction = [t.add(self.wait(first), self.R[first])]
+        reaction = [t.add(self.late_wait(first), self.R[first])]
         # the reduced data age counts from τ₁'s read, its stamp: its job's release and read ages are 0
         ages: Ages = (0, 0, self._completion(first, 0, 0))
         for n, hop in enumerate(chain.hops):
@@ -624,10 +587,42 @@ class Encoding:
                 self.guard(st.key, t.le(totals[st.spec_kind], bound))  # type: ignore[index]
 
     def _named(self, name: str, term: Term) -> Term:
+        """A variable at least ``term`` (a latency: only its least value matters, §3)."""
         if isinstance(term, int):
             return term
         var = z3.Int(name, self.ctx)
-        self.add(self.t.eq(var, term))
+        self.add(self.t.ge(var, term))
+        return var
+
+    def least(self, *terms: Term) -> Term:
+        """A term at least the least of ``terms``: a fresh variable ``v`` with ``v ≥ a ∨ v ≥ b ∨ …``
+        (specs/synthesis.md §3). Latencies are monotone — a larger term never makes a chain bound
+        smaller — so where only the least value of a latency matters (specs, objectives) this one-sided
+        minimum keeps every configuration at its exact bound, without the case split of an
+        ``if-then-else`` in both directions."""
+        numbers = [x for x in terms if isinstance(x, int)]
+        alternatives: list[Term] = [x for x in terms if not isinstance(x, int)]
+        if numbers:
+            alternatives.append(min(numbers))
+        if len(alternatives) == 1:
+            return alternatives[0]
+        self._mins += 1
+        var = z3.Int(f"min|{self._mins}", self.ctx)
+        self.add(self.t.any_of([cast(z3.BoolRef, self.t.ge(var, x)) for x in alternatives]))  # (of a variable)
+        return var
+
+    def greatest(self, *terms: Term) -> Term:
+        """A term at least the greatest of ``terms`` (one-sided, as ``least``): ``v ≥ a ∧ v ≥ b ∧ …``."""
+        numbers = [x for x in terms if isinstance(x, int)]
+        rest: list[Term] = [x for x in terms if not isinstance(x, int)]
+        if not rest:
+            return max(numbers)
+        if len(rest) == 1 and not numbers:
+            return rest[0]
+        self._mins += 1
+        var = z3.Int(f"max|{self._mins}", self.ctx)
+        for x in rest + ([max(numbers)] if numbers else []):
+            self.add(self.t.ge(var, x))
         return var
 
     def span(self, tid: str) -> Term:
@@ -657,10 +652,7 @@ class Encoding:
     def _completion(self, tid: str, release: Term, read: Term, *more: Term) -> Term:
         """The completion age of a job of ``tid`` from its release and read ages (rule (7.7a)), or ``more``."""
         t = self.t
-        out = t.min(t.add(release, self.R[tid]), t.add(read, self.span(tid)))
-        for x in more:
-            out = t.min(out, x)
-        return out
+        return self.least(t.add(release, self.R[tid]), t.add(read, self.span(tid)), *more)
 
     def _hop(self, chain: str, n: int, hop: HopModel, ages: Ages) -> tuple[Term, Ages]:
         """(reaction term, the reader's ages) of one hop, by the reader's activation (§7.3, §7.7)."""
@@ -676,9 +668,9 @@ class Encoding:
         new = tuple(z3.Int(f"age|{chain}|{n}|{x}", self.ctx) for x in names)
         for index, (r, out) in terms:  # (several options: the candidates of a choice, each with its index)
             sel = self.sel[reader.id][index]  # type: ignore[index]
-            self.guard(None, self.t.eq(hr, r), sel)
+            self.guard(None, self.t.ge(hr, r), sel)
             for var, value in zip(new, out):
-                self.guard(None, self.t.eq(var, value), sel)
+                self.guard(None, self.t.ge(var, value), sel)
         return hr, (new[0], new[1], new[2])
 
     def _hop_terms(self, hop: HopModel, act: Activation, ages: Ages) -> tuple[Term, Ages]:
@@ -687,12 +679,12 @@ class Encoding:
         p, i = hop.writer, hop.reader
         release, read, completion = ages
         d = self.ticks(hop.link.delay_max) if hop.link.delay_max else 0
-        register_r = t.add(d, self.wait(i), self.R[i])
+        register_r = t.add(d, self.late_wait(i), self.R[i])
         register_a = t.add(d, self.a_max(p), self.R[p])
         read_term = register_a
         if same_core_reason(self.model, hop) is None:
-            read_term = t.min(register_a, self.a_max(p))
-        new_read = t.add(t.min(t.min(release, read), completion), read_term)
+            read_term = self.least(register_a, self.a_max(p))
+        new_read = t.add(self.least(release, read, completion), read_term)
         new_release = new_read
         member = hop.link.target.split(".", 1)[1]
         if not act.listens_to(member):
@@ -706,13 +698,13 @@ class Encoding:
             else:
                 wait = 0
                 trig = t.add(d, self._delta_plus(p, k), self.R[i])
-            reaction = self._same_core(hop, t.min(trig, register_r))
+            reaction = self._same_core(hop, self.least(trig, register_r))
             if act.mode != "or":  # the data trigger (7.7b) and the AND join age (7.7c)
-                for age, writer in ((release, self.R[p]), (read, self.span(p)), (completion, 0)):
-                    new_release = t.min(new_release, t.add(age, d, writer, wait))
+                new_release = self.least(new_release, *(t.add(age, d, writer, wait) for age, writer in (
+                    (release, self.R[p]), (read, self.span(p)), (completion, 0))))
         pair = []
         if pair_shape(self.model, hop, act, self._cooperative):
-            pair.append(t.add(read, t.min(self._pair(hop), t.add(self.span(p), self.R[i]))))
+            pair.append(t.add(read, self.least(self._pair(hop), t.add(self.span(p), self.R[i]))))
         return reaction, (new_release, new_read, self._completion(i, new_release, new_read, *pair))
 
     def _same_core(self, hop: HopModel, reaction: Term) -> Term:
@@ -722,7 +714,7 @@ class Encoding:
         if same_core_reason(self.model, hop) is not None:
             return reaction
         t, p, i = self.t, hop.writer, hop.reader
-        return t.min(reaction, t.add(self.wait(i), self.R[i], t.mul(-1, self.R[p])))
+        return self.least(reaction, t.add(self.late_wait(i), self.R[i], t.mul(-1, self.R[p])))
 
     def _delta_plus(self, writer: str, k: int) -> Term:
         """δ⁺ₚ(k) = 0 for k = 1, else (k−1)·P⁺ₚ + J⁺ₚ + Rₚ − Bₚ."""
@@ -740,11 +732,21 @@ class Encoding:
         """``maxₘ W⁺ₘ`` of the other members, 0 where they are fresh by (7.3e) (``_cascade``)."""
         t = self.t
         member = hop.link.target.split(".", 1)[1]
-        wait = 0
+        waits: list[Term] = []
         for m, (aP, aJ, aF) in self._and_arrivals(hop, act):
             if m != member:
-                wait = t.max(wait, t.max(t.add(aP, aJ), aF))
-        return t.ite(self._cascade(hop, act), 0, wait)
+                waits += [t.add(aP, aJ), aF]
+        cascade = self._cascade(hop, act)
+        if cascade is True or not waits:
+            return 0
+        if cascade is False:
+            return self.greatest(*waits)
+        self._mins += 1
+        var = z3.Int(f"wait|{self._mins}", self.ctx)
+        self.add(self.t.ge(var, 0))
+        for x in waits:
+            self.add(z3.Or(cascade, self.t.ge(var, x)))
+        return var
 
     def _cascade(self, hop: HopModel, act: DataTriggered) -> Cond:
         """Whether the AND join ``act`` is one of a cascade whose other members are fresh when this hop's
@@ -776,9 +778,7 @@ class Encoding:
         if k == 1:
             return 0
         t = self.t
-        gap = None
-        for _, (aP, aJ, _) in self._and_arrivals(hop, act):
-            gap = t.add(aP, aJ) if gap is None else t.max(gap, t.add(aP, aJ))
+        gap = self.greatest(*(t.add(aP, aJ) for _, (aP, aJ, _) in self._and_arrivals(hop, act)))
         return t.mul(k - 1, gap)
 
 
@@ -796,91 +796,6 @@ def _any(conds: list[Cond]) -> Cond:
         return True
     rest = [c for c in conds if c is not False]
     return False if not rest else rest[0] if len(rest) == 1 else z3.Or(*rest)
-
-
-def first_job_bounds(model: SystemModel, choices: Mapping[str, Choice], *,
-                     relaxed: bool = False) -> dict[str, Fraction]:
-    """A response-time lower bound per task, valid in every configuration: the first job of the
-    level-i busy window (specs/timing.md §6.2), ``w = C + Σ_{hp} η·C`` with ``η = ⌈w / T_max⌉`` for
-    an interferer that is a timer in every configuration (``T_max`` its longest candidate period) and
-    1 otherwise (every interferer is activated at least once in a window, and a causal cap is at
-    least 1), and 0 for a task on its pipeline path in some configuration (``_possible_upstream``:
-    the pipeline release offsets of §6.2 may leave it no job in the window). For a callback of an
-    executor, every bound of §9.3 counts each other callback of its executor and each higher thread at
-    least once: ``C + Σ C``; of a multi-threaded one, ``multi_threaded_floor``. ``relaxed`` (tracked
-    problems): an execution time may fall to ``bcet`` and a task may leave its core, so only the
-    task's own ``bcet`` is certain."""
-    if relaxed:
-        return {t.id: t.bcet for t in model.tasks}
-    out: dict[str, Fraction] = {}
-    by_core: dict[str, list[TaskModel]] = {}
-    for t in model.tasks:
-        by_core.setdefault(t.core, []).append(t)
-    for tasks in by_core.values():
-        cost = [t.bcet if relaxed else t.wcet for t in tasks]
-        periods = []
-        for t in tasks:
-            acts = [a for _, a in activation_options(t, choices.get(t.id))]
-            periods.append(max(a.strict_period for a in acts)  # type: ignore[type-var]  # (none is None)
-                           if all(a.strict_period is not None for a in acts) else None)
-        scale = 1
-        for x in cost + [p for p in periods if p is not None]:
-            scale = math.lcm(scale, x.denominator)
-        c = [int(x * scale) for x in cost]
-        per = [int(p * scale) if p is not None else None for p in periods]
-        limit = max([p for p in per if p is not None], default=scale) * 1000
-        for n, t in enumerate(tasks):
-            if t.executor is not None and model.executor(t.executor).multi_threaded:
-                out[t.id] = multi_threaded_floor(model, t)
-                continue
-            if t.executor is not None:  # a callback (§9.3): each other callback and higher thread once
-                others = [m for m, o in enumerate(tasks) if m != n and (o.priority > t.priority
-                                                                      or o.executor == t.executor)]
-                out[t.id] = Fraction(c[n] + sum(c[m] for m in others), scale)
-                continue
-            # (a task upstream of t on a pipeline may have no job in the window: timing.pipeline)
-            ahead = _possible_upstream(model, choices, t)
-            hp = [m for m, o in enumerate(tasks) if m != n and o.priority >= t.priority and o.id not in ahead]
-            w = c[n] + sum(c[m] for m in hp)
-            for _ in range(1000):
-                new = c[n] + sum(c[m] * (-(-w // per[m]) if per[m] else 1) for m in hp)  # type: ignore[operator, misc]  # per[m] is set
-                if new == w or new > limit:
-                    break
-                w = new
-            out[t.id] = Fraction(max(w, c[n]), scale)
-    return out
-
-
-def multi_threaded_floor(model: SystemModel, task: TaskModel) -> Fraction:
-    """A lower bound of the bound of §9.4 for a callback of a multi-threaded executor, in every
-    configuration: ``Cᵢ + B + (the m largest C)/m`` (the jobs of the window's other callbacks are not
-    certain: a callback may be silent)."""
-    from ..timing.multithreaded import carry_in, group_blocking
-
-    executor = model.executor(task.executor)  # type: ignore[arg-type]  # (a callback)
-    blocking, _ = group_blocking(model, task, executor)
-    workers = len(executor.workers)
-    return task.wcet + (blocking or Fraction(0)) + carry_in(model, model.callbacks(executor.name), workers) / workers
-
-
-def _possible_upstream(model: SystemModel, choices: Mapping[str, Choice], task: TaskModel) -> set[str]:
-    """The tasks that are on ``task``'s pipeline path (``verify.timing.pipeline.upstream``) in some
-    configuration: writers reached back through single-port triggers of any candidate, without delay,
-    on ``task``'s core at a higher priority (a superset: tokens and the depth limit are ignored)."""
-    found: set[str] = set()
-    todo = [task]
-    while todo:
-        reader = todo.pop()
-        for _, act in activation_options(reader, choices.get(reader.id)):
-            port = act.single_port
-            link = None if port is None else model.link_into(f"{reader.instance}.{port}")
-            if link is None or link.delay_max != 0 or link.writer in found:
-                continue
-            writer = model.task(link.writer)
-            if writer.core == task.core and writer.priority > task.priority:
-                found.add(writer.id)
-                todo.append(writer)
-    return found
 
 
 def _lt_pair(t: Terms, a: tuple[Term, Term], b: tuple[Term, Term]) -> Cond:

@@ -187,7 +187,7 @@ class Pruner:
     def _schedulability(self) -> set[tuple[str, int]]:
         """A timer candidate whose period (its default deadline) is below the first-job bound of its
         busy window goes (E312); a task whose given deadline is below it makes the problem infeasible."""
-        from .encode import first_job_bounds
+        from .floors import first_job_bounds
 
         dead: set[tuple[str, int]] = set()
         floors = first_job_bounds(self.model, self.choices)
@@ -379,7 +379,7 @@ class ChainLowerBound:
             first, last = self.chain.tasks[0], self.chain.tasks[-1]
             if self.kind == "reaction":
                 return p_min(first) + _r_min(model.task(first))
-            return _r_min(model.task(last))
+            return model.task(last).wcet
         hop = self.chain.hops[n - 1]
         member = hop.link.target.split(".", 1)[1]
         waits, same_core_waits = [], []
@@ -391,10 +391,13 @@ class ChainLowerBound:
                 else:
                     waits.append(ZERO if triggered else pm)
                 same_core_waits.append(ZERO if act.trigger_port is not None else pm)
-            else:
-                waits.append(ZERO if triggered and act.single_port is not None else p_min(hop.writer))
-        end = hop.reader if self.kind == "reaction" else hop.writer
-        lower = hop.link.delay_max + _r_min(model.task(end)) + min(waits)
+            else:  # a data trigger (7.7b) waits for nothing; an AND join (7.7c) may not (7.3e)
+                joins_or = isinstance(act, DataTriggered) and act.mode == "or"
+                waits.append(ZERO if triggered and not joins_or else p_min(hop.writer))
+        if self.kind == "reaction":
+            lower = hop.link.delay_max + _r_min(model.task(hop.reader)) + min(waits)
+        else:  # (§7.7: a completion age may count E ≥ C⁺ rather than R from the job's read)
+            lower = hop.link.delay_max + model.task(hop.writer).wcet + min(waits)
         if self.same_core[n - 1]:
             lower = min(lower, self._same_core_term(hop, min(same_core_waits) if same_core_waits else ZERO,
                                                     p_min(hop.writer)))

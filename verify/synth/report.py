@@ -96,7 +96,8 @@ def to_text(result: SynthResult) -> str:
     stats = result.stats
     lines.append(f"search     {stats.get('candidates', 0)} candidate values ({stats.get('pruned', 0)} pruned), "
                  f"{stats.get('solver_calls', 0)} solver calls, {stats.get('analyses', 0)} analyses, "
-                 f"{stats.get('lemmas', 0)} lemmas, rlimit {stats.get('rlimit_used', 0)}")
+                 f"{stats.get('lemmas', 0)} lemmas, rlimit {stats.get('rlimit_used', 0)}"
+                 + (f", {stats['enumerated']} configurations enumerated" if "enumerated" in stats else ""))
     return "\n".join(lines) + "\n"
 
 
