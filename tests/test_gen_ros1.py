@@ -298,3 +298,34 @@ def test_binding_a_type_changes_no_other_file_than_its_users(tmp_path):
     bound = _generated(tmp_path / "navigation.vfy")
     changed = {p for p in plain if plain[p] != bound[p]}
     assert changed == {"CMakeLists.txt", "package.xml", "glue/Mapper.hpp", "glue/Planner.hpp", "user/types/GridMap.hpp"}
+
+
+@pytest.mark.slow
+def test_a_user_header_that_no_longer_names_the_bound_message_stops_the_build(tmp_path, capsys):
+    """A type header written before the type was bound (bytes) is the user's and stays; the glue's
+    compile-time check says what to do instead of letting the nodes send bytes where a message is due."""
+    import subprocess
+
+    from .conftest import in_ci
+
+    if shutil.which("g++") is None or not Path("/usr/include/sensor_msgs/LaserScan.h").is_file():
+        if in_ci():
+            pytest.fail("g++ or ROS 1's sensor_msgs missing (scripts/install-tools installs them)")
+        pytest.skip("g++ or ROS 1's sensor_msgs missing")
+    project = tmp_path / "out"
+    assert main(["gen", "ros1", str(NAVIGATION / "navigation-ros.vfy"), "-o", str(project)]) == 0
+    header = project / "user" / "types" / "LaserScan.hpp"
+    header.write_text(_generated(NAVIGATION / "navigation.vfy")["user/types/LaserScan.hpp"], encoding="utf-8")
+
+    def syntax_check() -> subprocess.CompletedProcess[str]:
+        return subprocess.run(["g++", "-std=c++17", "-fsyntax-only", f"-I{project / 'include'}", f"-I{project}",
+                               f"-I{project / 'user'}", str(project / "glue" / "Laser_main.cpp")],
+                              capture_output=True, text=True, timeout=600)
+
+    stale = syntax_check()
+    assert stale.returncode != 0
+    assert ("message type LaserScan is bound to sensor_msgs/LaserScan in the model: user/types/LaserScan.hpp "
+            "must name it (delete the file and regenerate)") in stale.stderr
+    header.unlink()
+    assert main(["gen", "ros1", str(NAVIGATION / "navigation-ros.vfy"), "-o", str(project)]) == 0
+    assert syntax_check().returncode == 0, "regenerated, the header names the message"

@@ -263,6 +263,12 @@ def _includes(comp: ComponentModel) -> list[str]:
     return [f'#include "types/{cpp(t)}.hpp"' for t in sorted({p.message_type for p in comp.ports})]
 
 
+def _message_includes(comp: ComponentModel, messages: dict[str, MessageModel]) -> list[str]:
+    """The headers of the ROS messages the component's bound types are (the glue names them itself)."""
+    bound = {messages[p.message_type] for p in comp.ports if p.message_type in messages}
+    return sorted(f"#include <{m.package}/{m.type}.h>" for m in bound)
+
+
 def _bound_checks(comp: ComponentModel, messages: dict[str, MessageModel]) -> list[str]:
     """A compile-time check per bound type: its user header (written once) still names its ROS message."""
     lines = []
@@ -280,7 +286,7 @@ def _glue_class(comp: ComponentModel, messages: dict[str, MessageModel]) -> str:
              "// activation and communication semantics of specs/timing.md (specs/codegen.md). The functional",
              f"// code is the user's, in user/{name}.hpp.",
              "#pragma once", "", "#include <mutex>", "#include <utility>", "",
-             '#include "verify_ros1/runtime.hpp"', *_includes(comp), "",
+             '#include "verify_ros1/runtime.hpp"', *_message_includes(comp, messages), *_includes(comp), "",
              *(_bound_checks(comp, messages) + [""] if _bound_checks(comp, messages) else []),
              "namespace verify_gen {", "namespace glue {", "",
              f"class {name} : public verify_ros1::Component {{", " public:",
