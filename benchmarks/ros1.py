@@ -2,12 +2,12 @@
 
 ``ros1-monitor`` measures two things and sets them side by side:
 - the monitors' own work, in a C++ micro-benchmark of the runtime library (``ros1_monitor_cost.cpp``):
-  per chain hop (taking the stamp from the input, passing it on, its bytes in the envelope, encoded and
-  decoded) and per chain end (``ChainMonitor::on_end``), each against the same work without a chain;
+  per chain hop (taking the stamp from the input, passing it on, its bytes in the message's out-of-band
+  record, encoded and decoded) and per chain end (``ChainMonitor::on_end``), each against the same work without a chain;
 - the middleware's own per-message latency, from a live run of a generated pipeline (a 100 Hz source,
   two relays and a sink on two cores, one chain through all): the time from a writer job's completion to
   the release of the reader job it triggers, from the job records, once with monitors (``monitor:=true``)
-  and once without (``monitor:=false``: no stamps, no monitors).
+  and once without (``monitor:=false``: no records beside the messages, no stamps, no monitors).
 The goal: the monitors' work per hop under 5 % of the middleware's median per-message latency.
 The project is generated and built once (untimed) in ``benchmarks/out/ros1-pipeline``.
 """

@@ -1,9 +1,10 @@
 // The monitors' own work per chain hop and per chain end, in ns (benchmarks/ros1.py, stage
 // ros1-monitor): what a job does with monitoring on and does not do with it off.
 //   hop: hold() takes the stamp from the input and passes it on, stamps_for() picks it for the
-//        out-port, and its 20 bytes are encoded into the envelope and decoded by the reader;
+//        out-port, and its 20 bytes are encoded into the message's out-of-band record and decoded by
+//        the reader (specs/codegen.md §6);
 //   end: ChainMonitor::on_end (data age, reaction time, jitter, spec checks).
-// The baseline of each is the same work with no chain role (an envelope without stamps).
+// The baseline of each is the same work with no chain role (a record without stamps).
 // Prints one JSON object.
 #include <chrono>
 #include <cstdint>
@@ -39,7 +40,6 @@ double per_iteration(int n, bool with_stamps) {
     verify_ros1::Envelope e;
     e.seq = static_cast<std::uint64_t>(i);
     e.stamps = job.stamps_for("out");
-    e.payload.assign(16, 7);
     verify_ros1::encode(e, buffer);
     verify_ros1::decode(buffer.data(), buffer.size(), decoded);
     g_sink = g_sink + decoded.stamps.size();

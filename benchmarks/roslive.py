@@ -25,12 +25,17 @@ RECORDER = ROOT / "tests" / "ros" / "record.py"
 
 def missing_tools() -> list[str]:
     """What building and running needs and this machine lacks (scripts/install-tools installs it)."""
-    missing = [tool for tool in ("cmake", "g++", "roscore", "roslaunch") if shutil.which(tool) is None]
-    if not os.path.exists("/usr/include/ros/ros.h"):
-        missing.append("libroscpp-dev")
-    if not os.path.exists(SYSTEM_PYTHON) or subprocess.run([SYSTEM_PYTHON, "-c", "import rospy"],
-                                                           capture_output=True).returncode != 0:
-        missing.append("python3-rospy")
+    missing = [tool for tool in ("cmake", "g++", "roscore", "roslaunch", "rosbag") if shutil.which(tool) is None]
+    missing += [package for header, package in (("ros/ros.h", "libroscpp-dev"),
+                                                ("sensor_msgs/LaserScan.h", "libsensor-msgs-dev"),
+                                                ("geometry_msgs/Twist.h", "libgeometry-msgs-dev"),
+                                                ("nav_msgs/Path.h", "libnav-msgs-dev"))
+                if not os.path.exists(f"/usr/include/{header}")]
+    for module, package in (("rospy", "python3-rospy"), ("rosbag", "python3-rosbag"),
+                            ("sensor_msgs.msg", "python3-sensor-msgs"), ("nav_msgs.msg", "python3-nav-msgs")):
+        if not os.path.exists(SYSTEM_PYTHON) or subprocess.run([SYSTEM_PYTHON, "-c", f"import {module}"],
+                                                               capture_output=True).returncode != 0:
+            missing.append(package)
     return missing
 
 
@@ -148,22 +153,21 @@ def jobs(records: list[dict[str, object]]) -> list[dict[str, object]]:
     return [json.loads(str(r["data"])) for r in records if r["topic"] == "/verify/jobs"]
 
 
-def decode_message(hex_bytes: str) -> dict[str, object]:
-    """A data message as recorded: an std_msgs/UInt8MultiArray (an empty layout) holding an envelope
-    (specs/codegen.md, "The envelope")."""
+def decode_record(hex_bytes: str) -> dict[str, object]:
+    """A record as recorded on TOPIC/verify: an std_msgs/UInt8MultiArray (an empty layout) holding the
+    out-of-band record of a message (specs/codegen.md §6)."""
     raw = bytes.fromhex(hex_bytes)
     (dims,) = struct.unpack_from("<I", raw, 0)
     assert dims == 0
     (_offset, length) = struct.unpack_from("<II", raw, 4)
     data = raw[12:12 + length]
-    assert len(data) == length and data[:4] == b"VFY1"
-    seq, release, start, finish, event, n = struct.unpack_from("<QqqqQH", data, 4)
-    at = 4 + 42
+    assert len(data) == length and data[:4] == b"VFY2"
+    index, seq, release, start, finish, event, n = struct.unpack_from("<QQqqqQH", data, 4)
+    at = 4 + 50
     stamps = []
     for _ in range(n):
         stamps.append(struct.unpack_from("<HHqq", data, at))
         at += 20
-    (m,) = struct.unpack_from("<I", data, at)
-    assert at + 4 + m == len(data)
-    return {"seq": seq, "release": release, "start": start, "finish": finish, "event": event,
-            "stamps": stamps, "payload": data[at + 4:]}
+    assert at == len(data)
+    return {"index": index, "seq": seq, "release": release, "start": start, "finish": finish, "event": event,
+            "stamps": stamps}

@@ -6,12 +6,13 @@ from __future__ import annotations
 
 import pytest
 
-from benchmarks.roslive import build, burn_execution_times, decode_message, jobs, master, recorded, run_system
+from benchmarks.roslive import (RECORDER, SYSTEM_PYTHON, build, burn_execution_times, decode_record, jobs, master,
+                               recorded, run_system)
 
 from .conftest import in_ci
 
-__all__ = ["build", "burn_execution_times", "decode_message", "jobs", "master", "recorded", "require_ros",
-           "run_system"]
+__all__ = ["RECORDER", "SYSTEM_PYTHON", "build", "burn_execution_times", "decode_record", "jobs", "master", "recorded",
+           "require_ros", "run_system"]
 
 
 def require_ros() -> None:

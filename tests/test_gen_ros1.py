@@ -209,7 +209,7 @@ system Tricky {
 
 def test_the_monitor_library_works_from_hand_written_code(tmp_path):
     """tests/ros/monitor_check.cpp uses only monitor.hpp and envelope.hpp (no ROS, no generated code):
-    known answers of the chain monitor and the envelope's round trip, built with -Wall -Wextra -Werror."""
+    known answers of the chain monitor and the out-of-band record's round trip, built with -Wall -Wextra -Werror."""
     import shutil
     import subprocess
 
@@ -258,3 +258,77 @@ def test_a_system_with_ros2_executors_is_refused_and_nothing_is_written(tmp_path
     err = capsys.readouterr().err
     assert err.count("error[E602]: executor `") == 4 and "autoware-executors.vfy:16:3" in err
     assert not out.exists()
+
+
+# ------------------------------------------------------------------ message types bound to ROS messages
+
+
+def _generated(path: Path) -> dict[str, str]:
+    return {f.path: f.text for f in ros1.generate(verify.load(str(path)).system(None)).files}
+
+
+def test_a_bound_type_is_its_ros_message_in_the_user_header_the_glue_and_the_build():
+    files = _generated(NAVIGATION / "navigation-ros.vfy")
+    scan = files["user/types/LaserScan.hpp"]
+    assert "#include <sensor_msgs/LaserScan.h>" in scan and "using LaserScan = ::sensor_msgs::LaserScan;" in scan
+    glue = files["glue/ObstacleAvoidance.hpp"]
+    assert "verify_ros1::InPort<msg::LaserScan, ::sensor_msgs::LaserScan> port_scan_" in glue
+    assert "verify_ros1::OutPort<msg::Velocity, ::geometry_msgs::Twist> port_navvel_" in glue
+    assert "static_assert(std::is_same<verify_gen::msg::LaserScan, ::sensor_msgs::LaserScan>::value," in glue
+    cmake = files["CMakeLists.txt"]
+    assert "find_path(VERIFY_MSG_sensor_msgs sensor_msgs/LaserScan.h REQUIRED)" in cmake
+    assert "${VERIFY_MSG_nav_msgs}" in cmake and "find_package(nav_msgs" not in cmake  # (its config needs catkin)
+    assert all(f"<depend>{p}</depend>" in files["package.xml"] for p in ("geometry_msgs", "nav_msgs", "sensor_msgs"))
+    params = files["config/parameters.yaml"]
+    assert '    sources:  # the node of the model that writes it (its messages carry records)\n      "odom": ' \
+           '"/Navigation/base"' in params
+
+
+def test_an_unbound_type_stays_bytes_on_the_wire():
+    files = _generated(NAVIGATION / "navigation.vfy")
+    assert "using LaserScan = std::vector<std::uint8_t>;" in files["user/types/LaserScan.hpp"]
+    glue = files["glue/ObstacleAvoidance.hpp"]
+    assert "verify_ros1::InPort<msg::LaserScan, verify_ros1::Bytes> port_scan_" in glue
+    assert "static_assert" not in glue and "VERIFY_MSG" not in files["CMakeLists.txt"]
+
+
+def test_binding_a_type_changes_no_other_file_than_its_users(tmp_path):
+    """Only the glue of the components that use the type, the build and the new type header differ."""
+    plain = _generated(NAVIGATION / "navigation.vfy")
+    (tmp_path / "components.vfy").write_text((NAVIGATION / "components.vfy").read_text(encoding="utf-8"))
+    text = (NAVIGATION / "navigation.vfy").read_text(encoding="utf-8")
+    (tmp_path / "navigation.vfy").write_text(text + 'message GridMap = ros "nav_msgs/OccupancyGrid"\n')
+    bound = _generated(tmp_path / "navigation.vfy")
+    changed = {p for p in plain if plain[p] != bound[p]}
+    assert changed == {"CMakeLists.txt", "package.xml", "glue/Mapper.hpp", "glue/Planner.hpp", "user/types/GridMap.hpp"}
+
+
+@pytest.mark.slow
+def test_a_user_header_that_no_longer_names_the_bound_message_stops_the_build(tmp_path, capsys):
+    """A type header written before the type was bound (bytes) is the user's and stays; the glue's
+    compile-time check says what to do instead of letting the nodes send bytes where a message is due."""
+    import subprocess
+
+    from .conftest import in_ci
+
+    if shutil.which("g++") is None or not Path("/usr/include/sensor_msgs/LaserScan.h").is_file():
+        if in_ci():
+            pytest.fail("g++ or ROS 1's sensor_msgs missing (scripts/install-tools installs them)")
+        pytest.skip("g++ or ROS 1's sensor_msgs missing")
+    project = tmp_path / "out"
+    assert main(["gen", "ros1", str(NAVIGATION / "navigation-ros.vfy"), "-o", str(project)]) == 0
+    header = project / "user" / "types" / "LaserScan.hpp"
+    header.write_text(_generated(NAVIGATION / "navigation.vfy")["user/types/LaserScan.hpp"], encoding="utf-8")
+
+    def syntax_check() -> subprocess.CompletedProcess[str]:
+        return subprocess.run(["g++", "-std=c++17", "-fsyntax-only", f"-I{project / 'include'}", f"-I{project}",
+                               f"-I{project / 'user'}", str(project / "glue" / "Laser_main.cpp")],
+                              capture_output=True, text=True, timeout=600)
+
+    stale = syntax_check()
+    assert stale.returncode != 0
+    assert ("message type LaserScan is bound to sensor_msgs/LaserScan in the model: user/types/LaserScan.hpp "
+            "must name it (delete the file and regenerate)") in stale.stderr
+    header.unlink()
+    assert main(["gen", "ros1", str(NAVIGATION / "navigation-ros.vfy"), "-o", str(project)]) == 0
+    assert syntax_check().returncode == 0, "regenerated, the header names the message"

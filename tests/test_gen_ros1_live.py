@@ -1,8 +1,10 @@
 """The generated ROS 1 nodes of the navigation example, built and run for real (issue: model to robot).
 
-The project is generated, its skeletons filled with jobs that burn each task's worst-case execution
-time, built with CMake against Debian's ROS 1, and run for about 10 s on a private roscore with a
-recorder beside it. From the recorded job records and messages the tests check the semantics the
+The project of examples/navigation/navigation-ros.vfy (its message types bound to ROS messages) is
+generated, its skeletons filled with jobs that burn each task's worst-case execution time, built with
+CMake against Debian's ROS 1, and run for about 10 s on a private roscore with a recorder, a stock
+subscriber and `rosbag record` beside it. A bag of sensor_msgs/LaserScan made here drives the obstacle
+avoidance in its laser's place. From the recorded job records and messages the tests check the semantics the
 analysis assumed (every k-th arrival, timer rates), that no observed latency exceeds the bound
 `analyze` gives, and that the monitors' summaries agree with what was recorded. A variant whose spec
 is too tight makes the monitor report the violation; it changes only the parameter file, so the
@@ -11,8 +13,8 @@ nodes are not rebuilt.
 from __future__ import annotations
 
 import json
-import re
 import shutil
+import subprocess
 from fractions import Fraction
 from pathlib import Path
 
@@ -29,29 +31,34 @@ from .conftest import EXAMPLES
 pytestmark = pytest.mark.slow
 
 NAVIGATION = EXAMPLES / "navigation"
+MODEL = "navigation-ros.vfy"  # (its connections have the middleware's delay: TCPROS on loopback)
 RUN_SECONDS = 10
-#: what a connection through TCPROS on loopback takes, from the writer's completion to the reader's
-#: release (measured here: at most about 1 ms), for the connections the example gives no delay
-MIDDLEWARE_DELAY = "delay 50 us .. 2 ms"
 #: the share of each task's WCET its functional code burns: the rest is left for the glue's own work
 #: and the middleware's threads, which run above every task (specs/codegen.md, "Execution times")
 BURN_SHARE = Fraction(4, 5)
 
 
-def _deployed(model_dir: Path) -> None:
-    """The example as deployed on ROS 1: every connection without a delay gets the middleware's."""
-    path = model_dir / "navigation.vfy"
-    lines = path.read_text(encoding="utf-8").splitlines(keepends=True)
-    path.write_text("".join(re.sub(r"^(\s*connect [\w.]+ -> [\w.]+)(\s*)$", rf"\1 {MIDDLEWARE_DELAY}\2", line)
-                            for line in lines), encoding="utf-8")
-
-
 def _generate(model_dir: Path, project: Path) -> int:
-    return main(["gen", "ros1", str(model_dir / "navigation.vfy"), "-o", str(project)])
+    return main(["gen", "ros1", str(model_dir / MODEL), "-o", str(project)])
 
 
 def _model(model_dir: Path):
-    return verify.load(str(model_dir / "navigation.vfy")).system(None)
+    return verify.load(str(model_dir / MODEL)).system(None)
+
+
+def _data_topics(model) -> dict[str, str]:
+    """Every out-port's topic, with the ROS type of its message (``verify_ros1::Bytes`` when unbound)."""
+    out = {}
+    for port in model.ports:
+        if port.direction == "out":
+            message = model.message(port.message_type)
+            out[f"/{model.name}/{port.id.replace('.', '/')}"] = message.ros1 if message else "std_msgs/UInt8MultiArray"
+    return out
+
+
+def _records(live, topic: str) -> list[dict]:
+    """The out-of-band records of the messages on ``topic``, as recorded (TOPIC/verify)."""
+    return [rosrun.decode_record(str(r["hex"])) for r in live["records"] if r["topic"] == f"{topic}/verify"]
 
 
 @pytest.fixture(scope="module")
@@ -61,23 +68,34 @@ def live(tmp_path_factory):
     base = tmp_path_factory.mktemp("ros1")
     model_dir = base / "model"
     shutil.copytree(NAVIGATION, model_dir)
-    _deployed(model_dir)
     project = base / "project"
     assert _generate(model_dir, project) == 0
     model = _model(model_dir)
     wcet = {t.name: int(t.wcet * BURN_SHARE * 1_000_000_000) for t in model.tasks}
     rosrun.burn_execution_times(project, wcet)
+    oa = project / "user" / "ObstacleAvoidance.hpp"  # (says when it reads a scan that is not empty)
+    oa.write_text(oa.read_text(encoding="utf-8").replace(
+        f"verify_ros1::burn_cpu({wcet['OATask']});",
+        f"verify_ros1::burn_cpu({wcet['OATask']});\n    if (scan.has_value() && !scan->ranges.empty()) {{\n"
+        '      ROS_INFO_ONCE("oa read a scan of %zu ranges", scan->ranges.size());\n    }'), encoding="utf-8")
     build_log = rosrun.build(project)
-    topics = [f"/{model.name}/{p.id.replace('.', '/')}" for p in model.ports if p.direction == "out"]
+    data = _data_topics(model)
+    topics = [*data, *(f"{t}/verify" for t in data)]
+    bag = base / "run.bag"
+    record_bag = ["rosbag", "record", "--quiet", "-O", str(bag), *data]
+    # a stock subscriber of its own (rospy shares one subscription per topic and process)
+    stock = [rosrun.SYSTEM_PYTHON, str(rosrun.RECORDER), str(base / "stock.jsonl"),
+             f"/{model.name}/planner/path=nav_msgs/Path"]
     with rosrun.master(project, base / "ros") as env:
         output = rosrun.run_system(env, package_name(model.name), f"{model.name}.launch", RUN_SECONDS,
-                                   base / "run.jsonl", topics, base / "latency" / "summary")
+                                   base / "run.jsonl", topics, base / "latency" / "summary", beside=[record_bag, stock])
         assert "escalating" not in output, output  # every node stopped on SIGINT
     records = rosrun.recorded(base / "run.jsonl")
+    stock_records = rosrun.recorded(base / "stock.jsonl")
     summaries = [json.loads(p.read_text()) for p in (base / "latency" / "summary").glob("*.json")]
     summaries = {s["node"]: s for s in summaries}
     return {"model": model, "model_dir": model_dir, "project": project, "records": records,
-            "summaries": summaries, "build_log": build_log, "base": base}
+            "summaries": summaries, "build_log": build_log, "base": base, "bag": bag, "stock": stock_records}
 
 
 def _by_task(jobs: list[dict], node: str, task: str) -> list[dict]:
@@ -119,25 +137,66 @@ def test_a_prescaled_task_runs_on_exactly_every_kth_arrival(live):
 
 
 def test_the_triggering_arrivals_are_the_writer_messages(live):
-    """The mapper's releases are every 10th scan message the laser published (recorded on the wire)."""
+    """The mapper's releases are every 10th scan message the laser published (their records on the wire)."""
     model = live["model"]
-    scans = [rosrun.decode_message(str(r["hex"])) for r in live["records"] if r["topic"] == f"/{model.name}/laser/scan"]
-    seqs = [m["seq"] for m in scans]
-    assert seqs == list(range(seqs[0], seqs[0] + len(seqs))), "scan messages were lost on the wire"
+    scans = _records(live, f"/{model.name}/laser/scan")
+    indices, seqs = [m["index"] for m in scans], [m["seq"] for m in scans]
+    assert indices == list(range(1, len(indices) + 1)), "scan records were lost on the wire"
+    assert seqs == indices  # (every job of the laser wrote its scan)
     mapper = _by_task(rosrun.jobs(live["records"]), *_node(model, "mapper.CurMapTask"))
     assert {j["trigger_seq"] for j in mapper} <= set(seqs)
 
 
-def test_messages_on_the_wire_carry_their_jobs_identity_and_stamps(live):
+def test_records_beside_the_messages_carry_their_jobs_identity_and_stamps(live):
     model, jobs = live["model"], rosrun.jobs(live["records"])
     laser = {j["seq"]: j for j in _by_task(jobs, *_node(model, "laser.LaserTask"))}
-    messages = [rosrun.decode_message(str(r["hex"])) for r in live["records"]
-                if r["topic"] == f"/{model.name}/laser/scan"]
-    assert messages
-    for m in messages:
+    records = _records(live, f"/{model.name}/laser/scan")
+    scans = [r for r in live["records"] if r["topic"] == f"/{model.name}/laser/scan"]
+    assert records and abs(len(scans) - len(records)) <= 1  # one record per message (the last may be cut off)
+    for m in records:
         job = laser[m["seq"]]
         assert (m["release"], m["start"], m["finish"]) == (job["release"], job["start"], job["finish"])
         assert sorted(list(s) for s in m["stamps"]) == sorted(h[:4] for h in job["held"] if h[4] == "scan")
+
+
+def test_every_topic_carries_its_real_ros_type(live):
+    """On the wire each port's topic has the ROS message its type is bound to, as its publisher declares
+    it (so rostopic, rviz and stock nodes understand it); the records are beside them, on TOPIC/verify."""
+    model = live["model"]
+    for topic, kind in _data_topics(model).items():
+        declared = {(r["type"], r["publisher"]) for r in live["records"] if r["topic"] == topic and "hex" in r}
+        node = topic.rsplit("/", 1)[0]
+        assert declared == {(kind, node)}, topic
+        records = {(r["type"], r["publisher"]) for r in live["records"] if r["topic"] == f"{topic}/verify"}
+        assert records == {("std_msgs/UInt8MultiArray", node)}, topic
+    assert {m.ros1 for m in model.messages} == {"sensor_msgs/LaserScan", "geometry_msgs/PoseStamped",
+                                                "geometry_msgs/Twist", "nav_msgs/OccupancyGrid", "nav_msgs/Path"}
+
+
+def test_a_stock_subscriber_receives_the_planned_path_as_its_type(live):
+    """rospy's own nav_msgs/Path subscriber, in a process of its own (ROS connects it only if type and
+    checksum match): it receives what the planner published."""
+    model = live["model"]
+    typed = [r for r in live["stock"] if r["topic"] == f"/{model.name}/planner/path"]
+    raw = [r for r in live["records"] if r["topic"] == f"/{model.name}/planner/path" and "hex" in r]
+    assert len(typed) >= 5 and {r["typed"] for r in typed} == {"nav_msgs/Path"}
+    assert abs(len(typed) - len(raw)) <= 1
+
+
+def _bag_topics(bag: Path) -> dict[str, tuple[str, int]]:
+    """Topic -> (type, messages) of a bag, by the rosbag Python API (Debian's python3)."""
+    script = ("import json, sys, rosbag\n"
+              "info = rosbag.Bag(sys.argv[1]).get_type_and_topic_info().topics\n"
+              "print(json.dumps({t: [i.msg_type, i.message_count] for t, i in info.items()}))\n")
+    done = subprocess.run([rosrun.SYSTEM_PYTHON, "-c", script, str(bag)], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    return {t: (kind, n) for t, (kind, n) in json.loads(done.stdout).items()}
+
+
+def test_rosbag_records_the_real_types(live):
+    topics = _bag_topics(live["bag"])
+    assert {t: kind for t, (kind, _) in topics.items()} == _data_topics(live["model"])
+    assert all(n >= 5 for _, n in topics.values()), topics
 
 
 def test_timers_run_at_their_rates_within_two_percent(live):
@@ -181,6 +240,62 @@ def test_no_observed_latency_exceeds_the_analysis_bound(live):
             assert worst <= bound, f"chain {chain.name}: observed {metric} {float(worst)} s, bound {float(bound)} s"
 
 
+#: a bag of sensor_msgs/LaserScan at 40 Hz, made with the rosbag Python API (Debian's python3)
+MAKE_BAG = """\
+import sys, rosbag, rospy
+from sensor_msgs.msg import LaserScan
+with rosbag.Bag(sys.argv[1], "w") as bag:
+    for i in range(200):
+        at = rospy.Time(1000) + rospy.Duration(0.025 * i)
+        scan = LaserScan(angle_min=-1.0, angle_max=1.0, angle_increment=1 / 3, range_min=0.1, range_max=30.0,
+                         ranges=[1.0 + i / 100] * 7)
+        scan.header.stamp, scan.header.frame_id = at, "laser"
+        bag.write("/replay/scan", scan, at)
+"""
+
+#: the generated launch with the obstacle avoidance reading the replayed scans instead of the laser's
+REPLAY_LAUNCH = """\
+<launch>
+  <arg name="trace" default="false"/>
+  <arg name="summary_dir" default=""/>
+  <include file="$(dirname)/Navigation.launch">
+    <arg name="trace" value="$(arg trace)"/>
+    <arg name="summary_dir" value="$(arg summary_dir)"/>
+  </include>
+  <param name="/Navigation/oa/topics/scan" value="/replay/scan"/>
+  <param name="/Navigation/laser/subscribers/scan" value="1"/>
+</launch>
+"""
+
+
+@pytest.fixture(scope="module")
+def replayed(live):
+    """The built system run with `rosbag play` of a bag of sensor_msgs/LaserScan (made here) on the
+    obstacle avoidance's scan topic: messages of a node outside the model."""
+    base, project, model = live["base"], live["project"], live["model"]
+    bag = base / "scans.bag"
+    made = subprocess.run([rosrun.SYSTEM_PYTHON, "-c", MAKE_BAG, str(bag)], capture_output=True, text=True,
+                          timeout=120)
+    assert made.returncode == 0, made.stderr
+    (project / "launch" / "replay.launch").write_text(REPLAY_LAUNCH, encoding="utf-8")
+    play = ["rosbag", "play", "--quiet", "--loop", str(bag)]
+    with rosrun.master(project, base / "ros-replay") as env:
+        output = rosrun.run_system(env, package_name(model.name), "replay.launch", 5, base / "replay.jsonl", [],
+                                   base / "summary-replay", beside=[play])
+    return {"output": output, "jobs": rosrun.jobs(rosrun.recorded(base / "replay.jsonl"))}
+
+
+def test_a_replayed_bag_of_laser_scans_drives_the_obstacle_avoidance(replayed):
+    """The bag's scans are data without stamps (seq 0: not a job of the model); the obstacle avoidance
+    reads them, as the functional code says, and its commands drive the base."""
+    assert "oa read a scan of 7 ranges" in replayed["output"], replayed["output"]
+    oa = _by_task(replayed["jobs"], "/Navigation/oa", "OATask")
+    read = [j["reads"]["scan"] for j in oa if "scan" in j["reads"]]
+    assert len(read) >= 20 and set(read) == {0}
+    robot = _by_task(replayed["jobs"], "/Navigation/base", "RobotTask")
+    assert len(robot) >= 20 and all(j["reads"]["navvel"] > 0 for j in robot)
+
+
 def _monitor(live, index: int) -> dict:
     model = live["model"]
     node, _ = _node(model, model.chains[index].tasks[-1])
@@ -214,9 +329,8 @@ def test_a_too_tight_spec_is_reported_by_the_monitor(live):
     parameter file, and the monitor reports every violation on /verify/violations."""
     model_dir, project, base = live["model_dir"], live["project"], live["base"]
     before = {p: p.read_bytes() for p in project.rglob("*") if p.is_file() and "build" not in p.parts}
-    text = (model_dir / "navigation.vfy").read_text(encoding="utf-8")
-    (model_dir / "navigation.vfy").write_text(text.replace("reaction_time <= 250 ms", "reaction_time <= 100 ms"),
-                                              encoding="utf-8")
+    text = (model_dir / MODEL).read_text(encoding="utf-8")
+    (model_dir / MODEL).write_text(text.replace("reaction_time <= 250 ms", "reaction_time <= 100 ms"), encoding="utf-8")
     assert _generate(model_dir, project) == 0
     after = {p: p.read_bytes() for p in project.rglob("*") if p.is_file() and "build" not in p.parts}
     assert {p.relative_to(project).as_posix() for p in after if after[p] != before.get(p)} == {"config/parameters.yaml"}

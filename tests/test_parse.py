@@ -83,6 +83,7 @@ def test_names_resolution_collects_every_error_with_hints():
 #: every keyword of the language, each where the grammar accepts it (the text parses)
 EVERY_KEYWORD = """\
 import "lib.vfy"
+message T = ros "std_msgs/Header"
 component A {
   in a : T
   in b : T

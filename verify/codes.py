@@ -39,6 +39,7 @@ _ALL = [
     Code("E106", "unknown scheduling policy"),
     Code("E107", "wrong kind of port or member"),
     Code("E108", "unknown executor or callback-group kind"),
+    Code("E109", "invalid ROS message name"),
     # E2xx: structure
     Code("E201", "connection type mismatch"),
     Code("E202", "out-port produced by no task"),

@@ -244,8 +244,8 @@ def _has_span(span: Span | None) -> bool:
     return span is not None and span.line > 0
 
 
-def _top_level_items(module: s.Module) -> list[s.Component | s.System]:
-    items: list[s.Component | s.System] = [*module.components, *module.systems]
+def _top_level_items(module: s.Module) -> list[s.Message | s.Component | s.System]:
+    items: list[s.Message | s.Component | s.System] = [*module.messages, *module.components, *module.systems]
     if all(_has_span(item.span) for item in items):
         items.sort(key=lambda item: (item.span.line, item.span.column))
     return items
@@ -254,10 +254,15 @@ def _top_level_items(module: s.Module) -> list[s.Component | s.System]:
 def _print_module(p: _Printer, module: s.Module) -> None:
     for imp in module.imports:
         p.line(0, f'import "{imp.path}"', imp.span)
-    for i, item in enumerate(_top_level_items(module)):
-        if i or module.imports:
-            p.blank()
-        if isinstance(item, s.Component):
+    previous: s.Message | s.Component | s.System | None = None
+    for item in _top_level_items(module):
+        if (previous is not None or module.imports) and not (isinstance(item, s.Message)
+                                                              and isinstance(previous, s.Message)):
+            p.blank()  # (message declarations one after another stay together)
+        previous = item
+        if isinstance(item, s.Message):
+            p.line(0, f'message {item.name} = ros "{item.ros}"', item.span)
+        elif isinstance(item, s.Component):
             _print_component(p, item)
         else:
             _print_system(p, item)

@@ -25,7 +25,7 @@ from .activations import DataTriggered, Hole, Periodic, SporadicSource
 from .activations import HoleWhat as HoleWhat
 from .construct import direct_constructor
 from .ids import PortId, TaskId
-from .resolve import SystemScope
+from .resolve import SystemScope, ros_message
 from .source import NO_SPAN, Span
 
 
@@ -204,6 +204,26 @@ class ComponentModel:
 
 
 @dataclass(frozen=True)
+class MessageModel:
+    """Message type ``name`` bound to the ROS message ``package/type`` (specs/language.md)."""
+
+    name: str
+    package: str
+    type: str
+    span: Span = _span()
+
+    @property
+    def ros1(self) -> str:
+        """The ROS 1 name: ``sensor_msgs/LaserScan``; in C++ ``sensor_msgs::LaserScan``."""
+        return f"{self.package}/{self.type}"
+
+    @property
+    def ros2(self) -> str:
+        """The ROS 2 name: ``sensor_msgs/msg/LaserScan``."""
+        return f"{self.package}/msg/{self.type}"
+
+
+@dataclass(frozen=True)
 class PortModel:
     """A port of an instance: ``id`` is ``instance.port``; ``message_type`` what it carries."""
 
@@ -334,6 +354,12 @@ class SystemModel:
     ports: tuple[PortModel, ...] = ()
     executors: tuple[ExecutorModel, ...] = ()
     groups: tuple[GroupModel, ...] = ()  # the callback groups with callbacks, in system order
+    #: the ROS messages the message types of its ports are bound to (``message T = ros pkg/Name``)
+    messages: tuple[MessageModel, ...] = ()
+
+    def message(self, message_type: str) -> MessageModel | None:
+        """The ROS message ``message_type`` is bound to; None: unbound (bytes on ROS, specs/codegen.md)."""
+        return next((m for m in self.messages if m.name == message_type), None)
 
     def task(self, task_id: str) -> TaskModel:
         return self._index()["tasks"][task_id]
@@ -371,7 +397,7 @@ class SystemModel:
     def _with_chains(self, chains: tuple[ChainModel, ...]) -> SystemModel:
         """This system with ``chains``; it shares the lookup tables, which do not depend on the chains."""
         other = SystemModel(self.name, self.cores, self.tasks, self.links, chains, self.span, self.compounds,
-                            self.instances, self.components, self.ports, self.executors, self.groups)
+                            self.instances, self.components, self.ports, self.executors, self.groups, self.messages)
         if "_lookup" in self.__dict__:
             object.__setattr__(other, "_lookup", self.__dict__["_lookup"])
         return other
@@ -525,8 +551,11 @@ def build_system(scope: SystemScope) -> SystemModel:
                   for c in system.cores)
     compounds = tuple(cm for inst in system.instances
                       for cm in _compound_models(inst, scope.component_of[inst.name.text].component))
+    used = {p.message_type for p in ports}
+    messages = tuple(MessageModel(name, *ros, m.span) for name, m in sorted(scope.messages.items())
+                     if name in used and (ros := ros_message(m.ros)) is not None)
     model = SystemModel(system.name.text, cores, tuple(tasks), links, (), system.span, compounds, instances,
-                        components, ports, executors, groups)
+                        components, ports, executors, groups, messages)
     chains = tuple(_chain_model(ch, model, scope) for ch in system.chains)
     return model._with_chains(chains)
 

@@ -27,7 +27,7 @@ if TYPE_CHECKING:  # (Lark is imported where a text takes the error path: valid 
     from lark.tree import Meta
 
 #: the words a model file can start with (``start: item*``, each item opened by one of them)
-_FIRST_WORDS = frozenset({"import", "component", "system"})
+_FIRST_WORDS = frozenset({"import", "component", "system", "message"})
 
 
 @dataclass(frozen=True)
@@ -373,7 +373,12 @@ class _Builder:
         imports = tuple(i for i in items if isinstance(i, s.Import))
         comps = tuple(i for i in items if isinstance(i, s.Component))
         systems = tuple(i for i in items if isinstance(i, s.System))
-        return s.Module(self.path, imports, comps, systems, self._span(start, end))
+        messages = tuple(i for i in items if isinstance(i, s.Message))
+        return s.Module(self.path, imports, comps, systems, self._span(start, end), messages)
+
+    def message(self, start: _Pos, end: _Pos, children: _Children) -> s.Message:
+        name, (text, where) = children
+        return s.Message(name, text[1:-1], self._span(start, end), where)
 
     def import_decl(self, start: _Pos, end: _Pos, children: _Children) -> s.Import:
         text, where = children[0]

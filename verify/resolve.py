@@ -5,7 +5,8 @@ run only on systems whose names all resolved.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import re
+from dataclasses import dataclass, field, replace
 from collections.abc import Callable, Iterable
 from typing import Literal, TypeVar
 
@@ -55,6 +56,8 @@ class SystemScope:
     bindings: dict[tuple[str, str], s.TaskBinding] = field(compare=False)
     resolved: bool = True
     executors: dict[str, s.Executor] = field(default_factory=dict, compare=False)
+    #: the project's message declarations: message type -> its ROS message
+    messages: dict[str, s.Message] = field(default_factory=dict, compare=False)
 
     @property
     def name(self) -> str:
@@ -65,6 +68,7 @@ class SystemScope:
 class Resolution:
     components: dict[str, ComponentScope] = field(compare=False)
     systems: dict[str, SystemScope] = field(compare=False)
+    messages: dict[str, s.Message] = field(default_factory=dict, compare=False)
 
 
 def _unknown(sink: DiagnosticSink, what: str, name: s.Name, candidates: Iterable[str], where: str = "") -> None:
@@ -268,10 +272,43 @@ def resolve(project: Project, sink: DiagnosticSink) -> Resolution:
             _duplicate(sink, "component", comp.name, components[comp.name.text].component.name)
             continue
         components[comp.name.text] = _scope_component(comp, sink)
+    messages = _messages(project, sink)
     systems: dict[str, SystemScope] = {}
     for system in project.systems:
         if system.name.text in systems:
             _duplicate(sink, "system", system.name, systems[system.name.text].system.name)
             continue
-        systems[system.name.text] = _scope_system(system, components, sink)
-    return Resolution(components, systems)
+        systems[system.name.text] = replace(_scope_system(system, components, sink), messages=messages)
+    return Resolution(components, systems, messages)
+
+
+#: a ROS message: a package name (REP 144: lower-case letters, digits, ``_``, from a letter), then a
+#: message name both ROS 1 and ROS 2 accept (letters and digits, from an upper-case letter); ROS 2's
+#: ``msg/`` between them is optional
+ROS_MESSAGE = re.compile(r"([a-z][a-z0-9_]*)/(?:msg/)?([A-Z][A-Za-z0-9]*)")
+
+
+def ros_message(text: str) -> tuple[str, str] | None:
+    """The package and the message name of a ROS message's name (``sensor_msgs/LaserScan`` or
+    ``sensor_msgs/msg/LaserScan``), or None if ``text`` is not one."""
+    found = ROS_MESSAGE.fullmatch(text)
+    return (found.group(1), found.group(2)) if found else None
+
+
+def _messages(project: Project, sink: DiagnosticSink) -> dict[str, s.Message]:
+    """The valid message declarations of the project, by message type; E102 for a type declared twice,
+    E109 for a ROS name that is not one."""
+    messages: dict[str, s.Message] = {}
+    first: dict[str, s.Name] = {}
+    for message in (m for module in project.modules for m in module.messages):
+        if message.name.text in first:
+            _duplicate(sink, "message type", message.name, first[message.name.text])
+            continue
+        first[message.name.text] = message.name
+        if ros_message(message.ros) is None:
+            sink.emit("E109", f"`{message.ros}` is not the name of a ROS message", message.ros_span,
+                      "expected PACKAGE/NAME", help="write the package, then the message: `sensor_msgs/LaserScan` "
+                      "(a package is lower-case letters, digits and `_`; a message starts with an upper-case letter)")
+            continue
+        messages[message.name.text] = message
+    return messages

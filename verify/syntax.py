@@ -354,11 +354,23 @@ class Import:
 
 
 @dataclass(frozen=True)
+class Message:
+    """``message NAME = ros "PACKAGE/TYPE"``: message type NAME is a ROS message (``ros``: the string's
+    text, unchecked; ``verify.resolve`` checks it)."""
+
+    name: Name
+    ros: str
+    span: Span = _span()
+    ros_span: Span = _span()  #: the quoted ROS name
+
+
+@dataclass(frozen=True)
 class Module:
-    """One source file: its imports, components and systems, in source order."""
+    """One source file: its imports, components and systems, in source order; its message declarations."""
 
     path: str
     imports: tuple[Import, ...] = ()
     components: tuple[Component, ...] = ()
     systems: tuple[System, ...] = ()
     span: Span = _span()
+    messages: tuple[Message, ...] = ()

@@ -1,6 +1,6 @@
 // A hand-written program on the monitor library alone (no ROS, no generated code): known answers of
-// ChainMonitor (specs/codegen.md §5), a round trip of the envelope, and the summary directory made where
-// it can be and refused where it cannot (argv[1]: an empty scratch directory). Exits 0 when every check
+// ChainMonitor (specs/codegen.md §5), a round trip of the out-of-band record, and the summary directory made
+// where it can be and refused where it cannot (argv[1]: an empty scratch directory). Exits 0 when every check
 // holds, else prints the failed check and exits 1. Built and run by tests/test_gen_ros1.py.
 #include <cstdio>
 #include <fstream>
@@ -66,22 +66,22 @@ int main(int argc, char** argv) {
   check(first.summary_json().find("\"reaction_time\": {\"count\": 0") != std::string::npos, "no reaction sample");
 
   verify_ros1::Envelope e;
+  e.index = 9;
   e.seq = 7;
   e.release = -1;
   e.start = 1795686227200063972;
   e.finish = e.start + 5;
   e.event = 3;
   e.stamps = {Stamp{1, 2, 10, 20}, Stamp{65535, 0, -3, 4}};
-  e.payload = {1, 2, 3};
   std::vector<std::uint8_t> bytes;
   verify_ros1::encode(e, bytes);
   verify_ros1::Envelope d;
   check(verify_ros1::decode(bytes.data(), bytes.size(), d), "decodes");
   check(d.seq == 7 && d.release == -1 && d.start == e.start && d.finish == e.finish && d.event == 3 &&
-            d.stamps.size() == 2 && d.stamps[1].chain == 65535 && d.stamps[1].origin == -3 && d.payload == e.payload,
+            d.stamps.size() == 2 && d.stamps[1].chain == 65535 && d.stamps[1].origin == -3 && d.index == 9,
         "round trip");
   for (std::size_t cut = 0; cut < bytes.size(); ++cut) {
-    check(!verify_ros1::decode(bytes.data(), cut, d), "a truncated envelope is refused");
+    check(!verify_ros1::decode(bytes.data(), cut, d), "a truncated record is refused");
   }
   bytes.push_back(0);
   check(!verify_ros1::decode(bytes.data(), bytes.size(), d), "trailing bytes are refused");

@@ -3,7 +3,8 @@
 The mapping from each model construct to code, and what the generated code guarantees, is
 specs/codegen.md. The layout of the generated project:
 
-    CMakeLists.txt, package.xml            glue: plain CMake against Debian's roscpp and std_msgs
+    CMakeLists.txt, package.xml            glue: plain CMake against Debian's roscpp, std_msgs and the
+                                           packages of the ROS messages the message types are bound to
     include/verify_ros1/*.hpp              glue: the runtime and monitor library (verify/gen/ros1_runtime)
     glue/<Component>.hpp, <Component>_main.cpp
                                            glue: per component, its base class and its node's main
@@ -11,7 +12,7 @@ specs/codegen.md. The layout of the generated project:
                                            chain role; the only file a changed configuration changes
     launch/<system>.launch                 glue: starts one node per instance
     user/<Component>.hpp                   user: the class with the component's functional code
-    user/types/<Type>.hpp                  user: the C++ type of a message type
+    user/types/<Type>.hpp                  user: the C++ type of a message type (its ROS message, if bound)
     user/user.cmake                        user: extra packages and libraries for the user's code
 """
 from __future__ import annotations
@@ -22,7 +23,7 @@ from fractions import Fraction
 from importlib import resources
 
 from ..activations import DataTriggered, Periodic, SporadicSource
-from ..model import ComponentModel, SystemModel, TaskDecl, TaskModel
+from ..model import ComponentModel, MessageModel, SystemModel, TaskDecl, TaskModel
 from ..sanitize import c_string, comment, yaml_string
 from ..source import Span
 from .tree import File, Tree, stamped
@@ -165,16 +166,18 @@ def generate(model: SystemModel) -> Tree:
     pkg = package_name(model.name)
     files = [File(f"include/verify_ros1/{name}", _runtime(name), "glue")
              for name in ("envelope.hpp", "monitor.hpp", "runtime.hpp")]
+    messages = {m.name: m for m in model.messages}
     files += [File("CMakeLists.txt", _cmake(model, pkg), "glue"), File("package.xml", _package_xml(model, pkg), "glue"),
               File("config/parameters.yaml", _parameters(model), "glue"),
               File(f"launch/{ros_name(model.name)}.launch", _launch(model, pkg), "glue")]
     for comp in model.components:
-        files.append(File(f"glue/{cpp(comp.name)}.hpp", _glue_class(comp), "glue"))
+        files.append(File(f"glue/{cpp(comp.name)}.hpp", _glue_class(comp, messages), "glue"))
         files.append(File(f"glue/{cpp(comp.name)}_main.cpp", _main(comp), "glue"))
     for comp in model.components:
         files.append(File(f"user/{cpp(comp.name)}.hpp", _skeleton(comp), "user"))
     for type_name in sorted({p.message_type for c in model.components for p in c.ports}):
-        files.append(File(f"user/types/{cpp(type_name)}.hpp", _type_header(type_name), "user"))
+        files.append(File(f"user/types/{cpp(type_name)}.hpp", _type_header(type_name, messages.get(type_name)),
+                          "user"))
     files.append(File("user/user.cmake", _user_cmake(), "user"))
     return Tree(tuple(File(f.path, stamped(f.path, f.text, GENERATOR), "glue") if f.owner == "glue" else f
                       for f in files))
@@ -189,6 +192,22 @@ def _runtime(name: str) -> str:
 
 def _type(type_name: str) -> str:
     return f"msg::{cpp(type_name)}"
+
+
+def ros_cpp(message: MessageModel) -> str:
+    """The C++ class of a ROS 1 message: ``::sensor_msgs::LaserScan`` (qualified: a component may be named
+    as a package is)."""
+    return f"::{message.package}::{message.type}"
+
+
+def _wire(type_name: str, messages: dict[str, MessageModel]) -> str:
+    """What a message type travels as (specs/codegen.md §6): its ROS message, or bytes when unbound."""
+    message = messages.get(type_name)
+    return ros_cpp(message) if message is not None else "verify_ros1::Bytes"
+
+
+def _port_type(kind: str, type_name: str, messages: dict[str, MessageModel]) -> str:
+    return f"verify_ros1::{kind}<{_type(type_name)}, {_wire(type_name, messages)}>"
 
 
 def _signature(comp: ComponentModel, task: TaskDecl, override: bool) -> str:
@@ -244,13 +263,31 @@ def _includes(comp: ComponentModel) -> list[str]:
     return [f'#include "types/{cpp(t)}.hpp"' for t in sorted({p.message_type for p in comp.ports})]
 
 
-def _glue_class(comp: ComponentModel) -> str:
+def _message_includes(comp: ComponentModel, messages: dict[str, MessageModel]) -> list[str]:
+    """The headers of the ROS messages the component's bound types are (the glue names them itself)."""
+    bound = {messages[p.message_type] for p in comp.ports if p.message_type in messages}
+    return sorted(f"#include <{m.package}/{m.type}.h>" for m in bound)
+
+
+def _bound_checks(comp: ComponentModel, messages: dict[str, MessageModel]) -> list[str]:
+    """A compile-time check per bound type: its user header (written once) still names its ROS message."""
+    lines = []
+    for type_name in sorted({p.message_type for p in comp.ports if p.message_type in messages}):
+        message = messages[type_name]
+        lines.append(f"static_assert(std::is_same<verify_gen::{_type(type_name)}, {ros_cpp(message)}>::value,")
+        lines.append(f'              "message type {c_string(type_name)[1:-1]} is bound to {message.ros1} in the '
+                     f'model: user/types/{cpp(type_name)}.hpp must name it (delete the file and regenerate)");')
+    return lines
+
+
+def _glue_class(comp: ComponentModel, messages: dict[str, MessageModel]) -> str:
     name = cpp(comp.name)
     lines = ["// The glue of component " + comment(comp.name) + ": its ports, compound in-ports and tasks, with the",
              "// activation and communication semantics of specs/timing.md (specs/codegen.md). The functional",
              f"// code is the user's, in user/{name}.hpp.",
              "#pragma once", "", "#include <mutex>", "#include <utility>", "",
-             '#include "verify_ros1/runtime.hpp"', *_includes(comp), "",
+             '#include "verify_ros1/runtime.hpp"', *_message_includes(comp, messages), *_includes(comp), "",
+             *(_bound_checks(comp, messages) + [""] if _bound_checks(comp, messages) else []),
              "namespace verify_gen {", "namespace glue {", "",
              f"class {name} : public verify_ros1::Component {{", " public:",
              f"  {name}(ros::NodeHandle nh, ros::NodeHandle pnh)",
@@ -273,9 +310,9 @@ def _glue_class(comp: ComponentModel) -> str:
     for t in comp.tasks:
         lines += _job_method(comp, t)
     for p in comp.in_ports:
-        lines.append(f"  verify_ros1::InPort<{_type(p.message_type)}> port_{p.name}_{{{c_string(p.name)}}};")
+        lines.append(f"  {_port_type('InPort', p.message_type, messages)} port_{p.name}_{{{c_string(p.name)}}};")
     for p in comp.out_ports:
-        lines.append(f"  verify_ros1::OutPort<{_type(p.message_type)}> port_{p.name}_{{{c_string(p.name)}}};")
+        lines.append(f"  {_port_type('OutPort', p.message_type, messages)} port_{p.name}_{{{c_string(p.name)}}};")
     lines += ["};", "", "}  // namespace glue", "}  // namespace verify_gen", ""]
     return "\n".join(lines)
 
@@ -309,11 +346,21 @@ def _skeleton(comp: ComponentModel) -> str:
     return "\n".join(lines)
 
 
-def _type_header(type_name: str) -> str:
+def _type_header(type_name: str, message: MessageModel | None) -> str:
+    if message is not None:
+        return "\n".join([
+            f"// The C++ type of message type {comment(type_name)}: the ROS message {message.ros1}, as the model binds",
+            "// it (`message ... = ros ...`). `verify gen ros1` wrote this file once and never overwrites it; the",
+            "// glue checks at compile time that it still names that message.",
+            "#pragma once", "", f"#include <{message.package}/{message.type}.h>", "",
+            "namespace verify_gen {", "namespace msg {", "",
+            f"using {cpp(type_name)} = {ros_cpp(message)};", "",
+            "}  // namespace msg", "}  // namespace verify_gen", ""])
     return "\n".join([
         f"// The C++ type of message type {comment(type_name)}. `verify gen ros1` wrote this file once and never",
-        "// overwrites it: make it any type ros::serialization can serialize (a ROS message such as",
-        "// sensor_msgs::LaserScan, with its package added in user/user.cmake), or keep the bytes.",
+        "// overwrites it: make it any type ros::serialization can serialize, or keep the bytes. On the wire",
+        "// it is bytes (std_msgs/UInt8MultiArray); to send a ROS message that other ROS nodes understand,",
+        "// bind the type in the model (`message T = ros \"sensor_msgs/LaserScan\"`) and regenerate.",
         "#pragma once", "", "#include <cstdint>", "#include <vector>", "",
         "namespace verify_gen {", "namespace msg {", "",
         f"using {cpp(type_name)} = std::vector<std::uint8_t>;", "",
@@ -337,6 +384,7 @@ def _cmake(model: SystemModel, pkg: str) -> str:
              "set(CMAKE_CXX_STANDARD 17)", "set(CMAKE_CXX_STANDARD_REQUIRED ON)",
              "if(NOT CMAKE_BUILD_TYPE)", "  set(CMAKE_BUILD_TYPE RelWithDebInfo)", "endif()", "",
              "find_package(roscpp REQUIRED)", "find_package(std_msgs REQUIRED)", "find_package(Threads REQUIRED)",
+             *_message_headers(model),
              "", "set(VERIFY_USER_INCLUDE_DIRS)", "set(VERIFY_USER_LIBRARIES)",
              "include(${CMAKE_CURRENT_SOURCE_DIR}/user/user.cmake OPTIONAL)", "",
              "function(verify_node name main)", "  add_executable(${name} ${main})",
@@ -344,11 +392,29 @@ def _cmake(model: SystemModel, pkg: str) -> str:
              "  target_include_directories(${name} PRIVATE ${CMAKE_CURRENT_SOURCE_DIR}/include",
              "                             ${CMAKE_CURRENT_SOURCE_DIR} ${CMAKE_CURRENT_SOURCE_DIR}/user)",
              "  target_include_directories(${name} SYSTEM PRIVATE ${roscpp_INCLUDE_DIRS} ${std_msgs_INCLUDE_DIRS}",
+             *(f"                             ${{VERIFY_MSG_{p}}}" for p in _packages(model)),
              "                             ${VERIFY_USER_INCLUDE_DIRS})",
              "  target_link_libraries(${name} PRIVATE ${roscpp_LIBRARIES} ${VERIFY_USER_LIBRARIES} Threads::Threads)",
              "endfunction()", ""]
     lines += [f"verify_node({cpp(c.name)}_node glue/{cpp(c.name)}_main.cpp)" for c in model.components]
     return "\n".join(lines) + "\n"
+
+
+def _message_headers(model: SystemModel) -> list[str]:
+    """Where the headers of the bound messages are: ROS 1 messages are header-only (their packages'
+    CMake configurations need catkin, which a plain CMake build has not), one header per package found."""
+    first: dict[str, str] = {}
+    for m in model.messages:
+        first.setdefault(m.package, m.type)
+    lines = ["# the bound message types' ROS messages (header-only)"] if first else []
+    for package in _packages(model):
+        lines.append(f"find_path(VERIFY_MSG_{package} {package}/{first[package]}.h REQUIRED)")
+    return lines
+
+
+def _packages(model: SystemModel) -> list[str]:
+    """The ROS packages of the messages the system's message types are bound to (std_msgs is always used)."""
+    return sorted({m.package for m in model.messages} - {"std_msgs", "roscpp"})
 
 
 def _package_xml(model: SystemModel, pkg: str) -> str:
@@ -357,7 +423,7 @@ def _package_xml(model: SystemModel, pkg: str) -> str:
         f"  <description>The nodes of system {model.name}, generated by {GENERATOR}.</description>",
         '  <maintainer email="nobody@example.org">nobody</maintainer>', "  <license>MIT</license>",
         "  <buildtool_depend>cmake</buildtool_depend>", "  <depend>roscpp</depend>", "  <depend>std_msgs</depend>",
-        "</package>", ""])
+        *(f"  <depend>{p}</depend>" for p in _packages(model)), "</package>", ""])
 
 
 def _launch(model: SystemModel, pkg: str) -> str:
@@ -444,15 +510,17 @@ def _parameters(model: SystemModel) -> str:
     for inst in model.instances:
         comp = model.component(inst.component)
         lines.append(f"  {yaml_string(ros_name(inst.name))}:")
-        topics = []
+        topics, sources = [], []
         for p in comp.in_ports:
             link = model.link_into(f"{inst.name}.{p.name}")
             if link is not None:
                 src_inst, src_port = link.source.split(".", 1)
-                topic = f"/{ros_name(model.name)}/{ros_name(src_inst)}/{src_port}"
-                topics.append(f"      {yaml_string(p.name)}: {yaml_string(topic)}")
+                node = f"/{ros_name(model.name)}/{ros_name(src_inst)}"
+                topics.append(f"      {yaml_string(p.name)}: {yaml_string(f'{node}/{src_port}')}")
+                sources.append(f"      {yaml_string(p.name)}: {yaml_string(node)}")
         if topics:
-            lines += ["    topics:  # the topic each connected in-port subscribes to", *topics]
+            lines += ["    topics:  # the topic each connected in-port subscribes to", *topics,
+                      "    sources:  # the node of the model that writes it (its messages carry records)", *sources]
         readers = {p.name: len({lk.target.split(".")[0] for lk in model.links_from(f"{inst.name}.{p.name}")})
                    for p in comp.out_ports}
         if any(readers.values()):

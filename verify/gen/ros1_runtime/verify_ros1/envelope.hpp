@@ -1,15 +1,16 @@
-// verify_ros1/envelope.hpp: the wire format of every message the generated nodes exchange
-// (specs/codegen.md, "The envelope"). Part of the runtime library that `verify gen ros1` copies
-// into a generated project; usable on its own from hand-written nodes.
+// verify_ros1/envelope.hpp: the record that travels out of band beside every message a generated node
+// publishes (specs/codegen.md §6, "The wire"). The message itself is the port's ROS message on the
+// port's topic; its record is on TOPIC/verify. Part of the runtime library that `verify gen ros1`
+// copies into a generated project; usable on its own from hand-written nodes.
 //
-// A message on a port is a std_msgs/UInt8MultiArray whose data is, little-endian:
-//   "VFY1"                          magic and version
+// A record is a std_msgs/UInt8MultiArray (an empty layout) whose data is, little-endian:
+//   "VFY2"                          magic and version
+//   u64 index                       the message's number on its topic, from its publisher (1, 2, ...)
 //   u64 seq                         the writer job's number (1, 2, ...)
 //   i64 release, start, finish      the writer job's release, start and completion (ns since the Unix epoch)
 //   u64 event                       the activation event that released the job
 //   u16 n, then n stamps            per chain through the port: u16 chain, u16 position,
 //                                   i64 origin (the first task's read), i64 first (its first read)
-//   u32 m, then m bytes             the value, serialized by ros::serialization
 #pragma once
 
 #include <cstddef>
@@ -30,13 +31,13 @@ struct Stamp {
 };
 
 struct Envelope {
+  std::uint64_t index = 0;
   std::uint64_t seq = 0;
   Nanos release = 0;
   Nanos start = 0;
   Nanos finish = 0;
   std::uint64_t event = 0;
   std::vector<Stamp> stamps;
-  std::vector<std::uint8_t> payload;
 };
 
 namespace detail {
@@ -69,14 +70,6 @@ class Reader {
     value = static_cast<Nanos>(raw);
     return true;
   }
-  bool bytes(std::vector<std::uint8_t>& out, std::size_t n) {
-    if (size_ - pos_ < n) {
-      return false;
-    }
-    out.assign(data_ + pos_, data_ + pos_ + n);
-    pos_ += n;
-    return true;
-  }
   bool done() const { return pos_ == size_; }
 
  private:
@@ -89,8 +82,9 @@ class Reader {
 
 inline void encode(const Envelope& e, std::vector<std::uint8_t>& out) {
   out.clear();
-  out.reserve(46 + 20 * e.stamps.size() + e.payload.size());
-  out.insert(out.end(), {'V', 'F', 'Y', '1'});
+  out.reserve(50 + 20 * e.stamps.size());
+  out.insert(out.end(), {'V', 'F', 'Y', '2'});
+  detail::put(out, e.index, 8);
   detail::put(out, e.seq, 8);
   detail::put(out, static_cast<std::uint64_t>(e.release), 8);
   detail::put(out, static_cast<std::uint64_t>(e.start), 8);
@@ -103,18 +97,16 @@ inline void encode(const Envelope& e, std::vector<std::uint8_t>& out) {
     detail::put(out, static_cast<std::uint64_t>(s.origin), 8);
     detail::put(out, static_cast<std::uint64_t>(s.first), 8);
   }
-  detail::put(out, e.payload.size(), 4);
-  out.insert(out.end(), e.payload.begin(), e.payload.end());
 }
 
-// False (and `e` unspecified) for anything that is not a whole, well-formed envelope.
+// False (and `e` unspecified) for anything that is not a whole, well-formed record.
 inline bool decode(const std::uint8_t* data, std::size_t size, Envelope& e) {
-  if (size < 4 || data[0] != 'V' || data[1] != 'F' || data[2] != 'Y' || data[3] != '1') {
+  if (size < 4 || data[0] != 'V' || data[1] != 'F' || data[2] != 'Y' || data[3] != '2') {
     return false;
   }
   detail::Reader r(data + 4, size - 4);
   std::uint64_t n = 0;
-  if (!r.get(e.seq, 8) || !r.get_signed(e.release) || !r.get_signed(e.start) || !r.get_signed(e.finish) ||
+  if (!r.get(e.index, 8) || !r.get(e.seq, 8) || !r.get_signed(e.release) || !r.get_signed(e.start) || !r.get_signed(e.finish) ||
       !r.get(e.event, 8) || !r.get(n, 2)) {
     return false;
   }
@@ -130,8 +122,7 @@ inline bool decode(const std::uint8_t* data, std::size_t size, Envelope& e) {
     s.position = static_cast<std::uint16_t>(position);
     e.stamps.push_back(s);
   }
-  std::uint64_t m = 0;
-  return r.get(m, 4) && r.bytes(e.payload, m) && r.done();
+  return r.done();
 }
 
 }  // namespace verify_ros1

@@ -13,6 +13,9 @@
 //     otherwise).
 // Periods, phases, prescalers, priorities, CPUs and chain roles are ROS parameters (the generated
 // config/parameters.yaml), never code.
+// On the wire (specs/codegen.md §6) a port's value is its ROS message on a plain topic (a message type
+// bound to none travels as Bytes); the writer job's identity and chain stamps travel out of band, in a
+// record on TOPIC/verify that names the message by its number on the topic.
 #pragma once
 
 #include <pthread.h>
@@ -37,6 +40,7 @@
 #include <sstream>
 #include <string>
 #include <thread>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -242,10 +246,34 @@ inline void Job::hold() {
   }
 }
 
-// The register of an in-port.
-template <class T>
+// What a message type bound to no ROS message travels as: its value serialized by ros::serialization.
+using Bytes = std_msgs::UInt8MultiArray;
+
+// The value of a message as it arrived (W: the wire type, T: the port's value type); null when it does
+// not deserialize.
+template <class T, class W>
+std::shared_ptr<const T> from_wire(const boost::shared_ptr<const W>& message) {
+  if constexpr (std::is_same<T, W>::value) {
+    return std::shared_ptr<const T>(message.get(), [message](const T*) {});  // (shares the message)
+  } else {
+    static_assert(std::is_same<W, Bytes>::value, "a message type is its ROS message or Bytes");
+    auto value = std::make_shared<T>();
+    try {
+      ros::serialization::IStream stream(const_cast<std::uint8_t*>(message->data.data()),
+                                         static_cast<std::uint32_t>(message->data.size()));
+      ros::serialization::deserialize(stream, *value);
+    } catch (const std::exception&) {
+      return nullptr;
+    }
+    return value;
+  }
+}
+
+// The register of an in-port, and the pairing of its messages with their out-of-band records.
+template <class T, class W = T>
 class InPort {
  public:
+  using Wire = W;
   explicit InPort(std::string name) : name_(std::move(name)) {}
   const std::string& name() const { return name_; }
 
@@ -266,7 +294,17 @@ class InPort {
     seq_ = seq;
   }
 
-  ros::Subscriber subscriber;
+  // A message from the model's writer: the index-th on the topic, waiting for its record (or the value
+  // null: it did not deserialize, but it is counted).
+  struct Waiting {
+    std::uint64_t index = 0;
+    std::shared_ptr<const T> value;
+  };
+  ros::Subscriber subscriber, record_subscriber;
+  std::string source;  // the node of the model that writes the topic ("": none)
+  std::uint64_t received = 0;  // messages from the source so far
+  std::deque<Waiting> waiting;
+  std::map<std::uint64_t, Envelope> records;  // records that came before their messages, by index
 
  private:
   std::string name_;
@@ -275,34 +313,47 @@ class InPort {
   std::uint64_t seq_ = 0;
 };
 
-template <class T>
+template <class T, class W = T>
 class OutPort {
  public:
+  using Wire = W;
   explicit OutPort(std::string name) : name_(std::move(name)) {}
   const std::string& name() const { return name_; }
 
-  // At a job's completion: the value with the job's identity and the chain stamps it carries.
+  // At a job's completion: the record of the message (the job's identity and the chain stamps it
+  // carries; when records are on), then the value as its ROS message.
   void write(const T& value, const Job& job) {
-    Envelope e;
-    e.seq = job.seq;
-    e.release = job.release;
-    e.start = job.start;
-    e.finish = job.finish;
-    e.event = job.event;
-    e.stamps = job.stamps_for(name_);
-    std::uint32_t length = ros::serialization::serializationLength(value);
-    e.payload.resize(length);
-    ros::serialization::OStream stream(e.payload.data(), length);
-    ros::serialization::serialize(stream, value);
-    std_msgs::UInt8MultiArray message;
-    encode(e, message.data);
-    publisher.publish(message);
+    ++index_;
+    if (records) {
+      Envelope e;
+      e.index = index_;
+      e.seq = job.seq;
+      e.release = job.release;
+      e.start = job.start;
+      e.finish = job.finish;
+      e.event = job.event;
+      e.stamps = job.stamps_for(name_);
+      Bytes record;
+      encode(e, record.data);
+      record_publisher.publish(record);
+    }
+    if constexpr (std::is_same<T, W>::value) {
+      publisher.publish(value);
+    } else {
+      Bytes message;
+      message.data.resize(ros::serialization::serializationLength(value));
+      ros::serialization::OStream stream(message.data.data(), static_cast<std::uint32_t>(message.data.size()));
+      ros::serialization::serialize(stream, value);
+      publisher.publish(message);
+    }
   }
 
-  ros::Publisher publisher;
+  ros::Publisher publisher, record_publisher;
+  bool records = false;
 
  private:
   std::string name_;
+  std::uint64_t index_ = 0;
 };
 
 // A thread that runs jobs: one per preemptive task, one for the cooperative tasks of a node.
@@ -397,27 +448,54 @@ class Component {
 
  protected:
   // Subscribes the in-port to the topic of its connection (parameter topics/PORT; none: unconnected).
-  template <class T>
-  void subscribe(InPort<T>& port) {
+  // (specs/codegen.md §6: the port's messages on TOPIC, their records on TOPIC/verify, paired by the
+  // message's number on the topic; a message from a node other than the model's writer is data without
+  // stamps)
+  template <class T, class W>
+  void subscribe(InPort<T, W>& port) {
     std::string topic;
     if (!pnh_.getParam("topics/" + port.name(), topic)) {
       return;
     }
-    port.subscriber = nh_.subscribe<std_msgs::UInt8MultiArray>(
-        topic, 100,
-        [this, &port](const std_msgs::UInt8MultiArray::ConstPtr& message) { arrive(port, *message); },
+    pnh_.param("sources/" + port.name(), port.source, std::string());
+    using Event = ros::MessageEvent<W const>;
+    port.subscriber = nh_.subscribe<W, const Event&>(
+        topic, 100, boost::function<void(const Event&)>([this, &port](const Event& event) {
+          arrive(port, event.getPublisherName(), event.getConstMessage());
+        }),
         ros::VoidConstPtr(), ros::TransportHints().tcpNoDelay());
+    if (records()) {
+      using RecordEvent = ros::MessageEvent<Bytes const>;
+      port.record_subscriber = nh_.subscribe<Bytes, const RecordEvent&>(
+          topic + "/verify", 100, boost::function<void(const RecordEvent&)>([this, &port](const RecordEvent& event) {
+            arrive_record(port, event.getPublisherName(), *event.getConstMessage());
+          }),
+          ros::VoidConstPtr(), ros::TransportHints().tcpNoDelay());
+    }
     connected_.emplace_back("in-port " + port.name() + " (" + topic + ")",
                             [&port] { return port.subscriber.getNumPublishers() >= 1; });
   }
-  template <class T>
-  void advertise(OutPort<T>& port) {
-    port.publisher = nh_.advertise<std_msgs::UInt8MultiArray>(ros::this_node::getName() + "/" + port.name(), 100);
+  template <class T, class W>
+  void advertise(OutPort<T, W>& port) {
+    const std::string topic = ros::this_node::getName() + "/" + port.name();
+    port.publisher = nh_.advertise<W>(topic, 100);
+    port.records = records();
+    if (port.records) {
+      port.record_publisher = nh_.advertise<Bytes>(topic + "/verify", 100);
+    }
     int readers = 0;
     pnh_.param("subscribers/" + port.name(), readers, 0);
     connected_.emplace_back("out-port " + port.name(), [&port, readers] {
-      return port.publisher.getNumSubscribers() >= static_cast<std::uint32_t>(readers);
+      const auto n = static_cast<std::uint32_t>(readers);
+      return port.publisher.getNumSubscribers() >= n && (!port.records || port.record_publisher.getNumSubscribers() >= n);
     });
+  }
+  // Whether records travel beside the messages: with monitors or a trace (launch arguments).
+  bool records() {
+    bool monitor = true, trace = false;
+    pnh_.param("/verify/monitor", monitor, true);
+    pnh_.param("/verify/trace", trace, false);
+    return monitor || trace;
   }
   void declare_compound(const std::string& name, bool all, std::vector<std::string> members) {
     compounds_.push_back(Compound{name, all, std::move(members), {}});
@@ -441,26 +519,67 @@ class Component {
     std::vector<std::string> fresh;  // AND: members with a value not yet consumed
   };
 
-  template <class T>
-  void arrive(InPort<T>& port, const std_msgs::UInt8MultiArray& message) {
-    Envelope envelope;
-    if (!decode(message.data.data(), message.data.size(), envelope)) {
-      ROS_WARN_THROTTLE(1.0, "%s: a message on in-port %s is not a verify envelope; dropped", name().c_str(),
-                        port.name().c_str());
+  // A message on an in-port (on the arrival thread): from the model's writer, it waits for its record
+  // (unless records are off, or no record publisher is connected); from any other node it is data
+  // without stamps, stored at once.
+  template <class T, class W>
+  void arrive(InPort<T, W>& port, const std::string& publisher, const boost::shared_ptr<const W>& message) {
+    std::shared_ptr<const T> value = from_wire<T, W>(message);
+    if (!value) {
+      ROS_WARN_THROTTLE(1.0, "%s: a message on in-port %s does not deserialize as its type; dropped",
+                        name().c_str(), port.name().c_str());
+    }
+    if (publisher != port.source || port.source.empty() || port.record_subscriber.getNumPublishers() == 0) {
+      if (value) {
+        deliver(port, std::move(value), {}, 0);
+      }
       return;
     }
-    auto value = std::make_shared<T>();
-    try {
-      ros::serialization::IStream stream(envelope.payload.data(), static_cast<std::uint32_t>(envelope.payload.size()));
-      ros::serialization::deserialize(stream, *value);
-    } catch (const std::exception& err) {
-      ROS_WARN_THROTTLE(1.0, "%s: the value on in-port %s does not deserialize (%s); dropped", name().c_str(),
-                        port.name().c_str(), err.what());
+    port.waiting.push_back({++port.received, std::move(value)});
+    pair_records(port);
+  }
+  template <class T, class W>
+  void arrive_record(InPort<T, W>& port, const std::string& publisher, const Bytes& message) {
+    Envelope record;
+    if (publisher != port.source || !decode(message.data.data(), message.data.size(), record)) {
+      ROS_WARN_THROTTLE(1.0, "%s: a record on in-port %s's topic is not the writer's (%s) or not a record; dropped",
+                        name().c_str(), port.name().c_str(), publisher.c_str());
       return;
     }
+    if (record.index > port.received || !port.waiting.empty()) {  // (else its message went by: stale)
+      port.records[record.index] = std::move(record);
+    }
+    pair_records(port);
+  }
+  // Stores the waiting messages, in order, whose records are here; a message whose record has been
+  // overtaken by a later one (lost) is stored without stamps; so is the oldest beyond 100 waiting.
+  template <class T, class W>
+  void pair_records(InPort<T, W>& port) {
+    while (!port.waiting.empty()) {
+      auto& next = port.waiting.front();
+      auto record = port.records.find(next.index);
+      const bool lost = record == port.records.end() &&
+                        ((!port.records.empty() && port.records.rbegin()->first > next.index) ||
+                         port.waiting.size() > 100);
+      if (record == port.records.end() && !lost) {
+        return;
+      }
+      if (next.value) {
+        if (lost) {
+          deliver(port, std::move(next.value), {}, 0);
+        } else {
+          deliver(port, std::move(next.value), std::move(record->second.stamps), record->second.seq);
+        }
+      }
+      port.records.erase(port.records.begin(), port.records.upper_bound(next.index));
+      port.waiting.pop_front();
+    }
+  }
+  template <class T, class W>
+  void deliver(InPort<T, W>& port, std::shared_ptr<const T> value, std::vector<Stamp> stamps, std::uint64_t seq) {
     std::lock_guard<std::mutex> lock(registers_);
-    port.store(std::move(value), std::move(envelope.stamps), envelope.seq);
-    arrived(port.name(), envelope.seq);
+    port.store(std::move(value), std::move(stamps), seq);
+    arrived(port.name(), seq);
   }
   void arrived(const std::string& port, std::uint64_t seq);
   void event(const std::string& trigger, std::uint64_t seq);
