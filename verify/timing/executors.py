@@ -109,6 +109,8 @@ class _Level:
         self.failure = self._failure(flows)
         self.holds: dict[Fraction, Fraction | None] = {}
         self.children = _local_children(system, self.members)
+        self.position = {m.id: k for k, m in enumerate(self.members)}
+        self.names = tuple(m.id for m in self.members), tuple(h.id for h in self.hp)
         if self.failure is not None:
             return
         times = [v for f in flows.values() if not f.silent for v in (f.cost, f.period, f.jitter)]
@@ -118,6 +120,8 @@ class _Level:
         self.streams = {tid: _Stream(ticks(f.cost), 1, 0, True) if f.silent else  # type: ignore[arg-type]
                         _Stream(ticks(f.cost), ticks(f.period), ticks(f.jitter), False)  # type: ignore[arg-type]
                         for tid, f in flows.items()}
+        self.work = _costs(self.streams[m.id] for m in self.members)  # (per period and jitter, below)
+        self.above = _listed(_costs(self.streams[h.id] for h in self.hp))
         everyone = list(self.streams.values())
         self.length = _fixed(lambda w: sum(s.open(w) * s.cost for s in everyone),
                              sum(self.streams[m.id].cost for m in self.members))
@@ -154,7 +158,9 @@ class _Level:
             used, rule = task.wcrt_bound, "user bound"
         elif computed is None:
             rule = "unbounded"
-        names = tuple(m.id for m in self.members if m.id != task.id) + tuple(h.id for h in self.hp)
+        ids, above = self.names
+        k = self.position[task.id]
+        names = ids[:k] + ids[k + 1:] + above
         return TaskResponse(task.id, task.core, task.priority, bcrt(task), used, computed, rule, deadline,
                             deadline_rule, ZERO, hold, offsets, critical, names, failure)
 
@@ -167,12 +173,15 @@ class _Level:
             return None, None, None, self.failure
         if self.length is None:
             return None, None, None, f"no fixed point within {MAX_STEPS} iteration steps"
-        streams, members = self.streams, self.members
+        streams, above = self.streams, self.above
         own, cost = streams[task.id], streams[task.id].cost
         caused = _descendants(self.children, task.id)
-        others = _merged(streams[m.id] for m in members if m.id != task.id and m.id not in caused)
-        downstream = _merged(streams[m.id] for m in members if m.id in caused)
-        above = _merged(streams[h.id] for h in self.hp)
+        left = dict(self.work)  # every member's work but its own and its causal descendants'
+        for tid in (task.id, *caused):
+            if not streams[tid].silent:
+                left[streams[tid].period, streams[tid].jitter] -= streams[tid].cost
+        others = _listed(left)
+        downstream = _listed(_costs(streams[tid] for tid in caused))
         offsets = _offsets(own, self.length)
         if offsets is None:
             return None, None, None, f"the busy window holds more than {MAX_JOBS} jobs of `{task.id}`"
@@ -202,13 +211,18 @@ class _Level:
         return self.base.seconds(best[0]), len(offsets), best[1], None
 
 
-def _merged(streams: Iterable[_Stream]) -> list[tuple[int, int, int]]:
-    """The activated streams as (P, J, total C) of the streams of each (P, J): they count alike."""
+def _costs(streams: Iterable[_Stream]) -> dict[tuple[int, int], int]:
+    """The total cost of the activated streams of each (P, J): they count their jobs alike."""
     costs: dict[tuple[int, int], int] = {}
     for s in streams:
         if not s.silent:
             costs[s.period, s.jitter] = costs.get((s.period, s.jitter), 0) + s.cost
-    return [(p, j, c) for (p, j), c in costs.items()]
+    return costs
+
+
+def _listed(costs: Mapping[tuple[int, int], int]) -> list[tuple[int, int, int]]:
+    """``_costs`` as (P, J, C) for the sums below, without the streams of no cost left."""
+    return [(p, j, c) for (p, j), c in costs.items() if c]
 
 
 def _closed_work(merged: list[tuple[int, int, int]], window: int, most: int | None = None) -> int:
