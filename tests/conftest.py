@@ -41,6 +41,31 @@ TIGHTNESS_SOURCES = (("tests.test_bounds_vs_simulation", "random systems (tests/
                       "systems around a same-core hop, §7.6 (tests/test_priority_refinement.py)"))
 
 
+def pytest_sessionfinish(session):
+    """Under pytest-xdist, a worker hands the tightness ratios its property tests collected to the
+    controller (``workeroutput``), which reports them (``pytest_testnodedown``)."""
+    import sys
+
+    output = getattr(session.config, "workeroutput", None)
+    if output is None:
+        return
+    output["tightness"] = {name: {kind: [str(r) for r in ratios] for kind, ratios in module.TIGHTNESS.items()}
+                           for name, _ in TIGHTNESS_SOURCES if (module := sys.modules.get(name)) is not None}
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_testnodedown(node, error):
+    """(pytest-xdist, in the controller) The tightness ratios of a worker, added to those of its modules
+    here, from which the summary is made."""
+    import importlib
+    from fractions import Fraction
+
+    for name, kinds in getattr(node, "workeroutput", {}).get("tightness", {}).items():
+        module = importlib.import_module(name)
+        for kind, ratios in kinds.items():
+            module.TIGHTNESS[kind].extend(Fraction(r) for r in ratios)
+
+
 def pytest_terminal_summary(terminalreporter):
     """Report the tightness of the analytic bounds against the simulator — simulated worst / bound
     per latency kind, from the property tests that ran — in the summary and in ``TIGHTNESS_LOG``."""

@@ -345,3 +345,17 @@ def test_python_m_verify_is_the_verify_command():
     # importing the module (as the fuzzing harness does with every module of the package) runs nothing
     done = subprocess.run([sys.executable, "-c", "import verify.__main__"], capture_output=True, text=True)
     assert (done.returncode, done.stdout, done.stderr) == (0, "", "")
+
+
+def test_check_loads_neither_the_response_time_analysis_nor_the_solvers():
+    """`verify check` needs the activation rates of the timing analysis alone (E305/E306/E314): a run
+    of it imports neither the response-time analysis, the chain bounds and the executors, nor Z3,
+    networkx or Lark; `verify analyze` imports the analysis (start-up, issue 38)."""
+    heavy = ("verify.timing.fastrta", "verify.timing.chains", "verify.timing.executors", "z3", "networkx", "lark")
+    code = ("import sys, contextlib, io\nfrom verify.cli import main\n"
+            "with contextlib.redirect_stdout(io.StringIO()):\n    code = main(sys.argv[1:])\n"
+            f"print(code, [m for m in {heavy!r} if m in sys.modules])")
+    nav = str(EXAMPLES / "navigation" / "navigation.vfy")
+    for command, loaded in (("check", []), ("analyze", list(heavy[:3]))):
+        done = subprocess.run([sys.executable, "-c", code, command, nav], capture_output=True, text=True, check=True)
+        assert done.stdout.strip() == f"0 {loaded}", done.stderr

@@ -56,6 +56,7 @@ def test_the_lowest_allowed_versions_pass():
                               capture_output=True, text=True, check=True).stdout.split()
     assert versions == [bounds["lark"], bounds["networkx"], bounds["pygls"], bounds["PyYAML"]]
     env = dict(os.environ, PYTHONPATH=str(ROOT))
-    run = subprocess.run([_python(), "-m", "pytest", "-q", "-p", "no:cacheprovider", "-x", *SUBSET], cwd=ROOT,
-                         env=env, capture_output=True, text=True, check=False)
+    # (`-o addopts=`: in one process, without the suite's pytest-xdist options)
+    run = subprocess.run([_python(), "-m", "pytest", "-o", "addopts=", "-q", "-p", "no:cacheprovider", "-x", *SUBSET],
+                         cwd=ROOT, env=env, capture_output=True, text=True, check=False)
     assert run.returncode == 0, run.stdout[-3000:] + run.stderr[-2000:]  # (5 if nothing ran)

@@ -437,33 +437,39 @@ class IntSimulator:
 
     def _dispatch(self) -> None:
         """Every core runs its best eligible job (rank ``key``); jobs about to start are started one
-        at a time in rank order (verify.sim ``_dispatch``)."""
+        at a time in rank order (verify.sim ``_dispatch``). Starting a job that neither takes its
+        instance's token nor leaves its executor's queue changes no core's best job (its own core
+        keeps it, now started), so the cores are ranked again only after such a start."""
         running, ready, coop, instance, holder = self.running, self.ready, self.coop, self.instance, self.holder
         pop = heapq.heappop
         best: _Job | None
+        rank = True
         while True:
+            if rank:
+                for core in range(self.ncores):
+                    heap = ready[core]  # (``_best``, its common case inlined: the top is eligible)
+                    while heap and heap[0][1].finish is not None:
+                        pop(heap)
+                    if not heap:
+                        best = None
+                    else:
+                        best = heap[0][1]
+                        if coop[best.task] and best.start is None and instance[best.task] in holder:
+                            best = self._best(core)
+                    for e in self.threads[core]:  # executor threads compete with their next job (§9)
+                        head = self._head(e, core)
+                        if head is not None and (best is None or head.key < best.key):
+                            best = head
+                    running[core] = best
             starting: _Job | None = None
-            for core in range(self.ncores):
-                heap = ready[core]  # (``_best``, its common case inlined: the top is eligible)
-                while heap and heap[0][1].finish is not None:
-                    pop(heap)
-                if not heap:
-                    best = None
-                else:
-                    best = heap[0][1]
-                    if coop[best.task] and best.start is None and instance[best.task] in holder:
-                        best = self._best(core)
-                for e in self.threads[core]:  # executor threads compete with their next job (§9)
-                    head = self._head(e, core)
-                    if head is not None and (best is None or head.key < best.key):
-                        best = head
-                running[core] = best
+            for best in running:
                 if best is not None and best.start is None and (starting is None or best.key < starting.key):
                     starting = best
             if starting is None:
                 self._settle()
                 return
             self._start(starting)
+            rank = coop[starting.task] or self.executor_of[starting.task] >= 0
 
     def _start(self, job: _Job) -> None:
         t = job.task

@@ -14,21 +14,39 @@ refer back into the model by mutation. ``None`` stands for "unbounded" everywher
 """
 from __future__ import annotations
 
+import importlib
 from collections.abc import Mapping
 from dataclasses import dataclass
 from fractions import Fraction
+from typing import TYPE_CHECKING
 
 from ..construct import direct_constructor
 from ..diagnostics import Diagnostic, DiagnosticSink
 from ..gcpause import paused_gc
 from ..model import SystemModel, TaskModel
-from . import fastrta
-from .chains import Bound, ChainBounds, SpecCheck, Step, Term, Timing, chain_bounds
-from .rates import (ActivationInfo, EventModel, LinkSampling, RateInterval, activation_rates,
-                    check_sampling, check_trigger_constraints, event_models, sampling_relations,
-                    trigger_order)
-from .rta import CoreLoad, TaskResponse, check_response_times, check_utilisation, core_loads
-from .rta import response_times  # noqa: F401 - the reference statement of one round, importable as before
+
+if TYPE_CHECKING:  # (imported when first used: `verify check` needs the rates alone, not the analysis)
+    from . import fastrta
+    from .chains import Bound, ChainBounds, SpecCheck, Step, Term, Timing
+    from .rates import ActivationInfo, EventModel, LinkSampling, RateInterval
+    from .rta import CoreLoad, TaskResponse
+    from .rta import response_times  # noqa: F401 - the reference statement of one round, importable as before
+
+#: the names this package gives from its modules, each imported at its first use (PEP 562)
+_FROM_MODULES = {**dict.fromkeys(("Bound", "ChainBounds", "SpecCheck", "Step", "Term", "Timing"), "chains"),
+                 **dict.fromkeys(("ActivationInfo", "EventModel", "LinkSampling", "RateInterval"), "rates"),
+                 **dict.fromkeys(("CoreLoad", "TaskResponse", "response_times"), "rta")}
+
+
+def __getattr__(name: str) -> object:
+    """A name of ``_FROM_MODULES``, imported from its module at its first use."""
+    module = _FROM_MODULES.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
+    globals()[name] = value
+    return value
+
 
 __all__ = ["ActivationInfo", "AnalysisResult", "Bound", "ChainBounds", "CoreLoad", "EventModel",
            "LinkSampling", "RateInterval", "SpecCheck", "Step", "TaskResponse", "TaskTiming", "Term",
@@ -136,6 +154,8 @@ def timing_of(result: AnalysisResult, system: SystemModel) -> Timing:
     """What the chain rules read (``Timing``), rebuilt from an analysis of ``system``: to evaluate a
     rule's quantity for the analysed configuration, e.g. the start-to-completion time ``E`` of §7.7
     that synthesis learns lemmas from."""
+    from .chains import Timing
+
     return Timing(system, {t.id: t.activation for t in result.tasks}, {t.id: t.events for t in result.tasks},
                   {t.id: t.response for t in result.tasks})
 
@@ -152,6 +172,9 @@ def _bounds(system: SystemModel, variant: str
                        tuple[ChainBounds, ...], int, bool]:
     """Rates, event models, response times (the CPA fixed point) and chain bounds: (infos, events,
     responses, chains, rounds, converged)."""
+    from .chains import Timing, chain_bounds
+    from .rates import activation_rates, trigger_order
+
     order = trigger_order(system)
     infos = activation_rates(system, order)
     events, responses, rounds, converged = _fixed_point(system, infos, order[0])
@@ -161,6 +184,9 @@ def _bounds(system: SystemModel, variant: str
 
 
 def _analyze(system: SystemModel, variant: str) -> AnalysisResult:
+    from .rates import check_sampling, check_trigger_constraints, sampling_relations
+    from .rta import check_response_times, check_utilisation, core_loads
+
     sink = DiagnosticSink()
     infos, events, responses, chains, rounds, converged = _bounds(system, variant)
     loads = core_loads(system, infos)
@@ -189,6 +215,9 @@ def _fixed_point(system: SystemModel, infos: Mapping[str, ActivationInfo], order
     """CPA global iteration: event models from response times, response times from event models,
     starting from R = bcet (zero jitter) until the WCRTs repeat (§6.5). Each round is
     ``rta.response_times``, computed by ``fastrta``; only the last one's ``TaskResponse``s are built."""
+    from . import fastrta
+    from .rates import event_models
+
     static = fastrta.Static(system)
     bcrt: dict[str, Fraction] = {t.id: t.bcet for t in system.tasks}
     wcrt: dict[str, Fraction | None] = {t.id: (t.wcrt_bound if t.wcrt_bound is not None else t.bcet)
@@ -212,6 +241,9 @@ def _give_up(system: SystemModel, infos: Mapping[str, ActivationInfo], order: tu
              ) -> tuple[dict[str, EventModel], dict[str, TaskResponse], int, bool]:
     """Non-convergence (E312): every task whose WCRT still changes is made unbounded (None absorbs),
     and the rest is recomputed until nothing changes; at most one more round per task."""
+    from . import fastrta
+    from .rates import event_models
+
     forced: set[str] = set()
     for _ in range(len(system.tasks) + 1):
         events = event_models(system, infos, order, wcrt, bcrt)
@@ -227,6 +259,8 @@ def _give_up(system: SystemModel, infos: Mapping[str, ActivationInfo], order: tu
 
 
 def _unbounded(r: TaskResponse) -> TaskResponse:
+    from .rta import TaskResponse
+
     return TaskResponse(r.task, r.core, r.priority, r.bcrt, None, None, "unbounded", r.deadline,
                         r.deadline_rule, r.blocking, r.hold, r.busy_jobs, r.critical_job, r.interferers,
                         f"the global CPA iteration did not converge within {MAX_ROUNDS} rounds")

@@ -29,12 +29,12 @@ higher threads alone: ``E = Cᵢ + Σ_{hp(π)} η⁺ₕ(E)·Cₕ`` (reported as 
 """
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import replace
 from fractions import Fraction
 
 from ..model import ExecutorModel, SystemModel, TaskModel
-from .multithreaded import multi_threaded_response
+from .multithreaded import Workers, multi_threaded_response
 from .rates import EventModel
 from ..timebase import TimeBase
 from .rta import MAX_JOBS, MAX_STEPS, Interferer, TaskResponse, bcrt, deadline_of, interferer, least_fixed_point, ratio
@@ -55,7 +55,8 @@ def executor_responses(system: SystemModel, events: Mapping[str, EventModel],
     for executor in system.executors:
         members = system.callbacks(executor.name)
         if executor.multi_threaded:
-            found.update((t.id, multi_threaded_response(system, t, executor, events, estimates)) for t in members)
+            workers = Workers(system, executor, events, estimates)
+            found.update((t.id, workers.response(t)) for t in members)
         elif members:
             level = _Level(system, executor, events, estimates, members)
             found.update((t.id, level.response(t)) for t in members)
@@ -99,14 +100,17 @@ class _Level:
         self.system, self.executor, self.events = system, executor, events
         self.members = system.callbacks(executor.name)
         self.hp = higher_threads(system, executor)
-        self.rounds = {t.id: round_bound(system, t, self.members, self.hp, events, estimates) if executor.polls
-                       else None for t in tasks}
+        polling = PollingRounds(system, executor, self.members, self.hp, events, estimates) if executor.polls else None
+        self.rounds = {t.id: None if polling is None else polling.bound(t) for t in tasks}
         self.above_flows = [interferer(system, h, events[h.id], estimates.get(h.id), h.wcet) for h in self.hp]
         flows: dict[str, Interferer] = {t.id: interferer(system, t, events[t.id], estimates.get(t.id), t.wcet)
                                         for t in self.members}
         flows.update(zip((h.id for h in self.hp), self.above_flows))
         self.failure = self._failure(flows)
+        self.holds: dict[Fraction, Fraction | None] = {}
         self.children = _local_children(system, self.members)
+        self.position = {m.id: k for k, m in enumerate(self.members)}
+        self.names = tuple(m.id for m in self.members), tuple(h.id for h in self.hp)
         if self.failure is not None:
             return
         times = [v for f in flows.values() if not f.silent for v in (f.cost, f.period, f.jitter)]
@@ -116,6 +120,8 @@ class _Level:
         self.streams = {tid: _Stream(ticks(f.cost), 1, 0, True) if f.silent else  # type: ignore[arg-type]
                         _Stream(ticks(f.cost), ticks(f.period), ticks(f.jitter), False)  # type: ignore[arg-type]
                         for tid, f in flows.items()}
+        self.work = _costs(self.streams[m.id] for m in self.members)  # (per period and jitter, below)
+        self.above = _listed(_costs(self.streams[h.id] for h in self.hp))
         everyone = list(self.streams.values())
         self.length = _fixed(lambda w: sum(s.open(w) * s.cost for s in everyone),
                              sum(self.streams[m.id].cost for m in self.members))
@@ -130,11 +136,17 @@ class _Level:
             return f"the utilisation of its executor's level is {ratio(load)} (at least 1)"
         return None
 
+    def _hold(self, wcet: Fraction) -> Fraction | None:
+        """``E = C + Σ_{hp(π)} η⁺ₕ(E)·Cₕ`` for a callback of execution time ``wcet`` (one per distinct one)."""
+        if wcet not in self.holds:
+            self.holds[wcet] = least_fixed_point(wcet, wcet, list(self.above_flows))[0]
+        return self.holds[wcet]
+
     def response(self, task: TaskModel) -> TaskResponse:
         """WCRT (§9.3) and BCRT (``bcet``) of callback ``task``."""
         executor = self.executor
         deadline, deadline_rule = deadline_of(task, self.events[task.id])
-        hold, _ = least_fixed_point(task.wcet, task.wcet, list(self.above_flows))
+        hold = self._hold(task.wcet)
         rounds = self.rounds[task.id]
         computed, offsets, critical, failure = self._wcrt(task, rounds)
         rule = (f"{executor.kind} executor, {'FIFO' if not executor.polls else 'non-preemptive'} busy window, "
@@ -146,7 +158,9 @@ class _Level:
             used, rule = task.wcrt_bound, "user bound"
         elif computed is None:
             rule = "unbounded"
-        names = tuple(m.id for m in self.members if m.id != task.id) + tuple(h.id for h in self.hp)
+        ids, above = self.names
+        k = self.position[task.id]
+        names = ids[:k] + ids[k + 1:] + above
         return TaskResponse(task.id, task.core, task.priority, bcrt(task), used, computed, rule, deadline,
                             deadline_rule, ZERO, hold, offsets, critical, names, failure)
 
@@ -159,12 +173,15 @@ class _Level:
             return None, None, None, self.failure
         if self.length is None:
             return None, None, None, f"no fixed point within {MAX_STEPS} iteration steps"
-        streams, members = self.streams, self.members
+        streams, above = self.streams, self.above
         own, cost = streams[task.id], streams[task.id].cost
         caused = _descendants(self.children, task.id)
-        others = [streams[m.id] for m in members if m.id != task.id and m.id not in caused]
-        downstream = [streams[m.id] for m in members if m.id in caused]
-        above = [streams[h.id] for h in self.hp]
+        left = dict(self.work)  # every member's work but its own and its causal descendants'
+        for tid in (task.id, *caused):
+            if not streams[tid].silent:
+                left[streams[tid].period, streams[tid].jitter] -= streams[tid].cost
+        others = _listed(left)
+        downstream = _listed(_costs(streams[tid] for tid in caused))
         offsets = _offsets(own, self.length)
         if offsets is None:
             return None, None, None, f"the busy window holds more than {MAX_JOBS} jobs of `{task.id}`"
@@ -176,13 +193,12 @@ class _Level:
             jobs = own.closed(offset)
             mine = jobs * cost
             if self.executor.polls:  # Eq. (6)
-                finish = _fixed(lambda f: mine + sum(s.closed(f - cost) * s.cost for s in others)  # noqa: B023
-                                + sum(min(s.closed(f - cost), jobs - 1) * s.cost for s in downstream)  # noqa: B023
-                                + sum(s.open(f) * s.cost for s in above), max(last, mine), limit)  # noqa: B023
+                finish = _fixed(lambda f: mine + _closed_work(others, f - cost)  # noqa: B023
+                                + _closed_work(downstream, f - cost, jobs - 1)  # noqa: B023
+                                + _open_work(above, f), max(last, mine), limit)
             else:  # FIFO
-                queued = mine + sum(s.closed(offset) * s.cost for s in others)
-                queued += sum(min(s.closed(offset), jobs - 1) * s.cost for s in downstream)
-                finish = _fixed(lambda f: queued + sum(s.open(f) * s.cost for s in above),  # noqa: B023
+                queued = mine + _closed_work(others, offset) + _closed_work(downstream, offset, jobs - 1)
+                finish = _fixed(lambda f: queued + _open_work(above, f),  # noqa: B023
                                 max(last, queued), limit)
             if finish is None:
                 return None, n, None, f"no fixed point within {MAX_STEPS} iteration steps"
@@ -193,6 +209,32 @@ class _Level:
                 best = (finish - offset, n)
         assert best is not None  # (offset 0 is always searched)
         return self.base.seconds(best[0]), len(offsets), best[1], None
+
+
+def _costs(streams: Iterable[_Stream]) -> dict[tuple[int, int], int]:
+    """The total cost of the activated streams of each (P, J): they count their jobs alike."""
+    costs: dict[tuple[int, int], int] = {}
+    for s in streams:
+        if not s.silent:
+            costs[s.period, s.jitter] = costs.get((s.period, s.jitter), 0) + s.cost
+    return costs
+
+
+def _listed(costs: Mapping[tuple[int, int], int]) -> list[tuple[int, int, int]]:
+    """``_costs`` as (P, J, C) for the sums below, without the streams of no cost left."""
+    return [(p, j, c) for (p, j), c in costs.items() if c]
+
+
+def _closed_work(merged: list[tuple[int, int, int]], window: int, most: int | None = None) -> int:
+    """``Σ η̄(window)·C`` over merged streams (window ≥ 0), each count at most ``most`` if given."""
+    if most is None:
+        return sum(((window + j) // p + 1) * c for p, j, c in merged)
+    return sum(min((window + j) // p + 1, most) * c for p, j, c in merged)
+
+
+def _open_work(merged: list[tuple[int, int, int]], window: int) -> int:
+    """``Σ η⁺(window)·C`` over merged streams (0 for window ≤ 0)."""
+    return sum(-(-(window + j) // p) * c for p, j, c in merged) if window > 0 else 0
 
 
 def _local_children(system: SystemModel, members: tuple[TaskModel, ...]) -> dict[str, list[str]]:
@@ -254,10 +296,9 @@ def _offsets(own: _Stream, length: int) -> list[int] | None:
     return points
 
 
-def round_bound(system: SystemModel, task: TaskModel, members: tuple[TaskModel, ...], hp: tuple[TaskModel, ...],
-                events: Mapping[str, EventModel], estimates: Mapping[str, Fraction | None]) -> Fraction | None:
+class PollingRounds:
     """The polling-point bound of a wait-set executor (§9.3, after Blaß et al., RTSS 2021: a polled
-    callback runs at most once per snapshot): the least ``w`` with
+    callback runs at most once per snapshot), for each callback ``i`` of it the least ``w`` with
 
         w = Cᵢ + Σ_{c ∈ E} C_c + Σ_{j ≺ i} Cⱼ + Σ_{h ∈ hp(π)} η⁺ₕ(w + Rₕ)·Cₕ.
 
@@ -265,14 +306,31 @@ def round_bound(system: SystemModel, task: TaskModel, members: tuple[TaskModel, 
     runs at most one job of each callback (i's previous job included), and the next snapshot, which
     holds i's job, runs at most one job before it of each callback that comes before i in the processing
     order (kind, then system order: ``j ≺ i``); a job of h that runs in the window was released at most
-    Rₕ before it. None when some Rₕ is unbounded."""
-    if any(estimates.get(h.id) is None for h in hp):
-        return None
-    executor = system.executor(task.executor)  # type: ignore[arg-type]  # (a callback)
-    place = (executor.kind_rank(task), system.order(task.id))
-    ahead = sum((m.wcet for m in members if (executor.kind_rank(m), system.order(m.id)) < place), ZERO)
-    base = task.wcet + sum((m.wcet for m in members), ZERO) + ahead
-    streams = [replace(s, jitter=s.jitter + estimates[h.id]) if s.jitter is not None else s  # type: ignore[operator]
-               for h in hp for s in [interferer(system, h, events[h.id], estimates.get(h.id), h.wcet)]]
-    value, _ = least_fixed_point(base, base, streams)
-    return value
+    Rₕ before it. None when some Rₕ is unbounded. What the callbacks share (``Σ_E C``, the sums over
+    the processing order, the higher threads' streams) is built once."""
+
+    def __init__(self, system: SystemModel, executor: ExecutorModel, members: tuple[TaskModel, ...],
+                 hp: tuple[TaskModel, ...], events: Mapping[str, EventModel],
+                 estimates: Mapping[str, Fraction | None]):
+        self.bounded = all(estimates.get(h.id) is not None for h in hp)
+        self.total = sum((m.wcet for m in members), ZERO)
+        self.ahead: dict[str, Fraction] = {}
+        done = ZERO
+        for m in sorted(members, key=lambda m: (executor.kind_rank(m), system.order(m.id))):
+            self.ahead[m.id] = done
+            done += m.wcet
+        self.streams = [_later(interferer(system, h, events[h.id], estimates.get(h.id), h.wcet), estimates.get(h.id))
+                        for h in hp] if self.bounded else []
+
+    def bound(self, task: TaskModel) -> Fraction | None:
+        """The bound of callback ``task`` (one of the members)."""
+        if not self.bounded:
+            return None
+        base = task.wcet + self.total + self.ahead[task.id]
+        value, _ = least_fixed_point(base, base, self.streams)
+        return value
+
+
+def _later(stream: Interferer, response: Fraction | None) -> Interferer:
+    """``stream`` with its jitter widened by ``response``: a job of it runs up to that long after its release."""
+    return stream if stream.jitter is None or response is None else replace(stream, jitter=stream.jitter + response)

@@ -47,21 +47,73 @@ ZERO = Fraction(0)
 def multi_threaded_response(system: SystemModel, task: TaskModel, executor: ExecutorModel,
                             events: Mapping[str, EventModel], estimates: Mapping[str, Fraction | None]) -> TaskResponse:
     """WCRT (§9.4) and BCRT of callback ``task`` of the multi-threaded ``executor``."""
-    deadline, deadline_rule = deadline_of(task, events[task.id])
-    members = system.callbacks(executor.name)
-    others = [m for m in members if m.id != task.id]
-    group = system.group(task.group)  # type: ignore[arg-type]  # (a callback has a group)
-    computed, failure = _window(system, task, executor, members, events, estimates)
-    if computed is not None:
-        computed += task.wcet
-    rule = f"multi_threaded executor, {len(executor.workers)} workers, {group.describe()}"
-    used: Fraction | None = computed
-    if task.wcrt_bound is not None:
-        used, rule = task.wcrt_bound, "user bound"
-    elif computed is None:
-        rule = "unbounded"
-    return TaskResponse(task.id, task.core, task.priority, bcrt(task), used, computed, rule, deadline, deadline_rule,
-                        ZERO, task.wcet, None, None, tuple(m.id for m in others), failure)
+    return Workers(system, executor, events, estimates).response(task)
+
+
+class Workers:
+    """What the callbacks of one multi-threaded executor share in §9.4, built once: their streams, the
+    carry-in of the workers, and the execution times of the activated callbacks in the processing order."""
+
+    def __init__(self, system: SystemModel, executor: ExecutorModel, events: Mapping[str, EventModel],
+                 estimates: Mapping[str, Fraction | None]):
+        self.system, self.executor, self.events = system, executor, events
+        self.members = system.callbacks(executor.name)
+        self.flows = {m.id: interferer(system, m, events[m.id], estimates.get(m.id), m.wcet) for m in self.members}
+        self.carry = carry_in(system, self.members, len(executor.workers))
+        self.live_work = sum((m.wcet for m in self.members if not self.flows[m.id].silent), ZERO)
+        self.ahead_work: dict[str, Fraction] = {}  # of the activated callbacks before each one
+        done = ZERO
+        for m in sorted(self.members, key=lambda m: (executor.kind_rank(m), system.order(m.id))):
+            self.ahead_work[m.id] = done
+            done += ZERO if self.flows[m.id].silent else m.wcet
+
+    def response(self, task: TaskModel) -> TaskResponse:
+        """WCRT (§9.4) and BCRT of callback ``task`` (one of the members)."""
+        deadline, deadline_rule = deadline_of(task, self.events[task.id])
+        group = self.system.group(task.group)  # type: ignore[arg-type]  # (a callback has a group)
+        computed, failure = self._window(task)
+        if computed is not None:
+            computed += task.wcet
+        rule = f"multi_threaded executor, {len(self.executor.workers)} workers, {group.describe()}"
+        used: Fraction | None = computed
+        if task.wcrt_bound is not None:
+            used, rule = task.wcrt_bound, "user bound"
+        elif computed is None:
+            rule = "unbounded"
+        return TaskResponse(task.id, task.core, task.priority, bcrt(task), used, computed, rule, deadline,
+                            deadline_rule, ZERO, task.wcet, None, None,
+                            tuple(m.id for m in self.members if m.id != task.id), failure)
+
+    def _window(self, task: TaskModel) -> tuple[Fraction | None, str | None]:
+        """The least ``w = B + W(w)/m`` of §9.4 (the longest ``s − r``), or None and why."""
+        blocking, why = group_blocking(self.system, task, self.executor)
+        if blocking is None:
+            return None, why
+        workers = len(self.executor.workers)
+        if not (blocking > 0 and why == "siblings"):  # (the counts are capped: no fixed point to find)
+            # (one job of each activated other callback, two of those before it in the processing order)
+            own = ZERO if self.flows[task.id].silent else task.wcet
+            return blocking + (self.carry + self.live_work - own + self.ahead_work[task.id]) / workers, None
+        live = [f for tid, f in self.flows.items() if tid != task.id and not f.silent]
+        return held_window(live, blocking, self.carry, workers)
+
+
+def held_window(live: list[Interferer], blocking: Fraction, carry: Fraction, workers: int
+                ) -> tuple[Fraction | None, str | None]:
+    """The least ``w = B + (carry + Σ nⱼ(w)·Cⱼ)/m`` of §9.4 over the activated other callbacks ``live``
+    when other members of the group hold the job back (the counts follow the activations)."""
+    if any(f.period is None or f.jitter is None for f in live):
+        unbounded = next(f for f in live if f.period is None or f.jitter is None)
+        return None, f"the activations of `{unbounded.task}` are not bounded"
+    if (load := sum((f.cost / f.period for f in live), ZERO)) >= workers:  # type: ignore[operator]
+        return None, f"the other callbacks' utilisation is {ratio(load)}, not below its {workers} workers"
+    w = blocking + (carry + sum((_jobs(f, ZERO) * f.cost for f in live), ZERO)) / workers  # type: ignore[operator]
+    for _ in range(MAX_STEPS):
+        new = blocking + (carry + sum((_jobs(f, w) * f.cost for f in live), ZERO)) / workers  # type: ignore[operator]
+        if new == w:
+            return w, None
+        w = new
+    return None, f"no fixed point within {MAX_STEPS} iteration steps"
 
 
 def may_overlap(system: SystemModel, task: TaskModel, wcrt: Fraction | None, events: EventModel) -> bool:
@@ -91,37 +143,6 @@ def group_blocking(system: SystemModel, task: TaskModel, executor: ExecutorModel
         return None, (f"it may starve: `{ahead[0].id}` comes before it in {group.describe()} "
                       "(Teper et al., EMSOFT 2024)")
     return max(m.wcet for m in (task, *siblings)) + sum((m.wcet for m in siblings), ZERO), "siblings"
-
-
-def _window(system: SystemModel, task: TaskModel, executor: ExecutorModel, members: tuple[TaskModel, ...],
-            events: Mapping[str, EventModel], estimates: Mapping[str, Fraction | None]
-            ) -> tuple[Fraction | None, str | None]:
-    """The least ``w = B + W(w)/m`` of §9.4 (the longest ``s − r``), or None and why."""
-    blocking, why = group_blocking(system, task, executor)
-    if blocking is None:
-        return None, why
-    held = blocking > 0 and why == "siblings"  # (its own previous job alone: the counts stay capped)
-    place = (executor.kind_rank(task), system.order(task.id))
-    flows = [interferer(system, m, events[m.id], estimates.get(m.id), m.wcet) for m in members if m.id != task.id]
-    ahead = {m.id for m in members if (executor.kind_rank(m), system.order(m.id)) < place}
-    live = [f for f in flows if not f.silent]
-    if held and any(f.period is None or f.jitter is None for f in live):
-        unbounded = next(f for f in live if f.period is None or f.jitter is None)
-        return None, f"the activations of `{unbounded.task}` are not bounded"
-    workers = len(executor.workers)
-    if held and (load := sum((f.cost / f.period for f in live), ZERO)) >= workers:  # type: ignore[operator]
-        return None, f"the other callbacks' utilisation is {ratio(load)}, not below its {workers} workers"
-    carry = carry_in(system, members, workers)
-    if not held:  # (the counts do not depend on the window: no fixed point to find)
-        jobs = sum(((2 if f.task in ahead else 1) * f.cost for f in live), ZERO)  # type: ignore[operator]
-        return blocking + (carry + jobs) / workers, None
-    w = blocking + (carry + sum((_jobs(f, ZERO) * f.cost for f in live), ZERO)) / workers  # type: ignore[operator]
-    for _ in range(MAX_STEPS):
-        new = blocking + (carry + sum((_jobs(f, w) * f.cost for f in live), ZERO)) / workers  # type: ignore[operator]
-        if new == w:
-            return w, None
-        w = new
-    return None, f"no fixed point within {MAX_STEPS} iteration steps"
 
 
 def _jobs(flow: Interferer, window: Fraction) -> int:
