@@ -184,7 +184,9 @@ def test_runner_quick_mode_writes_json(tmp_path, capsys):
         assert [r["tasks"] for r in rows] == list(run.QUICK[name]), name
         for r in rows:
             assert r["runs"] == 1 and len(r["seconds"]) == 1 and r["seconds"][0] > 0
-            assert r["peak_bytes"][0] > 0 and r["chains"] >= 1
+            assert r["peak_bytes"][0] > 0
+            # (the hostile-input stages' files are a flood of errors or one crowded core: no chain)
+            assert r["chains"] >= (0 if name in ("hostile-diagnostics", "hostile-recovery", "analyze-one-core") else 1)
     assert [r["tasks"] for r in by_stage["parse+check"]] == list(run.QUICK_SIZES)
     for r in by_stage["prove-bound"]:
         assert r["result"]["proved"] == r["result"]["verdicts"] > 0

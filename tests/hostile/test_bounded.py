@@ -22,6 +22,10 @@ from verify.parse import parse_source, recovery_limit
 from verify.render import TEXT_PER_FILE, render_all_text
 from verify.source import SourceFile
 
+from benchmarks.hostile import generate_trigger_chain
+
+from ..test_prove import E312_SYSTEM
+
 COMPONENT = "component C {\n  out o : T\n  task K {\n    produces o\n    wcet 1 ms\n  }\n}\n"
 
 
@@ -312,25 +316,12 @@ def test_interferers_agree_with_the_reference_analysis():
     assert fast["i5.T"].interferers == ("i0.T", "i1.T", "i2.T", "i3.T", "i4.T")
 
 
-def _trigger_chain(n: int, cores: int = 8) -> str:
-    """A chain of ``n`` tasks over ``cores`` cores, each triggered by the one before, priorities falling
-    along it (no causal path keeps a cap: each task's writers are of higher priority)."""
-    component = ("component P {\n  in i : M\n  out o : M\n  task Run {\n    reads i optional\n    produces o\n"
-                 "    bcet 1 us\n    wcet 2 us\n  }\n}\n")
-    lines = [f"  core c{c}\n" for c in range(cores)]
-    lines += [f"  instance p{k} : P on c{k % cores} {{ task Run priority {n - k} "
-              f"{'trigger i' if k else 'timer 10 ms'} }}\n" for k in range(n)]
-    lines += [f"  connect p{k - 1}.o -> p{k}.i\n" for k in range(1, n)]
-    lines.append("  chain c: " + " -> ".join(f"p{k}.o" for k in range(n)) + " {\n    reaction_time <= 100 s\n  }\n")
-    return component + "system S {\n" + "".join(lines) + "}\n"
-
-
 def test_the_causal_paths_of_a_long_trigger_chain_cost_what_they_find():
     from verify.timing import analyze
     from verify.timing.fastrta import Round
 
     def walk_lines(n: int) -> int:
-        model = verify.load_text(_trigger_chain(n), "chain.vfy").system()
+        model = verify.load_text(generate_trigger_chain(n), "chain.vfy").system()
         return _lines_run(Round._causal_paths.__code__, lambda: analyze(model))
 
     small, large = walk_lines(60), walk_lines(240)
@@ -339,21 +330,6 @@ def test_the_causal_paths_of_a_long_trigger_chain_cost_what_they_find():
 
 
 # ------------------------------------------------------------------ prove
-
-
-E312_SYSTEM = """
-component Ticker { out tick : Msg
-  task Tick { produces tick  wcet 1 ms } }
-component Echo { in tick : Msg  in again : Msg  in any = tick | again  out echo : Msg
-  task Run { reads tick  reads again  produces echo  wcet 1 ms } }
-system Robot {
-  core cpu
-  instance ticker : Ticker on cpu { task Tick priority 2 timer 10 ms }
-  instance echo : Echo on cpu { task Run priority 1 trigger any }
-  connect ticker.tick -> echo.tick
-  connect echo.echo -> echo.again
-}
-"""
 
 
 def test_the_run_of_e312s_note_is_a_scenario_of_the_budget():
