@@ -359,3 +359,14 @@ def test_check_loads_neither_the_response_time_analysis_nor_the_solvers():
     for command, loaded in (("check", []), ("analyze", list(heavy[:3]))):
         done = subprocess.run([sys.executable, "-c", code, command, nav], capture_output=True, text=True, check=True)
         assert done.stdout.strip() == f"0 {loaded}", done.stderr
+
+
+def test_the_command_line_loads_no_language_server_library_until_lsp_runs():
+    """Building the parser (`verify --help`, every command) reads `verify lsp`'s options without pygls
+    and lsprotocol (their types module alone costs more than half a second to compile)."""
+    code = ("import sys, contextlib, io\nfrom verify.cli import main\n"
+            "with contextlib.redirect_stdout(io.StringIO()):\n"
+            "    try:\n        main(['--help'])\n    except SystemExit:\n        pass\n"
+            "print([m for m in ('pygls', 'lsprotocol', 'verify.lsp.transport') if m in sys.modules])")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert done.stdout.strip() == "[]", done.stderr

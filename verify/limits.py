@@ -33,3 +33,11 @@ class Limits:
 
 
 DEFAULT_LIMITS = Limits()
+
+#: the largest message body the language server reads (bytes; ``verify lsp --max-message-bytes``): a
+#: document at the size limit of one file (16 MiB) fits even with every character escaped in JSON as
+#: ``\\uXXXX`` pairs. Kept here, apart from the server, so that the command line shows it without
+#: importing the LSP libraries.
+LSP_MESSAGE_BYTES = 128 * 1024 * 1024
+#: the longest header line of a language server message (bytes)
+LSP_HEADER_BYTES = 4096

@@ -41,11 +41,9 @@ from lsprotocol import types as lsp
 from pygls.io_ import StdoutWriter
 from pygls.protocol import JsonRPCProtocol, JsonRPCRequestMessage, default_converter
 
-#: the largest message body the server reads (bytes): a document at the loader's size limit
-#: (``verify.limits``, 16 MiB) fits even with every character escaped in JSON as ``\\uXXXX`` pairs
-MESSAGE_BYTES = 128 * 1024 * 1024
-#: the longest header line (bytes)
-HEADER_BYTES = 4096
+from ..limits import LSP_HEADER_BYTES as HEADER_BYTES
+from ..limits import LSP_MESSAGE_BYTES as MESSAGE_BYTES
+
 #: the piece in which the body of an oversize message is read and dropped
 DISCARD_CHUNK = 64 * 1024
 
