@@ -38,7 +38,8 @@ from ..source import SourceMap
 from ..symbols import Symbol
 from ..timing import AnalysisResult
 from . import features as f
-from .transport import MESSAGE_BYTES, Worker, serve, shared_converter
+from ..limits import LSP_MESSAGE_BYTES as MESSAGE_BYTES
+from .transport import Worker, serve, shared_converter
 
 #: seconds after the last change before the timing analysis starts
 ANALYSIS_DELAY = 0.3
