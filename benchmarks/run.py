@@ -78,8 +78,10 @@ from collections import Counter
 from dataclasses import dataclass, field
 from datetime import datetime, UTC
 from fractions import Fraction
+import functools
 from functools import cached_property
 from pathlib import Path
+from typing import Any
 from collections.abc import Callable
 
 import verify
@@ -360,29 +362,15 @@ def _register_analyze() -> None:
            quick_sizes=(10,), generator=generate_pipeline_system)
     def analyze_pipeline(inst: Instance) -> dict:
         result = analyze(inst.model)
-        unbounded = [t.id for t in result.tasks if t.response.wcrt is None]
         found = {"CPA rounds": result.rounds, "WCRT of the last task": _ms(result.tasks[-1].response.wcrt),
                  "reaction time": _ms(result.chains[0].reaction_time.worst)}
-        if not result.converged or unbounded:
-            raise BenchmarkError(f"{len(unbounded)} task(s) without a WCRT bound (converged: {result.converged})",
-                                 found)
-        return found
-
-
-    def analyze_executors(inst: Instance) -> dict:
-        result = analyze(inst.model)
-        unbounded = [t.id for t in result.tasks if t.response.wcrt is None]
-        found = {"CPA rounds": result.rounds, "largest WCRT": _ms(max(t.response.wcrt or Fraction(0)
-                                                                      for t in result.tasks))}
-        if not result.converged or unbounded:
-            raise BenchmarkError(f"{len(unbounded)} callback(s) without a WCRT bound (converged: {result.converged})",
-                                 found)
-        return found
+        return _every_wcrt_bounded(result, found, "task")
 
     for kind in ("single_threaded", "multi_threaded"):
         stage(f"analyze-{kind.replace('_', '-')}", f"verify.timing.analyze on callbacks of {kind} ROS 2 executors, "
               "100 callbacks each (specs/timing.md §9)", needs=("model",), sizes=(1000,), quick_sizes=(100,),
-              generator=generate_executor_system, options={"kind": kind})(analyze_executors)
+              generator=generate_executor_system, options={"kind": kind})(
+                  functools.partial(_analyze_to_largest_wcrt, noun="callback"))
 
 
 #: the generators of the hostile stages (``benchmarks/hostile.py``) and the names of their instances
@@ -413,23 +401,33 @@ def _register_hostile() -> None:
             raise BenchmarkError("no syntax error reported")
         return {"syntax errors": errors}
 
-    def analyze_bounded(inst: Instance) -> dict:
-        from verify.timing import analyze
-
-        result = analyze(inst.model)
-        unbounded = [t.id for t in result.tasks if t.response.wcrt is None]
-        found = {"CPA rounds": result.rounds, "largest WCRT": _ms(max(t.response.wcrt or Fraction(0)
-                                                                      for t in result.tasks))}
-        if not result.converged or unbounded:
-            raise BenchmarkError(f"{len(unbounded)} task(s) without a WCRT bound", found)
-        return found
-
+    analyze_bounded = functools.partial(_analyze_to_largest_wcrt, noun="task")
     stage("analyze-one-core", "verify.timing.analyze on n timer tasks on one core at one priority (memory linear "
           "in the tasks of a core)", needs=("model",), sizes=(1000, 10000), quick_sizes=(100,),
           generator=hostile.generate_one_core)(analyze_bounded)
     stage("analyze-trigger-chain", "verify.timing.analyze on an n-hop chain over 8 cores, each task triggered by "
           "the one before, at falling priorities", needs=("model",), sizes=(250, 500, 1000), quick_sizes=(20,),
           generator=hostile.generate_trigger_chain)(analyze_bounded)
+
+
+def _analyze_to_largest_wcrt(inst: Instance, noun: str) -> dict:
+    """``verify.timing.analyze`` on the instance: its CPA rounds and largest WCRT, every one bounded."""
+    from verify.timing import analyze
+
+    result = analyze(inst.model)
+    found = {"CPA rounds": result.rounds, "largest WCRT": _ms(max(t.response.wcrt or Fraction(0)
+                                                                  for t in result.tasks))}
+    return _every_wcrt_bounded(result, found, noun)
+
+
+def _every_wcrt_bounded(result: Any, found: dict, noun: str) -> dict:
+    """``found``, or a ``BenchmarkError`` holding it when the analysis did not converge or left a ``noun``
+    without a WCRT bound."""
+    unbounded = [t.id for t in result.tasks if t.response.wcrt is None]
+    if not result.converged or unbounded:
+        raise BenchmarkError(f"{len(unbounded)} {noun}(s) without a WCRT bound (converged: {result.converged})",
+                             found)
+    return found
 
 
 def _ms(seconds: Fraction | None) -> str:
