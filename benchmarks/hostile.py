@@ -45,7 +45,7 @@ def generate_trigger_chain(n: int, seed: int = 1, cores: int = 8) -> str:
 def render_diagnostics(text: str) -> tuple[int, int]:
     """Load ``text`` and render its diagnostics as ``verify check`` does: (diagnostics, lines shown)."""
     import verify
-    from verify.render import render_all_text
+    from verify.outputs.rendering import render_all_text
 
     result = verify.load_text(text, "hostile.vfy")
     return len(result.diagnostics), render_all_text(result.diagnostics, result.sources).count("\n")
@@ -53,6 +53,6 @@ def render_diagnostics(text: str) -> tuple[int, int]:
 
 def recover(text: str) -> int:
     """Parse ``text`` (Lark's error path): the syntax errors reported."""
-    from verify.parse import parse_source
+    from verify.frontend.parse import parse_source
 
     return len(parse_source(text, "hostile.vfy").diagnostics)

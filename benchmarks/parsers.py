@@ -1,16 +1,17 @@
 """Parser engines for the ``parse-*`` stages of ``benchmarks.run``: verify's own parse against Lark's.
 
-Every engine turns the text of a valid model into the same ``verify.syntax.Module`` with the same
-``_Builder`` callbacks of ``verify.parse`` (one per grammar rule, ``(start, end, children)`` with positions
+Every engine turns the text of a valid model into the same ``verify.model.syntax.Module`` with the same
+``_Builder`` callbacks of ``verify.frontend.parse`` (one per grammar rule, ``(start, end, children)`` with positions
 ``lalr.position(line, column)``), so that what is compared is the machinery around them:
 
-- ``verify``: ``verify.parse.parse_source`` — the fast path of ``verify/lalr.py`` (Lark's table, a one-regex
+- ``verify``: ``verify.frontend.parse.parse_source`` — the fast path of ``verify/frontend/lalr.py``
+  (Lark's table, a one-regex
   lexer, callbacks at each reduction);
 - ``lark-transformer``: ``Lark(..., parser="lalr", lexer="contextual", transformer=T)``, Lark's own tree-less
   LALR: Lark calls ``T``'s methods at each reduction and builds no tree;
 - ``lark-standalone``: the same with the parser that ``python -m lark.tools.standalone`` generates (written
   to ``benchmarks/out/`` at benchmark time, never committed) and the same transformer;
-- ``lark-tree``: Lark's parse tree, then ``_Builder.transform`` (what ``verify.parse`` does on its error path;
+- ``lark-tree``: Lark's parse tree, then ``_Builder.transform`` (what ``verify.frontend.parse`` does on its error path;
   a reference, not a candidate).
 
 **Positions with a transformer.** Lark passes an internal transformer no ``meta`` (``v_args(meta=True)``
@@ -38,8 +39,8 @@ OUT = Path(__file__).resolve().parent / "out"
 
 
 def dropped_terminals() -> frozenset[str]:
-    """The terminals the ordinary parser (``verify.larkparse._parser``) leaves out of its trees."""
-    from verify.larkparse import _parser
+    """The terminals the ordinary parser (``verify.frontend.larkparse._parser``) leaves out of its trees."""
+    from verify.frontend.larkparse import _parser
 
     dropped, kept = set(), set()
     for rule in _parser().rules:
@@ -53,20 +54,20 @@ def dropped_terminals() -> frozenset[str]:
 
 def callback_names() -> list[str]:
     """The rules (aliases or names) that build a value: every method of ``_Builder`` a rule calls."""
-    from verify.parse import _fast_parser
+    from verify.frontend.parse import _fast_parser
 
     fast = _fast_parser()
     if fast is None:  # pragma: no cover - the fast path is off for this grammar
-        raise RuntimeError("verify's fast path (verify/lalr.py) is disabled for this grammar")
+        raise RuntimeError("verify's fast path (verify/frontend/lalr.py) is disabled for this grammar")
     return sorted(fast.callback_names())
 
 
 def transformer(transformer_class: type):
     """An instance of a subclass of ``transformer_class`` (``lark.Transformer``, or the standalone module's
-    copy of it) that builds ``verify.syntax`` with ``_Builder``; ``begin(path)`` before each parse (a new
+    copy of it) that builds ``verify.model.syntax`` with ``_Builder``; ``begin(path)`` before each parse (a new
     builder: spans carry the path). Its parse returns ``(module, start, end)``."""
-    from verify.diagnostics import DiagnosticSink
-    from verify.parse import _Builder
+    from verify.core.diagnostics import DiagnosticSink
+    from verify.frontend.parse import _Builder
 
     names = callback_names()
     dropped = dropped_terminals()
@@ -118,7 +119,7 @@ class LarkTransformerEngine:
     def __init__(self):
         from lark import Lark, Transformer
 
-        from verify.larkparse import _WholeWords, grammar_text
+        from verify.frontend.larkparse import _WholeWords, grammar_text
 
         self.transformer = transformer(Transformer)
         self.lark = Lark(grammar_text(), parser="lalr", lexer="contextual", keep_all_tokens=True,
@@ -135,7 +136,7 @@ def generate_standalone(out_dir: Path = OUT) -> Path:
     may share the directory). Regenerated at each call."""
     import lark
 
-    from verify.larkparse import grammar_text
+    from verify.frontend.larkparse import grammar_text
 
     grammar = grammar_text()
     digest = hashlib.sha256(f"{lark.__version__}\n{grammar}".encode()).hexdigest()[:12]
@@ -157,7 +158,7 @@ class LarkStandaloneEngine:
     generated module's own ``Transformer``)."""
 
     def __init__(self, out_dir: Path = OUT):
-        from verify.larkparse import _WholeWords
+        from verify.frontend.larkparse import _WholeWords
 
         self.path = generate_standalone(out_dir)
         spec = importlib.util.spec_from_file_location(f"verify_bench_{self.path.stem}", self.path)
@@ -174,25 +175,25 @@ class LarkStandaloneEngine:
 
 
 class LarkTreeEngine:
-    """Lark's parse tree with positions (``verify.larkparse._parser()``), then ``_Builder.transform``."""
+    """Lark's parse tree with positions (``verify.frontend.larkparse._parser()``), then ``_Builder.transform``."""
 
     def __init__(self):
-        from verify.larkparse import _parser
+        from verify.frontend.larkparse import _parser
 
         self.lark = _parser()
 
     def parse(self, text: str, path: str):
-        from verify.diagnostics import DiagnosticSink
-        from verify.parse import _Builder
+        from verify.core.diagnostics import DiagnosticSink
+        from verify.frontend.parse import _Builder
 
         return _Builder(path, DiagnosticSink()).transform(self.lark.parse(text))
 
 
 class VerifyEngine:
-    """``verify.parse.parse_source``: the fast path of ``verify/lalr.py`` on valid input."""
+    """``verify.frontend.parse.parse_source``: the fast path of ``verify/frontend/lalr.py`` on valid input."""
 
     def parse(self, text: str, path: str):
-        from verify.parse import parse_source
+        from verify.frontend.parse import parse_source
 
         parsed = parse_source(text, path)
         if parsed.diagnostics or parsed.module is None:
@@ -205,8 +206,8 @@ class VerifyEngine:
     def fast_path(text: str, path: str):
         """The module straight from ``FastParser.parse`` (raises ``Unparsable`` if the fast path rejects the
         text, in which case ``parse_source`` would have timed Lark's error path instead)."""
-        from verify.diagnostics import DiagnosticSink
-        from verify.parse import _Builder, _fast_parser
+        from verify.core.diagnostics import DiagnosticSink
+        from verify.frontend.parse import _Builder, _fast_parser
 
         builder = _Builder(path, DiagnosticSink())
         return _fast_parser().parse(text, builder.callbacks(), builder.tokens())
@@ -218,7 +219,7 @@ def sampled_spans(value, most: int = 200) -> list:
     ``most`` of them). Spans take no part in ``==`` on syntax nodes; this list does."""
     import dataclasses
 
-    from verify.source import Span
+    from verify.core.source import Span
 
     out: list = []
 

@@ -20,7 +20,8 @@ took). It may return a dict of result fields (status, evaluations, ...), shown i
 - ``parse+check``: ``verify.load_text`` on the text (parse, resolve, validate, build the model, chain
   checks). The system must load without a single diagnostic.
 - ``parse-verify``, ``parse-lark-transformer``, ``parse-lark-standalone``, ``parse-lark-tree``: one valid text
-  into the ``verify.syntax`` tree by verify's own parse (the fast path of ``verify/lalr.py``), by Lark's LALR with
+  into the ``verify.model.syntax`` tree by verify's own parse (the fast path of ``verify/frontend/lalr.py``),
+  by Lark's LALR with
   ``transformer=`` (no parse tree), by the parser of ``python -m lark.tools.standalone`` with the same
   transformer, and by Lark's tree then ``_Builder.transform`` (``benchmarks.parsers``), the collector paused as
   ``verify.load_text`` runs (``--param gc=on``: on). Every run's tree must equal the fast path's, spans
@@ -141,7 +142,7 @@ class Instance:
 
     @cached_property
     def model(self):
-        """The semantic model of the system (``verify.model.SystemModel``)."""
+        """The semantic model of the system (``verify.model.system.SystemModel``)."""
         return self.loaded.system()
 
     @cached_property
@@ -153,17 +154,18 @@ class Instance:
 
     @cached_property
     def syntax(self):
-        """The ``verify.syntax.Module`` of the text, straight from verify's fast path (``verify/lalr.py``): the
+        """The ``verify.model.syntax.Module`` of the text, straight from verify's fast path
+        (``verify/frontend/lalr.py``): the
         reference of the ``parse-*`` stages. Raises BenchmarkError if the fast path does not accept the text
         (``parse_source`` would then time Lark's error path)."""
-        from verify.lalr import Unparsable
+        from verify.frontend.lalr import Unparsable
 
         from .parsers import VerifyEngine
 
         try:
             return VerifyEngine.fast_path(self.text, self.name)
         except Unparsable:
-            raise BenchmarkError(f"verify's fast path (verify/lalr.py) does not accept {self.name}") from None
+            raise BenchmarkError(f"verify's fast path (verify/frontend/lalr.py) does not accept {self.name}") from None
 
     @cached_property
     def syntax_spans(self) -> list:
@@ -312,7 +314,8 @@ def _register_parsers() -> None:
         return {"tree": "equal", "spans equal": len(spans)}
 
     descriptions = {
-        "verify": "verify.parse.parse_source on valid input: the fast path of verify/lalr.py (Lark's table, "
+        "verify": "verify.frontend.parse.parse_source on valid input: the fast path of verify/frontend/lalr.py "
+                  "(Lark's table, "
                   "its own lexer, _Builder's callbacks at each reduction)",
         "lark-transformer": "Lark LALR, contextual lexer, transformer= (no parse tree): _Builder's callbacks "
                             "through an adapter (keep_all_tokens, positions from the children)",
@@ -326,7 +329,7 @@ def _register_parsers() -> None:
         @stage(f"parse-{key}", descriptions[key], needs=("syntax", "syntax_spans"), sizes=(10, 100, 1000, 10000),
                params={"gc": "paused"}, setup=lambda: engine(key), check=check)
         def parse_stage(inst: Instance, **params):
-            # "paused": the cyclic collector off during the parse, as verify.load_text runs it (verify.gcpause;
+            # "paused": the cyclic collector off during the parse, as verify.load_text runs it (verify.core.gcpause;
             # not paused_gc itself, whose exit may run a full collection); "on": as the runner's other stages
             mode = params["gc"]
             if mode == "on":
@@ -381,7 +384,7 @@ HOSTILE_NAMES: dict[Callable[..., str], str] = {
 
 def _register_hostile() -> None:
     """Issue 37's big cases: work linear in their size (``benchmarks/hostile.py``)."""
-    from verify.render import TEXT_PER_FILE
+    from verify.outputs.rendering import TEXT_PER_FILE
 
     @stage("hostile-diagnostics", "verify.load_text and the text rendering of its diagnostics (as `verify check` "
            "shows them) for a file of n lines with two unknown instances each", sizes=(4000, 16000),
@@ -392,7 +395,7 @@ def _register_hostile() -> None:
             raise BenchmarkError(f"{found} diagnostics, {lines} lines shown", {"diagnostics": found})
         return {"diagnostics": found, "lines shown": lines}
 
-    @stage("hostile-recovery", "verify.parse.parse_source on a component opened and then n words on its one "
+    @stage("hostile-recovery", "verify.frontend.parse.parse_source on a component opened and then n words on its one "
            "line: error recovery up to its limit", sizes=(100000, 1000000), quick_sizes=(1000,),
            generator=hostile.generate_junk_line)
     def recovery_stage(inst: Instance) -> dict:
@@ -433,7 +436,7 @@ def _every_wcrt_bounded(result: Any, found: dict, noun: str) -> dict:
 def _ms(seconds: Fraction | None) -> str:
     if seconds is None:
         return "–"
-    from verify.units import fmt_time
+    from verify.model.units import fmt_time
 
     return fmt_time(seconds)
 

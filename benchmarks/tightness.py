@@ -87,7 +87,7 @@ class AboveBound(AssertionError):
 def _simulated(model, n: int, runs: int) -> dict[tuple[str, str], Fraction]:
     """The worst sample per (chain, metric) over ``runs`` random scenarios of 2 s, the first with every job
     at its wcet and every message at its largest delay."""
-    from verify.sim import Scenario, chain_latencies, random_scenario, simulate
+    from verify.prove.sim import Scenario, chain_latencies, random_scenario, simulate
 
     worst: dict[tuple[str, str], Fraction] = {}
     for run in range(runs):

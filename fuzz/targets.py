@@ -74,7 +74,7 @@ def _located(diagnostics, source: str = "") -> None:
 
 
 def _render(diagnostics, sources) -> None:
-    from verify.render import diagnostics_json, render_all_text
+    from verify.outputs.rendering import diagnostics_json, render_all_text
 
     render_all_text(list(diagnostics), sources)
     json.dumps(diagnostics_json(list(diagnostics)))
@@ -84,8 +84,8 @@ def _render(diagnostics, sources) -> None:
 
 
 def parse(data: bytes) -> None:
-    from verify.fmt import format_module
-    from verify.parse import parse_source
+    from verify.frontend.fmt import format_module
+    from verify.frontend.parse import parse_source
 
     text = _text(data)
     parsed = parse_source(text, "fuzz.vfy")
@@ -159,7 +159,7 @@ def synth(data: bytes) -> None:
 def prove(data: bytes) -> None:
     from verify.prove import prove as run
     from verify.prove.report import to_json, to_text
-    from verify.sarif import to_sarif
+    from verify.outputs.sarif import to_sarif
 
     for _result, model in _models(data, holes=False, small=True):
         proof = run(model, budget=PROVE_BUDGET, rlimit=PROVE_RLIMIT, jobs=1)
@@ -175,7 +175,7 @@ def prove(data: bytes) -> None:
 
 def fmt(data: bytes) -> None:
     import verify
-    from verify.fmt import format_text
+    from verify.frontend.fmt import format_text
 
     text = _text(data)
     once, diagnostics = format_text(text, "fuzz.vfy")
@@ -198,7 +198,7 @@ _KIND_BY_KEYWORD = {"ComponentDefinition": ".component", "SystemComponentArchite
 
 def smartmdsd(data: bytes) -> None:
     import verify
-    from verify.diagnostics import DiagnosticSink
+    from verify.core.diagnostics import DiagnosticSink
     from verify.interop.smartmdsd.read import KINDS, Files, read_text
     from verify.interop.smartmdsd.to_vfy import import_system
 
@@ -224,11 +224,11 @@ def smartmdsd(data: bytes) -> None:
 
 def caret(data: bytes) -> None:
     import verify
-    from verify.diagnostics import DiagnosticSink
+    from verify.core.diagnostics import DiagnosticSink
     from verify.interop.caret.read import read
     from verify.interop.caret.to_vfy import import_architecture
-    from verify.limits import DEFAULT_LIMITS
-    from verify.source import SourceFile
+    from verify.core.limits import DEFAULT_LIMITS
+    from verify.core.source import SourceFile
 
     text, sink = _text(data), DiagnosticSink()
     architecture = read(text, "architecture.yaml", sink, DEFAULT_LIMITS)

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from fractions import Fraction as F
 
-from verify.model import LinkModel
+from verify.model.system import LinkModel
 
 
 def link(source, target, tasks, dmin=F(0), dmax=None):

@@ -12,8 +12,8 @@ from fractions import Fraction
 
 from hypothesis import strategies as st
 
-from verify import syntax as s
-from verify.larkparse import grammar_text
+from verify.model import syntax as s
+from verify.frontend.larkparse import grammar_text
 
 MODULE_PATH = "<text>"
 

@@ -1,4 +1,4 @@
-"""The activation kinds' behaviour (verify.activations) and integer time (verify.timebase)."""
+"""The activation kinds' behaviour (verify.model.activations) and integer time (verify.core.timebase)."""
 from __future__ import annotations
 
 from fractions import Fraction as F
@@ -7,9 +7,9 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from verify.activations import KINDS, Activation, DataTriggered, Hole, Periodic, SporadicSource
-from verify.construct import is_plain_frozen
-from verify.timebase import TimeBase, ceil_to, floor_to, frac_gcd, frac_lcm
+from verify.model.activations import KINDS, Activation, DataTriggered, Hole, Periodic, SporadicSource
+from verify.core.construct import is_plain_frozen
+from verify.core.timebase import TimeBase, ceil_to, floor_to, frac_gcd, frac_lcm
 
 MS = F(1, 1000)
 
@@ -18,7 +18,7 @@ def test_every_kind_is_registered_by_its_name_and_built_fast():
     assert {"timer": Periodic, "sporadic": SporadicSource, "trigger": DataTriggered, "hole": Hole} == KINDS
     for name, cls in KINDS.items():
         assert issubclass(cls, Activation) and cls.kind == name
-    for cls in (Periodic, SporadicSource, DataTriggered):  # built by the thousand: verify.construct's fast path
+    for cls in (Periodic, SporadicSource, DataTriggered):  # built by the thousand: verify.core.construct's fast path
         assert is_plain_frozen(cls)
 
 

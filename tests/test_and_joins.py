@@ -12,7 +12,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import verify
-from verify.sim import random_scenario, simulate
+from verify.prove.sim import random_scenario, simulate
 from verify.timing import analyze, diagnostics_of
 
 from .test_perf_equivalence import _rounds_agree

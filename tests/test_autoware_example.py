@@ -9,7 +9,7 @@ import pytest
 
 import verify
 from verify.cli import main
-from verify.sim import random_scenario, simulate
+from verify.prove.sim import random_scenario, simulate
 from verify.timing import analyze, diagnostics_of
 
 from .conftest import EXAMPLES

@@ -16,7 +16,7 @@ import verify
 from benchmarks import run
 from benchmarks.generate import (PERIOD_SHARES, draw_chain, draw_system, generate_chain_system, generate_system,
                                  main as generate_main, render)
-from verify.model import DataTriggered, Periodic
+from verify.model.system import DataTriggered, Periodic
 
 
 def load_clean(text: str):

@@ -20,7 +20,7 @@ from hypothesis import HealthCheck, find, given, settings
 from hypothesis import strategies as st
 
 import verify
-from verify.sim import Scenario, chain_latencies, random_scenario, simulate
+from verify.prove.sim import Scenario, chain_latencies, random_scenario, simulate
 from verify.timing import analyze
 
 from .test_timing import KINDS, MS, bound_violations, promised_user_bounds

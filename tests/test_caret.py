@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 
 import verify
 from verify.cli import main
-from verify.diagnostics import DiagnosticSink
+from verify.core.diagnostics import DiagnosticSink
 from verify.interop.caret import import_dirs
 from verify.timing import analyze
 

@@ -3,9 +3,9 @@ completed, analysed and exported, as its README shows."""
 from __future__ import annotations
 
 from verify.cli import main
-from verify.diagnostics import DiagnosticSink
+from verify.core.diagnostics import DiagnosticSink
 from verify.interop.caret.read import read
-from verify.limits import DEFAULT_LIMITS
+from verify.core.limits import DEFAULT_LIMITS
 
 from .conftest import EXAMPLES
 

@@ -26,7 +26,7 @@ def test_check_json_schema(write, capsys):
     path = write({"m.vfy": BROKEN})
     assert main(["check", path, "--format", "json"]) == 2
     doc = json.loads(capsys.readouterr().out)
-    assert doc["schema"] == "verify.diagnostics/1"
+    assert doc["schema"] == "verify.core.diagnostics/1"
     (d,) = doc["diagnostics"]
     assert d["code"] == "E101" and d["severity"] == "error" and d["line"] == 2 and d["column"] == 25
     assert d["help"] == "did you mean `Laser`?" and d["spec"] == "specs/diagnostics.md#e101-unknown-name"
@@ -75,7 +75,7 @@ def test_console_scripts_exist(script):
 
 def _github_anchors(markdown: str) -> set[str]:
     """The anchors GitHub generates for the headings of ``markdown``, written out independently of
-    ``verify.codes``: lower case, every character but letters, digits, ``-``, ``_`` and spaces dropped,
+    ``verify.core.codes``: lower case, every character but letters, digits, ``-``, ``_`` and spaces dropped,
     spaces turned into hyphens."""
     anchors = set()
     for line in markdown.splitlines():
@@ -86,7 +86,7 @@ def _github_anchors(markdown: str) -> set[str]:
 
 
 def test_every_spec_link_points_at_a_heading():
-    from verify.codes import CODES, spec_anchor
+    from verify.core.codes import CODES, spec_anchor
 
     from .conftest import ROOT
 

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import verify
 from verify.cli import main
-from verify.codes import CODES
+from verify.core.codes import CODES
 
 from .conftest import EXAMPLES
 
@@ -73,7 +73,7 @@ def test_graph_writes_dot_to_dot_and_gv_and_says_so(tmp_path, capsys):
 
 def test_graph_lays_out_a_pdf_through_graphviz(tmp_path, monkeypatch):
     """`-o x.pdf` is Graphviz's `dot -Tpdf` (here a stand-in `dot` records what it was asked)."""
-    import verify.diagram
+    import verify.outputs.diagram
 
     calls = []
 
@@ -83,8 +83,8 @@ def test_graph_lays_out_a_pdf_through_graphviz(tmp_path, monkeypatch):
         calls.append(argv[1])
         return subprocess.CompletedProcess(argv, 0, b"%PDF-1.7 ...", b"")
 
-    monkeypatch.setattr(verify.diagram.shutil, "which", lambda name: "/usr/bin/dot")
-    monkeypatch.setattr(verify.diagram.subprocess, "run", fake_dot)
+    monkeypatch.setattr(verify.outputs.diagram.shutil, "which", lambda name: "/usr/bin/dot")
+    monkeypatch.setattr(verify.outputs.diagram.subprocess, "run", fake_dot)
     out = tmp_path / "nav.PDF"
     assert main(["graph", NAVIGATION, "-o", str(out)]) == 0
     assert calls == ["-Tpdf"] and out.read_bytes().startswith(b"%PDF")
@@ -154,7 +154,7 @@ def test_check_of_an_empty_directory_is_a_usage_error(tmp_path, capsys):
 
 
 def test_explain_lists_every_code(capsys):
-    from verify.codes import CODES
+    from verify.core.codes import CODES
 
     assert main(["explain", "--list"]) == 0
     lines = capsys.readouterr().out.splitlines()

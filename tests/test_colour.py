@@ -7,7 +7,7 @@ import subprocess
 import sys
 
 from verify.cli import main
-from verify.colour import ANSI, paint, wanted
+from verify.outputs.colour import ANSI, paint, wanted
 
 BROKEN = "component Laser {\n  task LaserTask {\n    wcet 2 mss\n    wcet 3 ms\n  }\n}\n"
 

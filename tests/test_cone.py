@@ -14,7 +14,7 @@ import verify
 from verify.prove import Target, prove, replay
 from verify.prove.cone import cone, restrict
 from verify.prove.exact import Budget, enumerate_exact, exact_class
-from verify.sim import Scenario, chain_latencies, random_scenario, simulate
+from verify.prove.sim import Scenario, chain_latencies, random_scenario, simulate
 
 from .test_bounds_vs_simulation import systems
 from .test_prove import KINDS, rigid_systems
@@ -93,11 +93,11 @@ def _with_outside_noise(sysm):
     own, one sporadic below everything on c0, and one reading the chain's output with a delay range."""
     lowest = min(t.priority for t in sysm.tasks) - 1
     noise = [task("n.Range", timer(5), wcet=2 * MS, bcet=MS, prio=3, core="c9"),
-             task("n.Spor", verify.model.SporadicSource(4 * MS, 9 * MS), prio=lowest, core="c0"),
+             task("n.Spor", verify.model.system.SporadicSource(4 * MS, 9 * MS), prio=lowest, core="c0"),
              task("n.Read", timer(6), prio=lowest - 1, core="c1", reads=["i"], bcet=MS / 2)]
     last = sysm.chains[0].tasks[-1]
     inst = last.split(".")[0]
-    links = sysm.links + (verify.model.LinkModel(f"{inst}.o", "n.i", last, ("n.Read",), MS, 3 * MS),)
+    links = sysm.links + (verify.model.system.LinkModel(f"{inst}.o", "n.i", last, ("n.Read",), MS, 3 * MS),)
     return system(sysm.tasks + tuple(noise), links, sysm.chains)
 
 

@@ -19,9 +19,9 @@ import verify
 from verify import timing
 from verify.api import SelectionError, require_configured
 from verify.cli import main
-from verify.codes import CODES
-from verify.limits import Limits
-from verify.render import render_all_text
+from verify.core.codes import CODES
+from verify.core.limits import Limits
+from verify.outputs.rendering import render_all_text
 
 from .conftest import ROOT
 
@@ -141,7 +141,7 @@ def gen_diagnostics(model, directory: Path):
 
 def import_diagnostics(directory: Path):
     """What `verify import smartmdsd DIR` reports for the example's SmartMDSD files: (diagnostics, sources)."""
-    from verify.diagnostics import DiagnosticSink
+    from verify.core.diagnostics import DiagnosticSink
     from verify.interop.smartmdsd import import_dirs
 
     sink = DiagnosticSink()
@@ -151,7 +151,7 @@ def import_diagnostics(directory: Path):
 
 def export_diagnostics(model):
     """What `verify export smartmdsd main.vfy -o out` reports."""
-    from verify.diagnostics import DiagnosticSink
+    from verify.core.diagnostics import DiagnosticSink
     from verify.interop.smartmdsd.export import export_system
 
     sink = DiagnosticSink()

@@ -12,14 +12,14 @@ import pytest
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
-from verify.activations.sporadic import SporadicSource
+from verify.model.activations.sporadic import SporadicSource
 from verify.prove import prove
 from verify.prove.dominant import exact_system
 from verify.prove.exact import Budget, count_representatives, enumerate_exact, exact_class, grid_of
 from verify.prove.refine import exact_cones, exact_responses, with_responses
 from verify.prove.scenario import Target, extremes
-from verify.sim import random_scenario, simulate
-from verify.timebase import ceil_to
+from verify.prove.sim import random_scenario, simulate
+from verify.core.timebase import ceil_to
 from verify.timing import analyze
 
 from .builders import link

@@ -53,8 +53,8 @@ def test_every_model_node_points_at_the_source(name):
     span on every node), and spans name the line the node's text is on."""
     import dataclasses
 
-    from verify.model import Hole
-    from verify.source import NO_SPAN
+    from verify.model.system import Hole
+    from verify.core.source import NO_SPAN
 
     loaded = verify.load(str(EXAMPLES / "navigation" / name))
     model = loaded.system()
@@ -65,7 +65,7 @@ def test_every_model_node_points_at_the_source(name):
             for n, item in enumerate(node):
                 walk(item, f"{path}[{n}]")
             return
-        if not dataclasses.is_dataclass(node) or id(node) in seen or type(node).__module__ != "verify.model":
+        if not dataclasses.is_dataclass(node) or id(node) in seen or type(node).__module__ != "verify.model.system":
             return
         seen.add(id(node))
         span = node.span  # (a Hole's is that of the syntax node it keeps)

@@ -15,7 +15,7 @@ from verify.prove.exact import Budget, count_representatives, enumerate_exact, e
 from verify.prove.scenario import (measure, measure_periodic, measure_periodic_reference, measure_reference,
                                    replay)
 from verify.prove.intsim import run_trace
-from verify.sim import Scenario, random_scenario, simulate
+from verify.prove.sim import Scenario, random_scenario, simulate
 from verify.timing import analyze
 
 from .executor_systems import executor_system, mt_system
@@ -206,7 +206,7 @@ def no_run_beyond_the_bounds(text: str, seed: int) -> None:
 
 @pytest.mark.parametrize("seed", range(40))
 def test_the_integer_run_is_the_reference_run(seed):
-    """``prove``'s integer simulator runs executors job by job as ``verify.sim`` does: the same trace
+    """``prove``'s integer simulator runs executors job by job as ``verify.prove.sim`` does: the same trace
     and the same samples of every target."""
     model = _model(executor_system(random.Random(seed)))
     rng = random.Random(seed)

@@ -9,10 +9,10 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from .strategies import MODULE_PATH, modules, valid_modules
-from verify import syntax as s
-from verify.diagnostics import DiagnosticSink
-from verify.fmt import collect_comments, format_module, format_number, format_text
-from verify.parse import parse_text
+from verify.model import syntax as s
+from verify.core.diagnostics import DiagnosticSink
+from verify.frontend.fmt import collect_comments, format_module, format_number, format_text
+from verify.frontend.parse import parse_text
 
 
 def parse(text: str, path: str = MODULE_PATH) -> s.Module:
@@ -340,8 +340,8 @@ def test_blank_lines_between_members_are_kept_once():
 def _models_of_tree(module: s.Module):
     """The semantic models of a syntax tree itself, built without any text (resolve, validate, build)."""
     from verify.api import _finish
-    from verify.loader import Project
-    from verify.source import SourceFile
+    from verify.frontend.loader import Project
+    from verify.core.source import SourceFile
 
     sink = DiagnosticSink()
     return _finish(Project(MODULE_PATH, (module,), {MODULE_PATH: SourceFile(MODULE_PATH, "")}), sink)

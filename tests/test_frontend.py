@@ -1,5 +1,5 @@
 """The front end an editor needs: a partial tree after syntax errors, positions as offsets and UTF-16
-(``SourceMap``), and the table from every use of a name to its declaration (``verify.symbols``)."""
+(``SourceMap``), and the table from every use of a name to its declaration (``verify.frontend.symbols``)."""
 from __future__ import annotations
 
 import random
@@ -8,8 +8,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import verify
-from verify.parse import parse_source
-from verify.source import SourceFile, SourceMap, Span
+from verify.frontend.parse import parse_source
+from verify.core.source import SourceFile, SourceMap, Span
 
 from .conftest import EXAMPLES
 

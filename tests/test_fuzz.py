@@ -49,8 +49,8 @@ def test_the_targets_report_what_they_are_for():
 
 
 def _unlocated():
-    from verify.diagnostics import DiagnosticSink
-    from verify.source import NO_SPAN
+    from verify.core.diagnostics import DiagnosticSink
+    from verify.core.source import NO_SPAN
 
     return DiagnosticSink().emit("E001", "x", NO_SPAN)
 

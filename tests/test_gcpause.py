@@ -1,4 +1,4 @@
-"""The collector paused while the pipeline runs (``verify.gcpause``) still finds the garbage cycles made
+"""The collector paused while the pipeline runs (``verify.core.gcpause``) still finds the garbage cycles made
 in the pauses: a long process (an editor's language server, a fuzzer) does not grow without bound."""
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import gc
 
 import pytest
 import verify
-from verify import gcpause
+from verify.core import gcpause
 
 BROKEN = "component A {\n  task T { wcet 1 ms }\nsystem S { instance x : Nope }\n"  # (Lark's error path)
 

@@ -1,4 +1,4 @@
-"""`verify graph`: the system as a picture (verify/diagram.py), as DOT text and laid out by Graphviz."""
+"""`verify graph`: the system as a picture (verify/outputs/diagram.py), as DOT text and laid out by Graphviz."""
 from __future__ import annotations
 
 import os
@@ -83,9 +83,9 @@ def test_an_existing_file_is_not_overwritten(tmp_path, capsys):
 
 
 def test_without_graphviz_svg_is_a_usage_error_and_dot_still_works(monkeypatch, capsysbinary):
-    import verify.diagram
+    import verify.outputs.diagram
 
-    monkeypatch.setattr(verify.diagram.shutil, "which", lambda name: None)
+    monkeypatch.setattr(verify.outputs.diagram.shutil, "which", lambda name: None)
     assert main(["graph", NAVIGATION, "--format", "svg"]) == 2
     assert "needs Graphviz's `dot`" in capsysbinary.readouterr().err.decode("utf-8")
     assert _dot(capsysbinary, NAVIGATION).startswith("digraph")
@@ -94,13 +94,13 @@ def test_without_graphviz_svg_is_a_usage_error_and_dot_still_works(monkeypatch, 
 def test_a_graphviz_failure_is_reported_not_a_traceback(monkeypatch, capsys):
     import subprocess
 
-    import verify.diagram
+    import verify.outputs.diagram
 
     def crash(*args, **kwargs):
         return subprocess.CompletedProcess(args, -11, b"", b"")
 
-    monkeypatch.setattr(verify.diagram.subprocess, "run", crash)
-    monkeypatch.setattr(verify.diagram.shutil, "which", lambda name: "/usr/bin/dot")
+    monkeypatch.setattr(verify.outputs.diagram.subprocess, "run", crash)
+    monkeypatch.setattr(verify.outputs.diagram.shutil, "which", lambda name: "/usr/bin/dot")
     assert main(["graph", NAVIGATION, "--format", "png", "-o", os.devnull, "--force"]) == 2
     err = capsys.readouterr().err
     assert "Graphviz's `dot` failed: exit status -11" in err and "Traceback" not in err

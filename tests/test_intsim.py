@@ -1,4 +1,4 @@
-"""The integer simulator of ``verify/prove/intsim.py`` against the reference simulator ``verify.sim``:
+"""The integer simulator of ``verify/prove/intsim.py`` against the reference simulator ``verify.prove.sim``:
 the same jobs, reads and samples for every kind of concrete scenario the searches of ``prove`` draw
 (phases, counter phases, per-job patterns of execution times, delays and inter-arrival times), and
 the same errors for choices outside their ranges."""
@@ -12,12 +12,12 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import verify
-from verify.model import DataTriggered, Periodic, SporadicSource
+from verify.model.system import DataTriggered, Periodic, SporadicSource
 from verify.prove import Target
 from verify.prove.intsim import run_trace, target_samples
 from verify.prove.scenario import (ConcreteScenario, _chain_samples, _response_samples, extremes, measure,
                                    measure_reference, replay)
-from verify.sim import ScenarioError, SimulationError, pick_in
+from verify.prove.sim import ScenarioError, SimulationError, pick_in
 
 from .test_bounds_vs_simulation import systems
 from .test_prove import KINDS
@@ -61,7 +61,7 @@ def test_the_integer_run_is_the_reference_run(text, seed):
     """Random systems (sporadic sources, AND/OR compounds, prescalers, cooperative siblings,
     execution-time and delay ranges) and random concrete scenarios: the whole trace (every job with
     what it read, every message), every sample of every target and every extreme agree with
-    ``verify.sim``, or both refuse the run alike."""
+    ``verify.prove.sim``, or both refuse the run alike."""
     model = verify.load_text(text, "random.vfy").system()
     rng = random.Random(seed)
     scenario = concrete_scenario(model, rng, F(rng.randrange(20, 400), 1000))

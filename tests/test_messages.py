@@ -2,10 +2,10 @@
 from __future__ import annotations
 
 import verify
-from verify import syntax as s
-from verify.diagnostics import DiagnosticSink
-from verify.fmt import format_text
-from verify.parse import _Builder, _fast_parser, _parse_with_lark, parse_text
+from verify.model import syntax as s
+from verify.core.diagnostics import DiagnosticSink
+from verify.frontend.fmt import format_text
+from verify.frontend.parse import _Builder, _fast_parser, _parse_with_lark, parse_text
 
 TEXT = """\
 // the scan is the laser's own message

@@ -11,7 +11,7 @@ import pytest
 import verify
 from verify.prove.intsim import run_trace
 from verify.prove.scenario import measure, measure_reference, replay
-from verify.sim import Scenario, simulate
+from verify.prove.sim import Scenario, simulate
 from verify.timing import analyze
 
 from .executor_systems import mt_system
@@ -94,7 +94,7 @@ def test_a_callback_behind_another_of_its_mutually_exclusive_group_can_starve():
 
 
 def test_the_unbounded_callback_is_reported_with_the_remedy():
-    from verify.diagnostics import DiagnosticSink
+    from verify.core.diagnostics import DiagnosticSink
     from verify.timing.rta import check_response_times
 
     model = _model(STARVING.replace("@Y@", ""))
@@ -155,7 +155,7 @@ def test_known_answers_of_the_multi_threaded_bound():
 @pytest.mark.parametrize("seed", range(40))
 def test_the_integer_run_is_the_reference_run_on_multi_threaded_executors(seed):
     """``prove``'s integer simulator runs a multi-threaded executor's workers, its shared snapshot and
-    its mutually exclusive groups job by job as ``verify.sim`` does."""
+    its mutually exclusive groups job by job as ``verify.prove.sim`` does."""
     model = _model(mt_system(random.Random(seed)))
     rng = random.Random(seed)
     scenario = concrete_scenario(model, rng, F(rng.randrange(20, 400), 1000))
@@ -230,7 +230,7 @@ def test_a_group_needs_an_executor_and_a_known_kind():
 
 
 def test_groups_and_threads_keep_their_meaning_through_fmt():
-    from verify.fmt import format_text
+    from verify.frontend.fmt import format_text
 
     text = _two("group r", "group r", "group r reentrant").replace("multi_threaded on", "multi_threaded 3 threads on")
     formatted, diags = format_text(text)

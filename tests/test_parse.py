@@ -7,9 +7,9 @@ from fractions import Fraction
 import pytest
 
 import verify
-from verify import syntax as s
-from verify.diagnostics import DiagnosticSink
-from verify.parse import parse_text
+from verify.model import syntax as s
+from verify.core.diagnostics import DiagnosticSink
+from verify.frontend.parse import parse_text
 
 
 def _parse(text):
@@ -124,7 +124,7 @@ system S {
 
 
 def _keywords():
-    from verify.larkparse import _keyword_terminals
+    from verify.frontend.larkparse import _keyword_terminals
 
     return sorted(_keyword_terminals())
 
@@ -138,8 +138,8 @@ def test_the_keyword_sample_parses_and_has_every_keyword():
 
 def _both_paths(text):
     """(whether the fast path accepted ``text``, Lark's diagnostics)."""
-    from verify.lalr import Unparsable
-    from verify.parse import _Builder, _fast_parser, _parse_with_lark
+    from verify.frontend.lalr import Unparsable
+    from verify.frontend.parse import _Builder, _fast_parser, _parse_with_lark
 
     sink = DiagnosticSink()
     _parse_with_lark(text, "m.vfy", sink)
@@ -198,7 +198,7 @@ def test_a_wrong_keyword_is_flagged_itself():
 
 
 def test_fmt_no_longer_splits_glued_keywords():
-    from verify.fmt import format_text
+    from verify.frontend.fmt import format_text
 
     out, diags = format_text("component A { outx : T }")
     assert out is None and [d.code for d in diags] == ["E001"]
@@ -315,8 +315,8 @@ def test_a_leading_byte_order_mark_is_skipped():
 
 
 def test_a_byte_order_mark_does_not_shift_the_snippet():
-    from verify.render import render_all_text
-    from verify.source import SourceFile
+    from verify.outputs.rendering import render_all_text
+    from verify.core.source import SourceFile
 
     text = "\ufeffcomponent A { outx : T }"
     _, diags = _parse(text)

@@ -1,6 +1,6 @@
 """The parser's tables are built once per Lark release and kept in the user's cache directory; a later
 process loads them, the same parser; a directory that another user could write is never used. The fast
-path's own tables are kept as JSON beside them (``verify.parsecache``): valid text then parses without
+path's own tables are kept as JSON beside them (``verify.frontend.parsecache``): valid text then parses without
 Lark being imported at all."""
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ import lark.lark
 import pytest
 
 import verify
-from verify import larkparse, parse, parsecache
+from verify.frontend import larkparse, parse, parsecache
 
 from .conftest import EXAMPLES
 
@@ -113,7 +113,7 @@ def test_a_kept_table_that_is_not_one_is_built_again(fresh):
 
 
 def test_the_kept_table_is_the_parser_lark_builds(fresh):
-    from verify.lalr import FastParser
+    from verify.frontend.lalr import FastParser
 
     fast = FastParser.build(larkparse._parser())
     again = FastParser.from_data(json.loads(json.dumps(fast.to_data())))

@@ -85,9 +85,9 @@ def teardown_module():
 
 def _both_paths(text: str):
     """(fast result or None if the fast path left the text to Lark, Lark's result, Lark's diagnostics)."""
-    from verify.diagnostics import DiagnosticSink
-    from verify.lalr import Unparsable
-    from verify.parse import _Builder, _fast_parser, _NumberError, _parse_with_lark
+    from verify.core.diagnostics import DiagnosticSink
+    from verify.frontend.lalr import Unparsable
+    from verify.frontend.parse import _Builder, _fast_parser, _NumberError, _parse_with_lark
 
     sink = DiagnosticSink()
     slow = _parse_with_lark(text, "t.vfy", sink)
@@ -108,7 +108,7 @@ def _assert_fast_path_exact(text: str) -> bool:
 
 
 def test_the_fast_path_is_enabled_for_the_grammar():
-    from verify.parse import _fast_parser
+    from verify.frontend.parse import _fast_parser
 
     assert _fast_parser() is not None
 
@@ -144,7 +144,7 @@ try:
     from hypothesis import HealthCheck, given, settings
     from hypothesis import strategies as st
 
-    from verify.fmt import format_module
+    from verify.frontend.fmt import format_module
 
     from .strategies import modules
 

@@ -18,7 +18,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import verify
-from verify.sim import random_scenario, simulate
+from verify.prove.sim import random_scenario, simulate
 from verify.timing import analyze
 from verify.timing.pipeline import upstream
 from verify.timing.rta import cooperative_counts

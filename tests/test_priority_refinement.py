@@ -26,7 +26,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import verify
-from verify.sim import KINDS, Scenario, chain_latencies, random_scenario, simulate
+from verify.prove.sim import KINDS, Scenario, chain_latencies, random_scenario, simulate
 from verify.timing import analyze
 from verify.timing.chains import READ_AGE, REGISTER, SAME_CORE
 

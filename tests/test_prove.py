@@ -20,7 +20,7 @@ from verify.prove import ConcreteScenario, Target, prove, replay
 from verify.prove.exact import (Budget, count_representatives, enumerate_exact, exact_class, grid_of,
                                 representatives, scenario_of, weak_orders)
 from verify.prove.scenario import extremes, measure_periodic, measure_periodic_reference
-from verify.sim import chain_latencies, simulate
+from verify.prove.sim import chain_latencies, simulate
 from verify.timing import analyze
 
 from .conftest import EXAMPLES
@@ -259,7 +259,7 @@ def test_jitter_violation_has_two_runs():
     lo = chain_latencies(replay(sysm, cex.best_scenario), sysm.chains[0]).best("data_age").value
     assert hi - lo == cex.latency > F(5, 1000)
     from verify.prove.gantt import to_svg
-    from verify.units import fmt_time
+    from verify.model.units import fmt_time
 
     label = ET.fromstring(to_svg(sysm, v)).findall(".//{http://www.w3.org/2000/svg}text")
     texts = [t.text or "" for t in label]
@@ -397,9 +397,9 @@ def _same_measurement(sysm, scenario, targets, hyper):
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(rigid_systems_with_siblings(), st.randoms(use_true_random=False))
 def test_integer_evaluator_matches_the_reference_simulator(sysm, rnd):
-    """verify/prove/rigid.py against verify.sim: the same extremes (samples, jobs, values), periodic
+    """verify/prove/rigid.py against verify.prove.sim: the same extremes (samples, jobs, values), periodic
     start, period, horizon and event count, on every representative and on off-grid phases; the
-    exact worst case of the enumeration and its counterexample scenario replay in verify.sim."""
+    exact worst case of the enumeration and its counterexample scenario replay in verify.prove.sim."""
     targets = [Target(k, "ch") for k in KINDS] + [Target("response", t.id) for t in sysm.tasks]
     grid = grid_of(sysm)
     if count_representatives(grid) > 60:

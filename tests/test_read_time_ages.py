@@ -19,7 +19,7 @@ from fractions import Fraction
 
 
 import verify
-from verify.sim import Scenario, chain_latencies, random_scenario, simulate
+from verify.prove.sim import Scenario, chain_latencies, random_scenario, simulate
 from verify.timing import analyze
 from verify.timing.chains import AND_AGE, LAST, PAIR, READ_AGE, REGISTER
 

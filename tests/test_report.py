@@ -99,9 +99,9 @@ def test_an_existing_file_is_not_overwritten(tmp_path, capsys):
 
 
 def test_without_graphviz_the_page_holds_the_dot_text(tmp_path, monkeypatch):
-    import verify.diagram
+    import verify.outputs.diagram
 
-    monkeypatch.setattr(verify.diagram.shutil, "which", lambda name: None)
+    monkeypatch.setattr(verify.outputs.diagram.shutil, "which", lambda name: None)
     out = tmp_path / "r.html"
     assert main(["report", VIOLATED, "-o", str(out)]) == 0
     page = out.read_text(encoding="utf-8")

@@ -9,9 +9,9 @@ import shutil
 import jsonschema
 import pytest
 
-from verify import sarif
+from verify.outputs import sarif
 from verify.cli import main
-from verify.explain import explain
+from verify.core.explain import explain
 
 from .conftest import EXAMPLES
 from .test_prove import _sarif_schema

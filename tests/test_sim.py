@@ -1,4 +1,4 @@
-"""Hand-computed timelines for the reference simulator (verify/sim.py, specs/timing.md §1–§4)."""
+"""Hand-computed timelines for the reference simulator (verify/prove/sim.py, specs/timing.md §1–§4)."""
 from __future__ import annotations
 
 import random
@@ -6,10 +6,10 @@ from fractions import Fraction as F
 
 import pytest
 
-from verify.model import (ChainModel, CoreModel, DataTriggered, HopModel, Periodic, ReadModel,
-                          SporadicSource, SystemModel, TaskModel)
-from verify.sim import (Scenario, ScenarioError, SimulationError, chain_latencies, random_scenario,
-                        simulate)
+from verify.model.system import (
+    ChainModel, CoreModel, DataTriggered, HopModel, Periodic, ReadModel, SporadicSource, SystemModel, TaskModel
+)
+from verify.prove.sim import Scenario, ScenarioError, SimulationError, chain_latencies, random_scenario, simulate
 
 from .builders import link
 

@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 
 import verify
 from verify.cli import main
-from verify.diagnostics import DiagnosticSink
+from verify.core.diagnostics import DiagnosticSink
 from verify.interop.smartmdsd import import_dirs, read_files
 from verify.interop.smartmdsd.export import export_system
 

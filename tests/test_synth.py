@@ -13,7 +13,7 @@ import pytest
 
 import verify
 from verify.cli import main
-from verify.sim import random_scenario, simulate
+from verify.prove.sim import random_scenario, simulate
 from verify.synth import brute_force, synthesize
 from verify.synth.statements import configured_model
 from verify.synth.writeback import completed_text, recheck

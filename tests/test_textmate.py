@@ -9,7 +9,7 @@ import subprocess
 
 import pytest
 
-from verify.larkparse import _keyword_terminals
+from verify.frontend.larkparse import _keyword_terminals
 
 from .conftest import EXAMPLES, ROOT, in_ci
 

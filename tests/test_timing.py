@@ -10,10 +10,12 @@ from fractions import Fraction as F
 import jsonschema
 import pytest
 
-from verify import syntax as s
-from verify.model import (ChainModel, CompoundModel, CoreModel, DataTriggered, Hole, HopModel, LinkModel, Periodic,
-                          ReadModel, SporadicSource, SystemModel, TaskModel)
-from verify.sim import KINDS, Scenario, chain_latencies, random_scenario, simulate
+from verify.model import syntax as s
+from verify.model.system import (
+    ChainModel, CompoundModel, CoreModel, DataTriggered, Hole, HopModel, LinkModel, Periodic, ReadModel,
+    SporadicSource, SystemModel, TaskModel
+)
+from verify.prove.sim import KINDS, Scenario, chain_latencies, random_scenario, simulate
 from verify.timing import analyze, diagnostics_of
 from verify.timing.report import JSON_SCHEMA, SCHEMA, to_json, to_text
 
@@ -229,7 +231,7 @@ def compound_text(any="", all="", port="any"):
     """The model of ``_COMPOUNDS``. `check` rejects a compound outside its constraint (E314), so such a
     model is built from the resolved system directly, for the analysis to be examined on it."""
     import verify
-    from verify.model import build_system
+    from verify.model.system import build_system
 
     result = verify.load_text(_COMPOUNDS.format(any=any, all=all, port=port), "q.vfy")
     assert {d.code for d in result.diagnostics} <= {"E314"}, [d.message for d in result.diagnostics]

@@ -18,7 +18,7 @@ from hypothesis import strategies as st
 import verify
 from verify.prove.exact import Budget, Goal, search, search_horizon
 from verify.prove.scenario import CHAIN_KINDS, Target
-from verify.sim import random_scenario, simulate
+from verify.prove.sim import random_scenario, simulate
 from verify.timing import analyze
 
 from .test_bounds_vs_simulation import _slowest

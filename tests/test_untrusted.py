@@ -14,8 +14,8 @@ from hypothesis import strategies as st
 
 import verify
 from verify.cli import main
-from verify.limits import Limits
-from verify.source import SNIPPET_WIDTH
+from verify.core.limits import Limits
+from verify.core.source import SNIPPET_WIDTH
 
 COMPONENT = "component Laser {\n  out scan : Scan\n  task T {\n    produces scan\n    wcet 1 ms\n  }\n}\n"
 SECRET = "hunter2-very-secret-value"

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from .api import LoadResult, SelectionError, load, load_text
-    from .diagnostics import Diagnostic, Label, Severity
+    from .core.diagnostics import Diagnostic, Label, Severity
 
 __all__ = ["Diagnostic", "Label", "LoadResult", "SelectionError", "Severity", "load", "load_text"]
 __version__ = "0.1.0"

@@ -14,18 +14,18 @@ from dataclasses import dataclass, field
 from functools import cached_property
 from typing import TYPE_CHECKING
 
-from .diagnostics import Diagnostic, DiagnosticSink, Label, has_errors
-from .gcpause import paused_gc
-from .limits import DEFAULT_LIMITS, Limits
-from .loader import Overlay, Project, load_project, project_from_text
-from .roots import project_roots
-from .model import SystemModel, build_system
-from .resolve import Resolution, SystemScope, resolve
-from .source import SourceFile, Span
-from .validate import validate, validate_chains
+from .core.diagnostics import Diagnostic, DiagnosticSink, Label, has_errors
+from .core.gcpause import paused_gc
+from .core.limits import DEFAULT_LIMITS, Limits
+from .frontend.loader import Overlay, Project, load_project, project_from_text
+from .frontend.roots import project_roots
+from .model.system import SystemModel, build_system
+from .frontend.resolve import Resolution, SystemScope, resolve
+from .core.source import SourceFile, Span
+from .frontend.validate import validate, validate_chains
 
 if TYPE_CHECKING:
-    from .symbols import SymbolIndex
+    from .frontend.symbols import SymbolIndex
 
 
 class SelectionError(Exception):
@@ -53,8 +53,8 @@ class LoadResult:
 
     @cached_property
     def symbols(self) -> SymbolIndex:
-        """Every declared name and every resolved use of one (``verify.symbols``), built on first use."""
-        from .symbols import index
+        """Every declared name and every resolved use of one (``verify.frontend.symbols``), built on first use."""
+        from .frontend.symbols import index
 
         return index(self.resolution) if self.resolution is not None else SymbolIndex((), ())
 
@@ -82,7 +82,7 @@ class LoadResult:
                 raise SelectionError(sink.items[0])
             name = names[0]
         if name not in self.models:
-            from .diagnostics import suggest
+            from .core.diagnostics import suggest
 
             if name in systems:
                 sink.emit("E105", f"system `{name}` in {self.project.root} is not valid", systems[name].name.span,
@@ -186,8 +186,8 @@ def load(path: str | os.PathLike[str], *, root: str | os.PathLike[str] | None = 
 
     Imports are confined to the project root — ``root``, else the ``root`` of ``[tool.verify]`` in the
     nearest ``pyproject.toml`` (``config``), else the directory of ``path`` — and the library directories
-    ``include`` (and that table's ``include``); ``verify.roots`` gives the rules. ``limits`` bound what is
-    read (``verify.limits``). ``overlay`` gives text that takes the place of a file on disk (an editor's
+    ``include`` (and that table's ``include``); ``verify.frontend.roots`` gives the rules. ``limits`` bound what is
+    read (``verify.core.limits``). ``overlay`` gives text that takes the place of a file on disk (an editor's
     unsaved buffers): a mapping from paths, or a function of an absolute path returning the text or
     None."""
     path = os.fspath(path)

@@ -61,7 +61,7 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def _color_option(p: argparse.ArgumentParser, default: str) -> None:
-    from .colour import CHOICES
+    from .outputs.colour import CHOICES
 
     p.add_argument("--color", choices=CHOICES, default=default,
                    help="colour diagnostics: auto (on a terminal, unless NO_COLOR is set; the default), always, "
@@ -97,7 +97,7 @@ def _run(name: str, args: argparse.Namespace) -> int:
 def main(argv: list[str] | None = None) -> int:
     try:
         args = _parser().parse_args(argv)
-        from .colour import choose
+        from .outputs.colour import choose
 
         choose(args.color)
         return _run(args.run, args)
@@ -112,7 +112,7 @@ def main(argv: list[str] | None = None) -> int:
     except Exception as err:  # the last line of defence: never a traceback for the user
         if os.environ.get("VERIFY_DEBUG"):
             raise
-        from .sanitize import shown
+        from .core.sanitize import shown
 
         print(f"internal error: {type(err).__name__}: {shown(str(err))}\n"
               "This is a bug in verify; please report it with the input file. "

@@ -16,11 +16,11 @@ import pytest
 
 import verify
 from verify.cli import main
-from verify.diagnostics import DiagnosticSink, Severity
-from verify.limits import DEFAULT_LIMITS, Limits
-from verify.parse import parse_source, recovery_limit
-from verify.render import TEXT_PER_FILE, render_all_text
-from verify.source import SourceFile
+from verify.core.diagnostics import DiagnosticSink, Severity
+from verify.core.limits import DEFAULT_LIMITS, Limits
+from verify.frontend.parse import parse_source, recovery_limit
+from verify.outputs.rendering import TEXT_PER_FILE, render_all_text
+from verify.core.source import SourceFile
 
 from benchmarks.hostile import generate_trigger_chain
 
@@ -83,10 +83,10 @@ def _rendering_work(n: int, render) -> int:
 
 @pytest.mark.parametrize("render", [
     pytest.param(lambda ds, sources: render_all_text(ds, sources, per_file=10 ** 9), id="text"),
-    pytest.param(lambda ds, sources: verify.sarif.to_sarif(ds, sources), id="sarif"),
+    pytest.param(lambda ds, sources: verify.outputs.sarif.to_sarif(ds, sources), id="sarif"),
 ])
 def test_rendering_diagnostics_is_linear_in_file_and_diagnostics(render):
-    import verify.sarif  # noqa: F401  (the renderer above)
+    import verify.outputs.sarif  # noqa: F401  (the renderer above)
 
     small, large = _rendering_work(250, render), _rendering_work(1000, render)
     # (each file 4 times the size with 4 times the diagnostics: linear work is 4 times as much, the
@@ -95,7 +95,7 @@ def test_rendering_diagnostics_is_linear_in_file_and_diagnostics(render):
 
 
 def test_a_line_index_is_built_once_per_file(monkeypatch):
-    from verify import source
+    from verify.core import source
 
     built = []
     real = source.SourceMap.__init__
@@ -126,8 +126,8 @@ def test_the_count_of_the_rest_names_each_severity_and_each_file():
     sink = DiagnosticSink()
     for file, count in (("a.vfy", 4), ("b.vfy", 1)):
         for i in range(count):
-            sink.emit("E101", f"unknown instance `x{i}`", verify.source.Span(file, i + 1, 1, i + 1, 2))
-    sink.emit("E101", "a warning", verify.source.Span("a.vfy", 9, 1, 9, 2), severity=Severity.WARNING)
+            sink.emit("E101", f"unknown instance `x{i}`", verify.core.source.Span(file, i + 1, 1, i + 1, 2))
+    sink.emit("E101", "a warning", verify.core.source.Span("a.vfy", 9, 1, 9, 2), severity=Severity.WARNING)
     shown = render_all_text(sink.items, {}, per_file=2)
     assert shown.count("error[E101]") == 3 and "warning[E101]" not in shown
     assert "… and 2 more errors and 1 more warning in a.vfy" in shown
@@ -152,7 +152,7 @@ def test_check_prints_the_cap_and_json_lists_every_diagnostic(tmp_path, capsys):
 
 def _recoveries(monkeypatch, text: str, limits: Limits = DEFAULT_LIMITS) -> tuple[int, list]:
     """(errors Lark's recovery was called for, the diagnostics) of parsing ``text``."""
-    from verify.larkparse import _parser
+    from verify.frontend.larkparse import _parser
 
     lark = _parser()
     real = lark.parse
@@ -200,7 +200,7 @@ def _peak_of_parsing(text_expression: str) -> tuple[int, list[tuple[str, int, in
     parsing the text ``text_expression`` evaluates to."""
     script = textwrap.dedent(f"""
         import json, resource
-        from verify.parse import parse_source
+        from verify.frontend.parse import parse_source
         text = {text_expression}
         before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
         parsed = parse_source(text, "junk.vfy")
@@ -361,7 +361,7 @@ def test_e312s_note_is_not_simulated_when_the_budget_is_spent(monkeypatch):
 
 def test_a_simulation_with_a_deadline_stops_within_a_clock_period():
     from verify.prove.scenario import ConcreteScenario, replay
-    from verify.sim import CLOCK_EVERY, SimulationTimeout
+    from verify.prove.sim import CLOCK_EVERY, SimulationTimeout
 
     model = verify.load_text(E312_SYSTEM, "e312.vfy").system()
     with pytest.raises(SimulationTimeout) as stopped:

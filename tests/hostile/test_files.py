@@ -1,4 +1,4 @@
-"""Hostile input, files (issue 37): every file verify reads or writes obeys one rule (``verify.fileaccess``).
+"""Hostile input, files (issue 37): every file verify reads or writes obeys one rule (``verify.core.fileaccess``).
 
 An attacker with a pull request controls the files of the checkout, not the command line. Each case
 commits a file that leads somewhere else — a symbolic link to a secret outside the project, a FIFO, a
@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pytest
 
-from verify import larkparse, parse, parsecache
+from verify.frontend import larkparse, parse, parsecache
 from verify.cli import main
 
 from ..conftest import EXAMPLES

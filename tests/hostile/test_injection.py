@@ -1,5 +1,5 @@
 """Hostile input, injection (issue 37): what a model, another tool's file or a file name holds never
-reaches the terminal or a generated file raw (``verify.sanitize``, specs/diagnostics.md "Text from
+reaches the terminal or a generated file raw (``verify.core.sanitize``, specs/diagnostics.md "Text from
 untrusted input", specs/codegen.md "Names").
 
 Each test runs the command as a user would and looks at what comes out: no control character, no line
@@ -386,7 +386,7 @@ def test_the_generator_names_what_it_mangles():
 @pytest.mark.parametrize("value", ["yes", "on", "null", "True", "~", "1e3", "0x10", 'a"b\\c', "x\ny\x1b[31m\x07\r",
                                    "tab\there", "é€😀", "\x85\u2028", ""])
 def test_a_yaml_string_loads_back_as_the_same_string(value):
-    from verify.sanitize import yaml_string
+    from verify.core.sanitize import yaml_string
 
     assert yaml.safe_load(f"key: {yaml_string(value)}") == {"key": value}
     assert "\n" not in yaml_string(value)
@@ -394,7 +394,7 @@ def test_a_yaml_string_loads_back_as_the_same_string(value):
 
 @pytest.mark.parametrize("value", ['a"b', "back\\slash", "x\ny", "\x1b[31m", "é", "??="])
 def test_a_cpp_string_literal_holds_printable_ascii_only(value):
-    from verify.sanitize import c_string
+    from verify.core.sanitize import c_string
 
     literal = c_string(value)
     assert literal.startswith('"') and literal.endswith('"')

@@ -12,7 +12,7 @@ from __future__ import annotations
 import argparse
 from collections.abc import Iterable
 
-from ..diagnostics import Diagnostic
+from ..core.diagnostics import Diagnostic
 from ..outputs import Report, render
 from .common import EXIT_INVALID, EXIT_OK, EXIT_UNDECIDED, EXIT_VIOLATED, load_configured, show
 

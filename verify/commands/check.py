@@ -11,9 +11,9 @@ from __future__ import annotations
 import argparse
 import os
 
-from ..diagnostics import Diagnostic
+from ..core.diagnostics import Diagnostic
 from ..outputs import Report, render
-from ..source import SourceFile
+from ..core.source import SourceFile
 from .common import EXIT_INVALID, EXIT_OK, fail, load_args, show
 
 HELP = "parse, resolve and validate models (files, or directories of .vfy files)"

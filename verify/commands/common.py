@@ -20,15 +20,15 @@ from collections.abc import Mapping, Sequence
 
 from typing import TYPE_CHECKING
 
-from ..diagnostics import Diagnostic, DiagnosticSink
+from ..core.diagnostics import Diagnostic, DiagnosticSink
 from ..outputs import Output, Report, render
-from ..render import render_all_text
-from ..sanitize import shown
-from ..source import SourceFile, Span
+from ..outputs.rendering import render_all_text
+from ..core.sanitize import shown
+from ..core.source import SourceFile, Span
 
 if TYPE_CHECKING:  # (the front end is imported when a command runs: `--help` stays quick)
     from .. import api
-    from ..model import SystemModel
+    from ..model.system import SystemModel
 
 EXIT_OK, EXIT_VIOLATED, EXIT_INVALID, EXIT_UNDECIDED, EXIT_INTERNAL = 0, 1, 2, 3, 70
 
@@ -39,7 +39,7 @@ STDIN = "<stdin>"
 
 def read_stdin(sink: DiagnosticSink) -> str | None:
     """The text piped into the command (FILE ``-``), or None after reporting why not (E003, E008)."""
-    from ..loader import read_stream
+    from ..frontend.loader import read_stream
 
     return read_stream(sys.stdin.buffer, STDIN, sink)
 
@@ -48,7 +48,7 @@ def load_args(args: argparse.Namespace) -> api.LoadResult:
     """``api.load`` of the command's FILE, with its ``--root`` and ``--include``. FILE ``-`` is standard
     input, read once (then named ``<stdin>``, in the working directory)."""
     from .. import api
-    from ..loader import Project
+    from ..frontend.loader import Project
 
     include = tuple(args.include or ())
     if args.file != "-":
@@ -63,7 +63,7 @@ def load_args(args: argparse.Namespace) -> api.LoadResult:
 
 def show(output: Output) -> None:
     """Write a rendered report: its standard output part, then its standard error part (diagnostics:
-    coloured on a terminal, ``verify.colour``)."""
+    coloured on a terminal, ``verify.outputs.colour``)."""
     if output.stdout:
         sys.stdout.write(output.stdout)
     if output.stderr:
@@ -72,10 +72,10 @@ def show(output: Output) -> None:
 
 def to_stderr(text: str, end: str = "\n") -> None:
     """``text`` (diagnostics as ``render_all_text`` makes them) on standard error, coloured when that is
-    a terminal and colour is not turned off (``verify.colour.wanted``); a control character in it is
-    shown escaped (``verify.sanitize.shown_lines``)."""
-    from ..colour import paint, wanted
-    from ..sanitize import shown_lines
+    a terminal and colour is not turned off (``verify.outputs.colour.wanted``); a control character in it is
+    shown escaped (``verify.core.sanitize.shown_lines``)."""
+    from ..outputs.colour import paint, wanted
+    from ..core.sanitize import shown_lines
 
     text = shown_lines(text)  # (no control character reaches the terminal, whatever a message quotes)
     sys.stderr.write((paint(text) if wanted(sys.stderr) else text) + end)
@@ -195,9 +195,9 @@ def exists(path: str) -> bool:
 
 def write_output(path: str, data: str | bytes, force: bool) -> int:
     """Write ``data`` to ``path``, which must not exist unless ``force`` (E004 when it cannot be written).
-    A symbolic link there is never written through (``verify.fileaccess.write_output``): without
+    A symbolic link there is never written through (``verify.core.fileaccess.write_output``): without
     ``force`` it is in the way, with ``force`` it is replaced by the file."""
-    from ..fileaccess import write_output as write
+    from ..core.fileaccess import write_output as write
 
     if exists(path) and not force:
         to_stderr(f"error: {shown(path)} exists; refusing to overwrite it (pass --force to replace it)")

@@ -22,13 +22,13 @@ PARSER = True
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from ..completion import SHELLS
+    from ..outputs.completion import SHELLS
 
     p.add_argument("shell", choices=SHELLS, metavar="SHELL", help="bash, zsh or fish")
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..completion import script
+    from ..outputs.completion import script
 
     sys.stdout.write(script(args.shell, args.parser))
     return EXIT_OK

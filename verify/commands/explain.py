@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ..codes import CODES
+from ..core.codes import CODES
 from .common import EXIT_INVALID, EXIT_OK
 
 HELP = "explain a diagnostic code with a minimal failing example"
@@ -19,7 +19,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..explain import explain
+    from ..core.explain import explain
 
     if args.list or args.code is None:
         if args.code is not None or not args.list:
@@ -29,7 +29,7 @@ def run(args: argparse.Namespace) -> int:
         return EXIT_OK
     code = args.code.upper()
     if code not in CODES:
-        from ..diagnostics import suggest
+        from ..core.diagnostics import suggest
 
         starting = sorted(c for c in CODES if c.startswith(code)) if len(code) >= 2 else []
         hint = ("one of " + ", ".join(starting) if starting else suggest(code, CODES))

@@ -13,9 +13,9 @@ from __future__ import annotations
 import argparse
 import os
 
-from ..diagnostics import DiagnosticSink
-from ..fileaccess import write_output
-from ..sanitize import shown
+from ..core.diagnostics import DiagnosticSink
+from ..core.fileaccess import write_output
+from ..core.sanitize import shown
 from .common import EXIT_INVALID, EXIT_OK, cannot_write, exists, load_configured, show_diagnostics, to_stderr, wrote
 
 HELP = "write a configured system as another tool's models (SmartMDSD, CARET)"

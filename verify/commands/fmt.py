@@ -5,10 +5,10 @@ import argparse
 import os
 import sys
 
-from ..diagnostics import DiagnosticSink
-from ..render import render_all_text
-from ..sanitize import shown
-from ..source import SourceFile
+from ..core.diagnostics import DiagnosticSink
+from ..outputs.rendering import render_all_text
+from ..core.sanitize import shown
+from ..core.source import SourceFile
 from .common import EXIT_INVALID, EXIT_OK, EXIT_VIOLATED, STDIN, read_stdin, replace_file, to_stderr, write_new_file
 
 HELP = "print the canonical formatting of a file"
@@ -27,9 +27,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..fmt import format_text
-    from ..fileaccess import area_of
-    from ..loader import read_text
+    from ..frontend.fmt import format_text
+    from ..core.fileaccess import area_of
+    from ..frontend.loader import read_text
 
     sink = DiagnosticSink()
     if args.file == "-":
@@ -47,7 +47,7 @@ def run(args: argparse.Namespace) -> int:
         return EXIT_INVALID
     formatted, diagnostics = format_text(text, args.file)
     if formatted is None:
-        from ..parse import parse_source
+        from ..frontend.parse import parse_source
 
         opaque = parse_source(text, args.file).opaque
         to_stderr(render_all_text(diagnostics, {args.file: SourceFile(args.file, text, opaque)}))

@@ -17,19 +17,19 @@ import os
 
 from typing import TYPE_CHECKING
 
-from ..diagnostics import Diagnostic, DiagnosticSink, Label
-from ..fileaccess import Area, Refused, read_regular
+from ..core.diagnostics import Diagnostic, DiagnosticSink, Label
+from ..core.fileaccess import Area, Refused, read_regular
 from ..gen.tree import LINK
-from ..sanitize import shown as printable
+from ..core.sanitize import shown as printable
 from ..outputs import Report, render
-from ..source import SourceFile, Span
+from ..core.source import SourceFile, Span
 from .common import EXIT_INVALID, EXIT_OK, cannot_write, load_configured, show, show_diagnostics
 
 if TYPE_CHECKING:
     from types import ModuleType
 
     from ..gen.tree import Outcome
-    from ..model import SystemModel
+    from ..model.system import SystemModel
 
 HELP = "generate the code that runs a configured system (ROS 1 nodes)"
 RESULT = "generation"
@@ -72,7 +72,7 @@ def refusals(outcome: Outcome, directory: str) -> tuple[list[Diagnostic], dict[s
 
 def _first_line(path: str, directory: str) -> str:
     """The first line of the regular file ``path`` in ``directory`` (at most 200 characters), or "" for
-    anything else: a link is never followed, a FIFO or a device never opened (``verify.fileaccess``)."""
+    anything else: a link is never followed, a FIFO or a device never opened (``verify.core.fileaccess``)."""
     try:
         data = read_regular(path, 200, Area((directory,)), follow_links=False)
     except (Refused, OSError):

@@ -1,4 +1,4 @@
-"""``verify graph FILE``: the system as a picture (specs/codegen.md is not involved: ``verify.diagram``).
+"""``verify graph FILE``: the system as a picture (specs/codegen.md is not involved: ``verify.outputs.diagram``).
 
     verify graph FILE [--format dot|svg|png|pdf] [-o OUT [--force]]
 
@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING
 from .common import EXIT_OK, exists, fail, load_system, write_output
 
 if TYPE_CHECKING:
-    from ..model import SystemModel
+    from ..model.system import SystemModel
 
 HELP = "draw the system: instances, ports, data flow, activations, chains (DOT, SVG, PNG, PDF)"
 RESULT = None
@@ -44,7 +44,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def picture(system: SystemModel, fmt: str) -> bytes:
     """The picture of a loaded system in ``fmt`` (raises ``diagram.GraphvizMissing`` for SVG/PNG
     without Graphviz, ``diagram.GraphvizFailed`` when it fails)."""
-    from .. import diagram
+    from ..outputs import diagram
     from ..timing import analyze
 
     analysis = analyze(system) if system.is_configured else None
@@ -53,7 +53,7 @@ def picture(system: SystemModel, fmt: str) -> bytes:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..diagram import GraphvizFailed, GraphvizMissing
+    from ..outputs.diagram import GraphvizFailed, GraphvizMissing
 
     if not args.format_given and args.output:  # (the format from OUT's extension: nav.svg, nav.png)
         ext = os.path.splitext(args.output)[1].lower()

@@ -17,10 +17,10 @@ import sys
 
 from collections.abc import Mapping, Sequence
 
-from ..diagnostics import Diagnostic, DiagnosticSink
+from ..core.diagnostics import Diagnostic, DiagnosticSink
 from ..outputs import Report, render
-from ..sanitize import shown
-from ..source import SourceFile
+from ..core.sanitize import shown
+from ..core.source import SourceFile
 from .common import EXIT_INVALID, EXIT_OK, show, to_stderr, write_new_file
 
 HELP = "read another tool's model (SmartMDSD, CARET) into verify's language"

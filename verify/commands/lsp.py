@@ -11,7 +11,7 @@ MODEL, SYSTEM = False, False
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """(the editor starts it; one option bounds what a message may make it hold)"""
-    from ..limits import LSP_MESSAGE_BYTES as MESSAGE_BYTES
+    from ..core.limits import LSP_MESSAGE_BYTES as MESSAGE_BYTES
 
     p.add_argument("--max-message-bytes", type=_positive, default=MESSAGE_BYTES, metavar="N",
                    help=f"the largest LSP message read (default {MESSAGE_BYTES:,} bytes: a file at the size limit "

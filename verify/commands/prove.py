@@ -15,15 +15,15 @@ import sys
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING
 
-from ..diagnostics import Diagnostic
-from ..fileaccess import write_output
+from ..core.diagnostics import Diagnostic
+from ..core.fileaccess import write_output
 from ..outputs import Output, Report, render
-from ..sanitize import shown, shown_lines
-from ..source import SourceFile
+from ..core.sanitize import shown, shown_lines
+from ..core.source import SourceFile
 from .common import EXIT_INVALID, EXIT_OK, fail, load_args, to_stderr, wrote
 
 if TYPE_CHECKING:
-    from ..model import SystemModel
+    from ..model.system import SystemModel
     from ..prove.verdict import ProofResult
 
 HELP = "prove every latency spec and deadline of a configured system"
@@ -32,7 +32,7 @@ MODEL, SYSTEM = True, True
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from ..budgets import PROVE_BUDGET as DEFAULT_BUDGET
+    from ..core.budgets import PROVE_BUDGET as DEFAULT_BUDGET
 
     p.add_argument("--trace-svg", metavar="FILE",
                    help="write every counterexample as an SVG Gantt chart (one below the other)")

@@ -1,5 +1,5 @@
 """``verify report FILE -o report.html``: one self-contained HTML page about a configured system
-(``verify.htmlreport``): the diagram, the outline, the chain table with margins and ``prove``'s verdicts,
+(``verify.outputs.htmlreport``): the diagram, the outline, the chain table with margins and ``prove``'s verdicts,
 and the Gantt chart of every counterexample.
 
 Exit codes: 0 the report was written (whatever it reports; ``prove`` is the command for CI); 2 invalid
@@ -19,7 +19,7 @@ MODEL, SYSTEM = True, True
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from ..budgets import PROVE_BUDGET
+    from ..core.budgets import PROVE_BUDGET
 
     p.add_argument("-o", "--output", metavar="OUT", required=True, help="the HTML file to write (a new file)")
     p.add_argument("--force", action="store_true", help="replace OUT if it exists")
@@ -36,7 +36,7 @@ def run(args: argparse.Namespace) -> int:
     if isinstance(loaded, int):
         return loaded
     _, system = loaded
-    from ..htmlreport import to_html
+    from ..outputs.htmlreport import to_html
     from ..prove.core import prove
     from ..timing import analyze
 

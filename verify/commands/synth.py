@@ -19,9 +19,9 @@ import argparse
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
-from ..diagnostics import Diagnostic, DiagnosticSink
+from ..core.diagnostics import Diagnostic, DiagnosticSink
 from ..outputs import Report, render
-from ..sanitize import shown
+from ..core.sanitize import shown
 from .common import (EXIT_INVALID, EXIT_OK, EXIT_UNDECIDED, EXIT_VIOLATED, load_system, replace_file, show,
                      show_diagnostics, to_stderr, write_new_file)
 
@@ -52,7 +52,7 @@ def _seconds(text: str) -> float:
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from ..budgets import SYNTH_RLIMIT as DEFAULT_RLIMIT
+    from ..core.budgets import SYNTH_RLIMIT as DEFAULT_RLIMIT
 
     p.add_argument("--objective", metavar="OBJ", default="utilisation", help=OBJECTIVE_HELP)
     where = p.add_mutually_exclusive_group()
@@ -137,7 +137,7 @@ def _write_back(args: argparse.Namespace, loaded: LoadResult, result: SynthResul
 def _relocated_imports(args: argparse.Namespace, loaded: LoadResult) -> dict[str, str] | int:
     """The new names of the root file's imports for the file written to ``-o OUT`` (the same files named
     from OUT's directory), or EXIT_INVALID after a located error for an import that cannot be renamed."""
-    from ..roots import Refusal, project_roots
+    from ..frontend.roots import Refusal, project_roots
     from ..synth.writeback import relocated_imports
 
     roots, _ = project_roots(args.file, args.root, tuple(args.include or ()))

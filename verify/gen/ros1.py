@@ -22,10 +22,10 @@ from collections.abc import Callable
 from fractions import Fraction
 from importlib import resources
 
-from ..activations import DataTriggered, Periodic, SporadicSource
-from ..model import ComponentModel, MessageModel, SystemModel, TaskDecl, TaskModel
-from ..sanitize import c_string, comment, yaml_string
-from ..source import Span
+from ..model.activations import DataTriggered, Periodic, SporadicSource
+from ..model.system import ComponentModel, MessageModel, SystemModel, TaskDecl, TaskModel
+from ..core.sanitize import c_string, comment, yaml_string
+from ..core.source import Span
 from .tree import File, Tree, stamped
 
 TARGET = "ros1"

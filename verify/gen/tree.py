@@ -15,7 +15,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Literal
 
-from ..fileaccess import Refused, links_below, read_regular, write_output
+from ..core.fileaccess import Refused, links_below, read_regular, write_output
 
 MARK = "verify-gen sha256 "
 #: why a symbolic link in the output directory is refused (E601, even with ``--force``)
@@ -70,7 +70,7 @@ def intact(text: str) -> bool:
 
 def _existing(path: str) -> str | None:
     """The text at ``path``: None if nothing is there, "" if it is not a readable text file (not ours:
-    a FIFO or a device is never opened, so reading cannot block; ``verify.fileaccess``)."""
+    a FIFO or a device is never opened, so reading cannot block; ``verify.core.fileaccess``)."""
     try:
         return read_regular(path, MAX_GLUE_BYTES, follow_links=False).decode("utf-8")
     except Refused as refused:

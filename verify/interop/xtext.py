@@ -13,10 +13,10 @@ from collections.abc import Collection
 from dataclasses import dataclass
 from fractions import Fraction
 
-from ..diagnostics import DiagnosticSink
-from ..limits import DEFAULT_LIMITS
-from ..sanitize import shown
-from ..source import Span
+from ..core.diagnostics import DiagnosticSink
+from ..core.limits import DEFAULT_LIMITS
+from ..core.sanitize import shown
+from ..core.source import Span
 
 _TOKEN = re.compile(r"""
     (?P<ws>[ \t\r\n\f\ufeff]+)
@@ -27,7 +27,7 @@ _TOKEN = re.compile(r"""
   | (?P<punct>->|\#import|[{}();=.,\-:\[\]<>*\#])
 """, re.VERBOSE | re.DOTALL)
 
-#: the most tokens one imported file may hold (as the language's own limit: verify.limits)
+#: the most tokens one imported file may hold (as the language's own limit: verify.core.limits)
 MAX_TOKENS = 2_000_000
 #: the largest exponent of a number (``1e-3``) in an imported file (10^40: far beyond any time or rate)
 MAX_EXPONENT = 40
@@ -159,7 +159,7 @@ class Cursor:
 
     def bounded(self, tok: Tok) -> None:
         """E005 (and ``Stop``) for a number of more than ``number_length`` characters, the language's own
-        limit (``verify.limits``): no number is ever converted whole if it is longer."""
+        limit (``verify.core.limits``): no number is ever converted whole if it is longer."""
         if len(tok.text) > DEFAULT_LIMITS.number_length:
             raise self.out_of_range(tok, f"it has {len(tok.text):,} characters; at most "
                                     f"{DEFAULT_LIMITS.number_length} are allowed", "write a shorter number")

@@ -14,15 +14,15 @@ from dataclasses import dataclass
 
 from lsprotocol import types as lsp
 
-from .. import syntax as s
+from ..model import syntax as s
 from ..api import LoadResult
-from ..diagnostics import Diagnostic, Severity
-from ..model import SystemModel
-from ..source import SourceMap, Span
-from ..symbols import Symbol
+from ..core.diagnostics import Diagnostic, Severity
+from ..model.system import SystemModel
+from ..core.source import SourceMap, Span
+from ..frontend.symbols import Symbol
 from ..timing import AnalysisResult
 from ..timing.report import sampling_marks
-from ..units import fmt_time
+from ..model.units import fmt_time
 
 NAME_RE = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 _SEVERITY = {Severity.ERROR: lsp.DiagnosticSeverity.Error, Severity.WARNING: lsp.DiagnosticSeverity.Warning,
@@ -325,7 +325,7 @@ def member_items(model: SystemModel, instance: str, before: str) -> list[lsp.Com
 def keyword_items(before: str) -> list[lsp.CompletionItem]:
     """The keywords the parser accepts at the cursor (its expected tokens), or every keyword when the
     text before it does not parse."""
-    from ..larkparse import expected_keywords
+    from ..frontend.larkparse import expected_keywords
 
     return [lsp.CompletionItem(k, kind=lsp.CompletionItemKind.Keyword) for k in expected_keywords(before)]
 

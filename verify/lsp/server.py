@@ -34,11 +34,11 @@ from pygls.protocol import LanguageServerProtocol, lsp_method
 from pygls.uris import to_fs_path
 
 from .. import __version__, api
-from ..source import SourceMap
-from ..symbols import Symbol
+from ..core.source import SourceMap
+from ..frontend.symbols import Symbol
 from ..timing import AnalysisResult
 from . import features as f
-from ..limits import LSP_MESSAGE_BYTES as MESSAGE_BYTES
+from ..core.limits import LSP_MESSAGE_BYTES as MESSAGE_BYTES
 from .transport import Worker, serve, shared_converter
 
 #: seconds after the last change before the timing analysis starts
@@ -368,7 +368,7 @@ def completion(ls: VerifyServer, params: lsp.CompletionParams) -> list[lsp.Compl
 
 @guarded(list)
 async def formatting(ls: VerifyServer, params: lsp.DocumentFormattingParams) -> list[lsp.TextEdit]:
-    from ..fmt import format_text
+    from ..frontend.fmt import format_text
 
     doc = ls.document(params.text_document.uri)
     if doc is None:

@@ -41,8 +41,8 @@ from lsprotocol import types as lsp
 from pygls.io_ import StdoutWriter
 from pygls.protocol import JsonRPCProtocol, JsonRPCRequestMessage, default_converter
 
-from ..limits import LSP_HEADER_BYTES as HEADER_BYTES
-from ..limits import LSP_MESSAGE_BYTES as MESSAGE_BYTES
+from ..core.limits import LSP_HEADER_BYTES as HEADER_BYTES
+from ..core.limits import LSP_MESSAGE_BYTES as MESSAGE_BYTES
 
 #: the piece in which the body of an oversize message is read and dropped
 DISCARD_CHUNK = 64 * 1024

@@ -17,8 +17,8 @@ from dataclasses import dataclass, field
 from typing import Any
 from collections.abc import Mapping
 
-from ..diagnostics import Diagnostic
-from ..source import SourceFile
+from ..core.diagnostics import Diagnostic
+from ..core.source import SourceFile
 
 #: the format every kind has and every command starts with
 DEFAULT_FORMAT = "text"

@@ -1,10 +1,10 @@
 """``analyze --format json``: schema ``verify.analysis/1`` (``verify.timing.report``), the problems as
-``verify.diagnostics/1`` items."""
+``verify.core.diagnostics/1`` items."""
 from __future__ import annotations
 
 import json
 
-from ..render import diagnostics_json
+from .rendering import diagnostics_json
 from ..timing.report import to_json
 from . import Output, Report
 from .diagnostics_json import render as diagnostics

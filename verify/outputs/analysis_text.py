@@ -3,7 +3,7 @@ verdicts first) or, with ``--explain``, the whole derivation (``to_text``) — a
 E310, E311, E312) on standard error."""
 from __future__ import annotations
 
-from ..sanitize import shown_lines
+from ..core.sanitize import shown_lines
 from ..timing.report import to_brief, to_text
 from . import Output, Report
 from .diagnostics_text import render as diagnostics

@@ -1,8 +1,8 @@
 """``check``: the diagnostics on standard error, and a one-line summary when the model is valid."""
 from __future__ import annotations
 
-from ..diagnostics import has_errors
-from ..sanitize import shown
+from ..core.diagnostics import has_errors
+from ..core.sanitize import shown
 from . import Output, Report
 from .diagnostics_text import render as diagnostics
 

@@ -1,9 +1,9 @@
-"""Diagnostics as one JSON document, schema ``verify.diagnostics/1`` (``verify.render``)."""
+"""Diagnostics as one JSON document, schema ``verify.core.diagnostics/1`` (``verify.outputs.rendering``)."""
 from __future__ import annotations
 
 import json
 
-from ..render import diagnostics_json
+from .rendering import diagnostics_json
 from . import Output, Report
 
 

@@ -1,9 +1,9 @@
-"""Diagnostics as a SARIF 2.1.0 log, for code scanning (``verify.sarif``)."""
+"""Diagnostics as a SARIF 2.1.0 log, for code scanning (``verify.outputs.sarif``)."""
 from __future__ import annotations
 
 import json
 
-from ..sarif import to_sarif
+from .sarif import to_sarif
 from . import Output, Report
 
 

@@ -1,7 +1,7 @@
-"""Diagnostics as text on standard error (rustc style, ``verify.render.render_all_text``)."""
+"""Diagnostics as text on standard error (rustc style, ``verify.outputs.rendering.render_all_text``)."""
 from __future__ import annotations
 
-from ..render import render_all_text
+from .rendering import render_all_text
 from . import Output, Report
 
 

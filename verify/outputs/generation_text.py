@@ -1,7 +1,7 @@
 """``verify gen``: what was written, what was already up to date, which user files were left alone."""
 from __future__ import annotations
 
-from ..sanitize import shown
+from ..core.sanitize import shown
 from . import Output, Report
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 from typing import Any
 
-from ..render import diagnostics_json
+from .rendering import diagnostics_json
 from ..prove.report import SCHEMA, to_json
 from . import Output, Report
 

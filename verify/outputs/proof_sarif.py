@@ -1,10 +1,10 @@
 """``prove --format sarif``: the proof's diagnostics (or why the input is invalid) as a SARIF 2.1.0 log on
-standard output (``verify.sarif``), and as text on standard error."""
+standard output (``verify.outputs.sarif``), and as text on standard error."""
 from __future__ import annotations
 
 import json
 
-from ..sarif import to_sarif
+from .sarif import to_sarif
 from . import Output, Report
 from .diagnostics_text import render as diagnostics
 

@@ -3,7 +3,7 @@ standard output, the diagnostics (E501–E503, or why the input is invalid) on s
 from __future__ import annotations
 
 from ..prove.report import to_text
-from ..sanitize import shown_lines
+from ..core.sanitize import shown_lines
 from . import Output, Report
 from .diagnostics_text import render as diagnostics
 

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import json
 
-from ..render import diagnostics_json
+from .rendering import diagnostics_json
 from ..synth.report import SCHEMA, to_json
 from . import Output, Report
 

@@ -2,8 +2,8 @@
 ``-o``/``--in-place`` the summary on standard output. Without a configuration, the diagnostics only."""
 from __future__ import annotations
 
-from ..render import render_all_text
-from ..sanitize import shown_lines
+from .rendering import render_all_text
+from ..core.sanitize import shown_lines
 from ..synth.report import to_text
 from . import Output, Report
 

@@ -1,7 +1,7 @@
 """Proof of every spec of a configured system (specs/proof.md): by the compositional bound, by an
 exact search over the job-level semantics (enumeration of representative runs, or Z3), or refuted by
 a concrete run that the reference simulator replays. Runs are simulated by the integer simulator of
-``intsim.py``, which the tests hold to the reference simulator ``verify.sim``.
+``intsim.py``, which the tests hold to the reference simulator ``verify.prove.sim``.
 
     from verify.prove import prove
     result = prove(model, budget=1000)      # ProofResult: verdicts, diagnostics, exit_code

@@ -12,9 +12,9 @@ from fractions import Fraction
 from typing import TypedDict, Unpack
 from collections.abc import Mapping, Sequence
 
-from ..construct import direct_constructor
-from ..model import SystemModel
-from ..source import NO_SPAN, Span
+from ..core.construct import direct_constructor
+from ..model.system import SystemModel
+from ..core.source import NO_SPAN, Span
 from ..timing import ChainBounds, TaskResponse
 from .scenario import Target
 from .verdict import Counterexample, Verdict, sim_kind

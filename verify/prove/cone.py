@@ -20,7 +20,7 @@ from collections.abc import Iterable
 from fractions import Fraction
 from typing import TYPE_CHECKING
 
-from ..model import SystemModel, TaskModel
+from ..model.system import SystemModel, TaskModel
 from .intsim import target_samples
 from .scenario import ConcreteScenario, Target
 

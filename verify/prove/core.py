@@ -17,12 +17,12 @@ from functools import partial
 from fractions import Fraction
 from typing import cast
 
-from ..diagnostics import Diagnostic, DiagnosticSink, Label
-from ..gcpause import paused_gc
-from ..model import SystemModel
-from ..sim import Sample, ScenarioError, SimulationError, SimulationTimeout, Trace
+from ..core.diagnostics import Diagnostic, DiagnosticSink, Label
+from ..core.gcpause import paused_gc
+from ..model.system import SystemModel
+from .sim import Sample, ScenarioError, SimulationError, SimulationTimeout, Trace
 from ..timing import TaskResponse, response_and_chain_bounds
-from ..units import fmt_time
+from ..model.units import fmt_time
 from . import bound as bound_mod
 from .bound import Obligation
 from .cone import SliceMismatch, check_all_carry_over, restrict, slices
@@ -33,7 +33,7 @@ from .exact import (SEARCH_EVENTS, Budget, ExactResult, Extreme, Goal, approach,
 from .parallel import ordered_map, resolve_workers
 from .scenario import ConcreteScenario, Measured, ResponseSample, Target, measure, replay
 from .verdict import Counterexample, ProofResult, Verdict
-from ..budgets import PROVE_BUDGET, PROVE_RLIMIT
+from ..core.budgets import PROVE_BUDGET, PROVE_RLIMIT
 
 DEFAULT_BUDGET = PROVE_BUDGET  # simulated scenarios
 DEFAULT_RLIMIT = PROVE_RLIMIT  # Z3 resource units (deterministic), per query
@@ -524,7 +524,7 @@ def diagnostics(model: SystemModel, verdicts: Sequence[Verdict]) -> list[Diagnos
             cex = v.counterexample
             assert cex is not None  # (every violation comes with its run)
             notes.append(f"established by {_method_text(v.method)}; the run replays in the reference "
-                         "simulator (verify.sim)")
+                         "simulator (verify.prove.sim)")
             if v.exact is not None:
                 notes.append(f"exact worst case: {fmt_time(v.exact)}"
                              + (" (a supremum, approached by runs like this one)" if v.exact != cex.latency else ""))
@@ -572,7 +572,7 @@ def _sample_text(model: SystemModel, v: Verdict, cex: Counterexample) -> str:
         r = cast(ResponseSample, cex.sample)  # (see ``Counterexample.of``: a task's sample is a response)
         end = "still running at the end of the run" if r.finish is None else f"completes at {fmt_time(r.finish)}"
         return f"job {r.task}#{r.index} is released at {fmt_time(r.release)} and {end}"
-    s = cast(Sample, cex.sample)  # (a chain's sample is a ``verify.sim.Sample``)
+    s = cast(Sample, cex.sample)  # (a chain's sample is a ``verify.prove.sim.Sample``)
     chain = next(c for c in model.chains if c.name == v.name)
     first, last = chain.tasks[0], chain.tasks[-1]
     text = (f"from the read of {first}#{s.origin} at {fmt_time(s.begin)} to the completion of {last}#{s.last} "

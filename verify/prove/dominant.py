@@ -21,10 +21,10 @@ from __future__ import annotations
 from collections.abc import Iterable
 from dataclasses import dataclass, replace
 
-from ..activations.sporadic import SporadicSource
-from ..activations.timer import Periodic
-from ..model import LinkModel, SystemModel, TaskModel
-from ..units import fmt_time
+from ..model.activations.sporadic import SporadicSource
+from ..model.activations.timer import Periodic
+from ..model.system import LinkModel, SystemModel, TaskModel
+from ..model.units import fmt_time
 from .exact import exact_class
 from .scenario import Target
 

@@ -24,10 +24,10 @@ from fractions import Fraction
 from collections.abc import Generator, Iterable
 from collections.abc import Callable, Iterator
 
-from ..model import SystemModel, TaskModel
-from ..sim import Sample, SimulationError
+from ..model.system import SystemModel, TaskModel
+from .sim import Sample, SimulationError
 from .parallel import ordered_map, resolve_workers
-from ..timebase import TimeBase, ceil_to, floor_to
+from ..core.timebase import TimeBase, ceil_to, floor_to
 from .scenario import ConcreteScenario, Measured, ResponseSample, Target, hyperperiod, measure, measure_periodic
 
 ZERO = Fraction(0)
@@ -508,7 +508,7 @@ def search(model: SystemModel, goals: list[Goal], budget: Budget, horizon: Fract
                 improved = True
         return improved
 
-    from ..sim import ScenarioError, SimulationError
+    from .sim import ScenarioError, SimulationError
 
     def run(sc: ConcreteScenario) -> Measured | None:
         try:  # a run with max_events events ends at the next instant (a shorter run, as real as any)

@@ -18,9 +18,9 @@ from fractions import Fraction
 from typing import Any, cast
 from xml.sax.saxutils import escape
 
-from ..model import SystemModel
-from ..sim import JobRecord, Sample, Trace
-from ..units import fmt_time
+from ..model.system import SystemModel
+from .sim import JobRecord, Sample, Trace
+from ..model.units import fmt_time
 from .intsim import run_trace
 from .scenario import ConcreteScenario, ResponseSample
 from .trace import ChainStep, _t, job_chain

@@ -2,7 +2,7 @@
 
 The searches of ``prove`` run the system many times: the exact enumeration once per representative,
 the falsifying search once per scenario, on systems of up to thousands of tasks. This module runs the
-same job-level semantics as the reference simulator ``verify.sim`` — the same rounds (completions,
+same job-level semantics as the reference simulator ``verify.prove.sim`` — the same rounds (completions,
 arrivals, releases, dispatch), the same dispatch ranks, cooperative tokens, FIFO back-pressure,
 prescalers, AND freshness, registers and read-at-start, the same event count — but on integers:
 every time is a multiple of one *unit* (the gcd of the model's times and the scenario's choices), so
@@ -12,8 +12,8 @@ dispatch costs a few heap operations however many jobs are pending. Every choice
 execution times, delays and sporadic inter-arrival times.
 
 Chain samples and response samples are derived from the integer job records by the rules of
-``verify.sim.chain_latencies`` and converted back to exact ``Fraction`` seconds only for the extremes
-returned. ``verify.sim`` stays the independent oracle: ``tests/test_intsim.py`` compares the two on
+``verify.prove.sim.chain_latencies`` and converted back to exact ``Fraction`` seconds only for the extremes
+returned. ``verify.prove.sim`` stays the independent oracle: ``tests/test_intsim.py`` compares the two on
 random systems and scenarios (ranges, sporadic sources, compounds, prescalers, cooperative tasks),
 ``tests/test_prove.py`` the periodic evaluation of ``rigid.py`` built on this simulator.
 """
@@ -25,15 +25,17 @@ from collections.abc import Callable, Iterable, Sequence
 from fractions import Fraction
 from typing import TYPE_CHECKING, Protocol, TypeAlias
 
-from ..model import ChainModel, LinkModel, SystemModel, TaskModel
-from ..sim import (DEFAULT_MAX_EVENTS, JobRecord, Message, Sample, ScenarioError, SimulationError,
-                   Trace, absorbs, exclusive_groups, executor_cores, snapshot_rank)
-from ..timebase import TimeBase
+from ..model.system import ChainModel, LinkModel, SystemModel, TaskModel
+from .sim import (
+    DEFAULT_MAX_EVENTS, JobRecord, Message, Sample, ScenarioError, SimulationError, Trace, absorbs, exclusive_groups,
+    executor_cores, snapshot_rank
+)
+from ..core.timebase import TimeBase
 
 if TYPE_CHECKING:
     from .scenario import ConcreteScenario, Extremes, Measured, ResponseSample, Target, TimingState
 
-_ARRIVAL, _RELEASE = 1, 2  # heap phases, as in verify.sim
+_ARRIVAL, _RELEASE = 1, 2  # heap phases, as in verify.prove.sim
 
 #: a message: (connection, index, writer task, writer job)
 _Msg: TypeAlias = "tuple[int, int, int, int]"
@@ -69,7 +71,7 @@ class _Job:
 
 
 class IntSimulator:
-    """``verify.sim._Simulator`` in integer multiples of ``unit`` seconds, for one concrete scenario.
+    """``verify.prove.sim._Simulator`` in integer multiples of ``unit`` seconds, for one concrete scenario.
 
     The scenario's choices come as in ``scenario.ConcreteScenario``: ``phases`` (timers without a fixed
     phase, first releases of sporadic sources), prescaler ``counters``, and per-job patterns —
@@ -154,7 +156,7 @@ class IntSimulator:
             self._init_activation(i, t, phases, counters, interarrivals, base)
 
     def _init_executors(self, model: SystemModel, cores: list[str]) -> None:
-        """ROS 2 executors (specs/timing.md §9), as in ``verify.sim._Executor``: per executor its
+        """ROS 2 executors (specs/timing.md §9), as in ``verify.prove.sim._Executor``: per executor its
         released, unstarted jobs (``ex_pending``, in release order), the snapshot of its last polling
         point still to run, its worker cores and the job each started (``ex_running``), and its
         callbacks in mutually exclusive groups (``ex_exclusive``, task -> group); per task its executor
@@ -178,7 +180,7 @@ class IntSimulator:
 
     def _head(self, e: int, core: int) -> _Job | None:
         """The job executor ``e``'s worker on ``core`` runs when it gets its core
-        (``verify.sim._Executor.head``)."""
+        (``verify.prove.sim._Executor.head``)."""
         current = self.ex_running[e][core]
         if current is not None:
             return current
@@ -215,7 +217,7 @@ class IntSimulator:
         job.core = core
 
     def _settle(self) -> None:
-        """``verify.sim._Executor.settle`` for every executor with mutually exclusive groups."""
+        """``verify.prove.sim._Executor.settle`` for every executor with mutually exclusive groups."""
         for e, exclusive in enumerate(self.ex_exclusive):
             if exclusive and self.ex_snapshot[e] and any(
                     job is None and self._head(e, c) is None for c, job in self.ex_running[e].items()):
@@ -273,7 +275,7 @@ class IntSimulator:
                                   "(a zero-time activation loop, or raise max_events)", self.now * self.unit)
 
     def run_to(self, until: int, event_budget: int | None = None) -> int:
-        """Process every event strictly before ``until`` (verify.sim's rounds: completions, arrivals,
+        """Process every event strictly before ``until`` (verify.prove.sim's rounds: completions, arrivals,
         releases, dispatch), then let time pass up to ``until``; return ``until``. With
         ``event_budget``, stop instead at the first new instant reached with at least that many
         events processed, before any event of it (an instant already begun, e.g. by zero-time jobs,
@@ -437,7 +439,7 @@ class IntSimulator:
 
     def _dispatch(self) -> None:
         """Every core runs its best eligible job (rank ``key``); jobs about to start are started one
-        at a time in rank order (verify.sim ``_dispatch``). Starting a job that neither takes its
+        at a time in rank order (verify.prove.sim ``_dispatch``). Starting a job that neither takes its
         instance's token nor leaves its executor's queue changes no core's best job (its own core
         keeps it, now started), so the cores are ranked again only after such a start."""
         running, ready, coop, instance, holder = self.running, self.ready, self.coop, self.instance, self.holder
@@ -475,7 +477,7 @@ class IntSimulator:
         t = job.task
         job.start = self.now
         e = self.executor_of[t]
-        if e >= 0:  # on the first free worker that chose it (``verify.sim._Executor.worker_for``)
+        if e >= 0:  # on the first free worker that chose it (``verify.prove.sim._Executor.worker_for``)
             running = self.ex_running[e]
             self._take(e, job, next(c for c in self.ex_workers[e] if running[c] is None and self.running[c] is job))
         regs = self.registers
@@ -583,7 +585,7 @@ class JobRecords(Protocol):
 
 class ChainSamples:
     """The samples of one chain in the run so far, as integer tuples ``(value, begin, end, origin,
-    stamp, last)`` in the order ``verify.sim.chain_latencies`` lists them."""
+    stamp, last)`` in the order ``verify.prove.sim.chain_latencies`` lists them."""
 
     def __init__(self, sim: JobRecords, chain: ChainModel):
         first = sim.index_of[chain.tasks[0]]

@@ -14,9 +14,9 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from fractions import Fraction
 
-from ..model import SystemModel
+from ..model.system import SystemModel
 from ..timing import TaskResponse, response_and_chain_bounds
-from ..units import fmt_time
+from ..model.units import fmt_time
 from . import bound as bound_mod
 from .bound import Obligation
 from .cone import ConeIndex, slices

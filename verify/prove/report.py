@@ -5,10 +5,10 @@ from __future__ import annotations
 from fractions import Fraction
 from typing import TYPE_CHECKING, Any
 
-from ..model import SystemModel
-from ..render import diagnostics_json
+from ..model.system import SystemModel
+from ..outputs.rendering import diagnostics_json
 from ..timing.report import exact
-from ..units import fmt_time
+from ..model.units import fmt_time
 from .verdict import ProofResult, Verdict
 
 if TYPE_CHECKING:

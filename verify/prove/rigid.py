@@ -7,7 +7,7 @@ simulator of ``intsim.py`` to the multiples of the hyperperiod until the timing 
 builds the rest of the run by shifting (``PeriodicShift``) instead of simulating it, and takes the
 extremes of every target from the integer job records.
 
-``verify.sim`` stays the independent oracle: ``tests/test_prove.py`` compares this evaluator with the
+``verify.prove.sim`` stays the independent oracle: ``tests/test_prove.py`` compares this evaluator with the
 reference path (``scenario.measure_periodic_reference``) on random rigid systems and scenarios.
 """
 from __future__ import annotations
@@ -16,7 +16,7 @@ from collections.abc import Callable, Hashable, Iterable
 from fractions import Fraction
 from typing import TYPE_CHECKING, TypeVar
 
-from ..model import SystemModel
+from ..model.system import SystemModel
 from .intsim import _ARRIVAL, ChainSamples, IntSimulator, _Job, extremes_of
 
 if TYPE_CHECKING:

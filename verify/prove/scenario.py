@@ -3,12 +3,12 @@
 A ``ConcreteScenario`` fixes every free choice of one run in a form that can be written to JSON and
 replayed: phases, prescaler counter phases, and per task / per connection *patterns* of execution
 times, delays and sporadic inter-arrival times (job or message ``i`` takes ``pattern[i % len]``).
-``to_sim`` turns it into a ``verify.sim.Scenario``: ``replay`` runs it in the reference simulator,
+``to_sim`` turns it into a ``verify.prove.sim.Scenario``: ``replay`` runs it in the reference simulator,
 which every counterexample is checked against. The searches evaluate scenarios with the integer
 simulator of ``intsim.py`` (and ``rigid.py`` on top of it), which the tests hold to the reference.
 
 Targets name what is measured: a chain latency (``reaction_time``, ``data_age`` — reduced —,
-``data_age_nonreduced``; the kinds of ``verify.sim.KINDS``) or a task's response time
+``data_age_nonreduced``; the kinds of ``verify.prove.sim.KINDS``) or a task's response time
 (``response``). ``measure`` runs a scenario to a fixed horizon; ``measure_periodic`` (rigid systems
 only, §4.3 of the proof spec) runs until the timing state repeats and the samples are provably
 complete, so that its maxima are those of the infinite run.
@@ -20,10 +20,11 @@ from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any, TypeAlias, TypeVar
 
-from ..model import SystemModel
-from ..timebase import frac_lcm
-from ..sim import (DEFAULT_MAX_EVENTS, Sample, Scenario, Trace, _ARRIVAL, _RELEASE, _Job, _Simulator,
-                   chain_latencies, simulate)
+from ..model.system import SystemModel
+from ..core.timebase import frac_lcm
+from .sim import (
+    DEFAULT_MAX_EVENTS, Sample, Scenario, Trace, _ARRIVAL, _RELEASE, _Job, _Simulator, chain_latencies, simulate
+)
 
 ZERO = Fraction(0)
 CHAIN_KINDS = ("reaction_time", "data_age", "data_age_nonreduced")
@@ -124,7 +125,7 @@ class ConcreteScenario:
                                 self.interarrivals)
 
     def to_sim(self, model: SystemModel) -> Scenario:
-        """The ``verify.sim.Scenario`` of these choices; entries without a pattern take the
+        """The ``verify.prove.sim.Scenario`` of these choices; entries without a pattern take the
         simulator's defaults for ``model``."""
         wcet: dict[str, Fraction] = {t.id: t.wcet for t in model.tasks}
         dmin: dict[tuple[str, str], Fraction] = {(lk.source, lk.target): lk.delay_min for lk in model.links}
@@ -176,7 +177,7 @@ class ConcreteScenario:
 
     def summary(self, model: SystemModel) -> str:
         """One line for a diagnostic note: the phases and how execution times and delays were chosen."""
-        from ..units import fmt_time
+        from ..model.units import fmt_time
 
         parts = []
         free = [t.id for t in model.tasks if t.activation.offset_window is not None]
@@ -230,7 +231,7 @@ def _policy_text(patterns: Iterable[tuple[object, tuple[Fraction, ...]]],
 
 def replay(model: SystemModel, scenario: ConcreteScenario, max_events: int = DEFAULT_MAX_EVENTS,
            deadline: float | None = None) -> Trace:
-    """The run of ``scenario`` (over ``[0, scenario.horizon)``), by ``verify.sim.simulate`` (which ends
+    """The run of ``scenario`` (over ``[0, scenario.horizon)``), by ``verify.prove.sim.simulate`` (which ends
     it with ``SimulationTimeout`` once ``deadline``, a ``time.monotonic()`` instant, has passed)."""
     return simulate(model, scenario.to_sim(model), max_events, deadline)
 
@@ -412,7 +413,7 @@ def measure(model: SystemModel, scenario: ConcreteScenario, targets: Iterable[Ta
 
 def measure_reference(model: SystemModel, scenario: ConcreteScenario, targets: Iterable[Target],
                       max_events: int = DEFAULT_MAX_EVENTS) -> Measured:
-    """``measure`` by the reference simulator ``verify.sim``."""
+    """``measure`` by the reference simulator ``verify.prove.sim``."""
     trace = replay(model, scenario, max_events)
     values = {t: extremes(trace, model, t, with_open=True) for t in targets}
     return Measured(scenario, values, False, scenario.horizon)

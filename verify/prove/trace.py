@@ -1,7 +1,7 @@
 """Counterexample timelines: text and JSON (specs/proof.md §8; the SVG Gantt chart: ``verify.prove.gantt``).
 
 Every view starts from a ``Counterexample`` and runs its scenario (``intsim.run_trace``, the same
-trace as the reference simulator ``verify.sim`` gives — tests/test_intsim.py — at a fraction of the
+trace as the reference simulator ``verify.prove.sim`` gives — tests/test_intsim.py — at a fraction of the
 cost on large systems); nothing is drawn that the run did not produce. The job chain is found by walking back from
 the last task's job through the values it read (provenance, specs/timing.md §4).
 """
@@ -12,16 +12,16 @@ from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any, TypeAlias, cast
 
-from ..model import SystemModel, TaskModel
-from ..sim import JobRecord, Message, Sample, Trace
+from ..model.system import SystemModel, TaskModel
+from .sim import JobRecord, Message, Sample, Trace
 from ..timing.report import exact
-from ..units import fmt_time
+from ..model.units import fmt_time
 from .intsim import run_trace
 from .scenario import ConcreteScenario, ResponseSample
 from .verdict import Verdict
 
 # ``Counterexample.sample`` and ``best_sample`` are typed ``object``: they are the extreme samples
-# ``Counterexample.of`` takes from ``scenario.Extremes``, a ``verify.sim.Sample`` for a chain verdict
+# ``Counterexample.of`` takes from ``scenario.Extremes``, a ``verify.prove.sim.Sample`` for a chain verdict
 # and a ``scenario.ResponseSample`` for a task's deadline (the casts below say which one a view has).
 AnySample: TypeAlias = "Sample | ResponseSample"
 

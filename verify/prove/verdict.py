@@ -12,8 +12,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from fractions import Fraction
 
-from ..diagnostics import Diagnostic
-from ..source import NO_SPAN, Span
+from ..core.diagnostics import Diagnostic
+from ..core.source import NO_SPAN, Span
 from ..timing.chains import SPEC_WORDS
 from .scenario import ConcreteScenario, Measured, Target
 
@@ -22,7 +22,7 @@ STATUSES = ("proved", "violated", "undecided")
 
 EXIT_OK, EXIT_VIOLATED, EXIT_UNDECIDED = 0, 1, 3
 
-#: the latency (``verify.sim`` kind) behind each spec kind, by data-age variant
+#: the latency (``verify.prove.sim`` kind) behind each spec kind, by data-age variant
 def sim_kind(spec_kind: str, variant: str) -> str:
     if spec_kind == "reaction_time":
         return "reaction_time"
@@ -33,8 +33,8 @@ def sim_kind(spec_kind: str, variant: str) -> str:
 
 @dataclass(frozen=True)
 class Counterexample:
-    """A concrete run breaking a spec: ``scenario`` replays (``verify.sim.simulate``) to a trace in
-    which ``sample`` (a ``verify.sim.Sample`` or a response sample) has ``latency``. For a jitter
+    """A concrete run breaking a spec: ``scenario`` replays (``verify.prove.sim.simulate``) to a trace in
+    which ``sample`` (a ``verify.prove.sim.Sample`` or a response sample) has ``latency``. For a jitter
     spec, ``best_scenario``/``best_sample`` is a second run with a small data age, and ``latency``
     is the difference of the two."""
 

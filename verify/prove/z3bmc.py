@@ -26,9 +26,9 @@ from typing import TypeAlias
 
 import z3
 
-from ..model import ChainModel, SystemModel
+from ..model.system import ChainModel, SystemModel
 from .exact import Budget, Extreme, ExactResult, Grid, exact_class, grid_of, scenario_of
-from ..timebase import ceil_to, floor_to
+from ..core.timebase import ceil_to, floor_to
 from .scenario import Measured, Target, measure_periodic
 
 MAX_CELLS = 2_500  # instants × tasks: beyond, bit-blasting alone can outlast any resource limit

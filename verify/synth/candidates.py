@@ -29,11 +29,11 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import Literal
 
-from ..diagnostics import Diagnostic, DiagnosticSink
-from ..activations import DataTriggered, Hole, Periodic
-from ..model import SystemModel, TaskModel
-from ..resolve import SystemScope
-from ..units import fmt_number, fmt_time
+from ..core.diagnostics import Diagnostic, DiagnosticSink
+from ..model.activations import DataTriggered, Hole, Periodic
+from ..model.system import SystemModel, TaskModel
+from ..frontend.resolve import SystemScope
+from ..model.units import fmt_number, fmt_time
 from .statements import Statement, statement_index
 
 MS = Fraction(1, 1000)

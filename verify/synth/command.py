@@ -1,7 +1,7 @@
 """The ``synth`` command is ``verify.commands.synth``; ``too_many`` stays here for its callers."""
 from __future__ import annotations
 
-from ..diagnostics import Diagnostic
+from ..core.diagnostics import Diagnostic
 from .candidates import TooManyCandidates
 
 

@@ -21,12 +21,12 @@ from typing import cast, overload
 
 import z3
 
-from ..diagnostics import Diagnostic, DiagnosticSink, Label
-from ..model import SystemModel
-from ..resolve import SystemScope
-from ..source import NO_SPAN, Span
+from ..core.diagnostics import Diagnostic, DiagnosticSink, Label
+from ..model.system import SystemModel
+from ..frontend.resolve import SystemScope
+from ..core.source import NO_SPAN, Span
 from ..timing import RateInterval
-from ..units import fmt_rate, fmt_time
+from ..model.units import fmt_rate, fmt_time
 from .candidates import Candidate
 from .encode import Encoding
 from .problem import Config, Evaluation, Problem, build_problem, relaxed_problem

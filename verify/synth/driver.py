@@ -19,12 +19,12 @@ from typing import cast
 import z3
 
 from ..api import LoadResult
-from ..diagnostics import Diagnostic, DiagnosticSink, Label
-from ..model import SystemModel
-from ..resolve import SystemScope
-from ..source import Span
+from ..core.diagnostics import Diagnostic, DiagnosticSink, Label
+from ..model.system import SystemModel
+from ..frontend.resolve import SystemScope
+from ..core.source import Span
 from ..timing import AnalysisResult
-from ..units import fmt_time
+from ..model.units import fmt_time
 from .candidates import Candidate
 from .core import Explanation, explain_unsat, unsat_diagnostic
 from .encode import Encoding
@@ -32,7 +32,7 @@ from .exhaust import EXHAUSTIVE_LIMIT, Enumerated, Key, enumerate_best, space
 from .problem import Config, Evaluation, Problem, build_problem
 from .solve import Budget, Engine, Objective, Outcome, lex_better, quick_answer
 from .statements import Statement
-from ..budgets import SYNTH_RLIMIT
+from ..core.budgets import SYNTH_RLIMIT
 
 DEFAULT_RLIMIT = SYNTH_RLIMIT  # Z3 resource units for one run (deterministic); --rlimit changes it
 OBJECTIVES = ("utilisation", "slack", "latency:CHAIN", "age:CHAIN", "none")
@@ -61,7 +61,7 @@ class Goal:
 def parse_objective(text: str | None, model: SystemModel) -> list[Goal]:
     """``utilisation`` (default), ``slack``, ``latency:CHAIN``, ``age:CHAIN``, comma-separated for a
     lexicographic combination; ``none`` for any feasible configuration."""
-    from ..diagnostics import suggest
+    from ..core.diagnostics import suggest
 
     goals: list[Goal] = []
     chains = [c.name for c in model.chains]

@@ -29,10 +29,10 @@ from collections.abc import Callable, Mapping
 
 import z3
 
-from .. import syntax as s
-from ..activations import Activation, DataTriggered
-from ..model import ChainModel, HopModel, LinkModel, SystemModel, TaskModel
-from ..timebase import TimeBase
+from ..model import syntax as s
+from ..model.activations import Activation, DataTriggered
+from ..model.system import ChainModel, HopModel, LinkModel, SystemModel, TaskModel
+from ..core.timebase import TimeBase
 from ..timing.chains import cascade_in_time, cascade_links, pair_shape, same_core_reason
 from ..timing.rta import cooperative_counts
 from .candidates import Choice
@@ -192,7 +192,7 @@ class Encoding:
         return self.base.unit
 
     def ticks(self, x: Fraction) -> int:
-        """``x`` in ticks of the problem (``verify.timebase``)."""
+        """``x`` in ticks of the problem (``verify.core.timebase``)."""
         return self.base.ticks(x)
 
     def ticks_above(self, x: Fraction, strictly: bool = False) -> int:

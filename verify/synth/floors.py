@@ -9,7 +9,7 @@ import math
 from collections.abc import Mapping
 from fractions import Fraction
 
-from ..model import SystemModel, TaskModel
+from ..model.system import SystemModel, TaskModel
 from .candidates import Choice
 from .structure import activation_options
 

@@ -14,9 +14,9 @@ from fractions import Fraction
 from typing import TYPE_CHECKING
 from collections.abc import Mapping
 
-from ..diagnostics import Diagnostic
-from ..model import SystemModel
-from ..resolve import SystemScope
+from ..core.diagnostics import Diagnostic
+from ..model.system import SystemModel
+from ..frontend.resolve import SystemScope
 from ..timing import AnalysisResult, analyze
 from .candidates import Candidate, Choice, build_choices, make_choice
 from .prune import Pruner

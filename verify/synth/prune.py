@@ -24,8 +24,8 @@ from fractions import Fraction
 from typing import TypeAlias
 from collections.abc import Callable, Mapping
 
-from ..activations import Activation, DataTriggered
-from ..model import ChainModel, HopModel, SystemModel, TaskModel
+from ..model.activations import Activation, DataTriggered
+from ..model.system import ChainModel, HopModel, SystemModel, TaskModel
 from ..timing.chains import same_core_reason
 from ..timing.rates import exact_sum
 from .candidates import Candidate, Choice, make_choice

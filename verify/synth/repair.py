@@ -15,7 +15,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 
-from ..model import SystemModel
+from ..model.system import SystemModel
 from .candidates import Choice
 from .problem import Config, Evaluation, Problem
 from .structure import member_links

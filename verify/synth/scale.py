@@ -11,8 +11,8 @@ import math
 from collections.abc import Mapping
 from fractions import Fraction
 
-from ..model import SystemModel, TaskModel
-from ..timebase import TimeBase
+from ..model.system import SystemModel, TaskModel
+from ..core.timebase import TimeBase
 from .candidates import Choice
 from .structure import Structure, activation_options, member_links
 

@@ -18,12 +18,12 @@ from fractions import Fraction
 from typing import TypedDict, TypeGuard
 from collections.abc import Mapping
 
-from .. import syntax as s
-from ..activations import DataTriggered, Hole, Periodic
-from ..model import ActivationModel, ChainModel, CoreModel, ReadModel, SystemModel, TaskModel
-from ..resolve import SystemScope
-from ..source import NO_SPAN, Span
-from ..units import fmt_number, fmt_quantity, fmt_rate, fmt_time
+from ..model import syntax as s
+from ..model.activations import DataTriggered, Hole, Periodic
+from ..model.system import ActivationModel, ChainModel, CoreModel, ReadModel, SystemModel, TaskModel
+from ..frontend.resolve import SystemScope
+from ..core.source import NO_SPAN, Span
+from ..model.units import fmt_number, fmt_quantity, fmt_rate, fmt_time
 
 #: deletion order of core minimisation: the kinds tried first are the first to leave the core, so
 #: what remains is what a user most likely wants to see (specs, fixed rates, constraints)

@@ -17,8 +17,8 @@ from collections.abc import Mapping
 
 import networkx as nx
 
-from ..activations import Activation
-from ..model import LinkModel, SystemModel, TaskModel
+from ..model.activations import Activation
+from ..model.system import LinkModel, SystemModel, TaskModel
 from .candidates import Choice
 
 #: a node of the dependency graph: ("em", task), ("r", task) or ("hp", core, priority)

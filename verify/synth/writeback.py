@@ -6,7 +6,7 @@ other byte stays as the user wrote it (layout, comments, line endings). A timer 
 hole's range (a frequency range gives a frequency), otherwise milliseconds. The edited text must parse
 to the syntax tree with the holes filled in (``filled_module``), or nothing is written. With
 ``canonical=True`` the whole root file is printed by the canonical formatter instead, comments and blank
-lines kept (``verify.fmt``).
+lines kept (``verify.frontend.fmt``).
 
 Written to another directory (``-o``), the root file's imports are rewritten so that they name the same
 files from there (``relocated_imports``): only the quoted file names change.
@@ -23,16 +23,18 @@ from dataclasses import dataclass, replace
 from fractions import Fraction
 from collections.abc import Mapping
 
-from .. import syntax as s
+from ..model import syntax as s
 from ..api import LoadResult, _finish
-from ..diagnostics import DiagnosticSink
+from ..core.diagnostics import DiagnosticSink
 from .problem import rejects
-from ..fmt import blank_lines, collect_comments, format_activation, format_module, format_number, format_quantity
-from ..loader import Project
-from ..model import SystemModel
-from ..parse import parse_text
-from ..roots import Refusal, Roots
-from ..source import SourceFile, Span
+from ..frontend.fmt import (
+    blank_lines, collect_comments, format_activation, format_module, format_number, format_quantity
+)
+from ..frontend.loader import Project
+from ..model.system import SystemModel
+from ..frontend.parse import parse_text
+from ..frontend.roots import Refusal, Roots
+from ..core.source import SourceFile, Span
 from ..timing import AnalysisResult, analyze
 from .candidates import Candidate
 

@@ -20,10 +20,10 @@ from dataclasses import dataclass
 from fractions import Fraction
 from typing import TYPE_CHECKING
 
-from ..construct import direct_constructor
-from ..diagnostics import Diagnostic, DiagnosticSink
-from ..gcpause import paused_gc
-from ..model import SystemModel, TaskModel
+from ..core.construct import direct_constructor
+from ..core.diagnostics import Diagnostic, DiagnosticSink
+from ..core.gcpause import paused_gc
+from ..model.system import SystemModel, TaskModel
 
 if TYPE_CHECKING:  # (imported when first used: `verify check` needs the rates alone, not the analysis)
     from . import fastrta
@@ -99,7 +99,7 @@ class TaskTiming:
         return self.response.bcrt
 
 
-_new_task_timing = direct_constructor(TaskTiming)  # (``verify.construct``: one per task)
+_new_task_timing = direct_constructor(TaskTiming)  # (``verify.core.construct``: one per task)
 
 
 @dataclass(frozen=True)

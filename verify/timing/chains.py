@@ -37,10 +37,10 @@ from fractions import Fraction
 from functools import cached_property
 from collections.abc import Iterable, Mapping
 
-from ..construct import direct_constructor
-from ..activations import Activation, DataTriggered, Periodic, SporadicSource
-from ..model import ChainModel, HopModel, LinkModel, SystemModel, TaskModel
-from ..units import fmt_time
+from ..core.construct import direct_constructor
+from ..model.activations import Activation, DataTriggered, Periodic, SporadicSource
+from ..model.system import ChainModel, HopModel, LinkModel, SystemModel, TaskModel
+from ..model.units import fmt_time
 from .rates import ActivationInfo, EventModel, arrival_model, combine_and, exact_sum
 from .multithreaded import may_overlap
 from .rta import TaskResponse, cooperative_counts, interferer, least_fixed_point
@@ -166,7 +166,7 @@ class ChainBounds:
     problem: str | None = None
 
     def bound(self, kind: str) -> Bound:
-        """The bound of a latency kind as ``verify.sim.KINDS`` names it: "reaction_time",
+        """The bound of a latency kind as ``verify.prove.sim.KINDS`` names it: "reaction_time",
         "reaction_time_reduced", "data_age" (reduced) or "data_age_nonreduced"."""
         return {"reaction_time": self.reaction_time, "reaction_time_reduced": self.reaction_time_reduced,
                 "data_age": self.data_age_reduced, "data_age_reduced": self.data_age_reduced,
@@ -191,7 +191,7 @@ class ChainBounds:
         return self.reaction_time.jitter
 
 
-#: the constructors of the objects above, built by the thousand (``verify.construct``)
+#: the constructors of the objects above, built by the thousand (``verify.core.construct``)
 _new_term = direct_constructor(Term)
 _new_step = direct_constructor(Step)
 _new_bound = direct_constructor(Bound)

@@ -33,10 +33,10 @@ from collections.abc import Callable, Iterable, Mapping
 from dataclasses import replace
 from fractions import Fraction
 
-from ..model import ExecutorModel, SystemModel, TaskModel
+from ..model.system import ExecutorModel, SystemModel, TaskModel
 from .multithreaded import Workers, multi_threaded_response
 from .rates import EventModel
-from ..timebase import TimeBase
+from ..core.timebase import TimeBase
 from .rta import MAX_JOBS, MAX_STEPS, Interferer, TaskResponse, bcrt, deadline_of, interferer, least_fixed_point, ratio
 
 ZERO = Fraction(0)

@@ -39,17 +39,17 @@ from collections.abc import Callable, Sequence
 from typing import overload
 from collections.abc import Mapping
 
-from ..construct import direct_constructor
-from ..ids import TaskId
-from ..model import SystemModel
-from ..timebase import TimeBase
+from ..core.construct import direct_constructor
+from ..core.ids import TaskId
+from ..model.system import SystemModel
+from ..core.timebase import TimeBase
 from .pipeline import cases, upstream
 from .rates import EventModel
 from .executors import executor_responses
 from .interferers import CoreOrder, Interferers
 from .rta import (MAX_JOBS, MAX_STEPS, ZERO, TaskResponse, bcrt, causes, deadline_of, ratio)
 
-_new_response = direct_constructor(TaskResponse)  # (``verify.construct``: one per task)
+_new_response = direct_constructor(TaskResponse)  # (``verify.core.construct``: one per task)
 
 #: what ``Round._lfp`` returns: (the fixed point in ticks or None, why not, the step budget left)
 _Run = tuple[int | None, str | None, int]
@@ -225,7 +225,7 @@ class Round:
 
     # ------------------------------------------------------------------ ticks
     def _time_base(self, previous: Round | None, kept: list[bool]) -> TimeBase:
-        """1/D seconds (``verify.timebase``): every duration of the round is a multiple of 1/D seconds. Any
+        """1/D seconds (``verify.core.timebase``): every duration of the round is a multiple of 1/D seconds. Any
         multiple of the least such D would do as well; after the first round D grows only by what tasks with
         new event models bring (last round's D covers the others, and the execution times)."""
         dens = {1 if previous is None else previous.scale}

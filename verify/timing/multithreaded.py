@@ -37,7 +37,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from fractions import Fraction
 
-from ..model import ExecutorModel, SystemModel, TaskModel
+from ..model.system import ExecutorModel, SystemModel, TaskModel
 from .rates import EventModel
 from .rta import MAX_STEPS, Interferer, TaskResponse, bcrt, deadline_of, interferer, ratio
 

@@ -35,7 +35,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from fractions import Fraction
 
-from ..model import SystemModel, TaskModel
+from ..model.system import SystemModel, TaskModel
 
 ZERO = Fraction(0)
 #: the longest path followed: each level is one more busy window per analysed task

@@ -26,13 +26,13 @@ from collections.abc import Iterable, Mapping
 from typing import Any
 
 
-from ..construct import direct_constructor
-from ..diagnostics import DiagnosticSink, Label, name_list
-from ..syntax import Tolerance
-from ..activations import DataTriggered
-from ..ids import TaskId
-from ..model import CompoundModel, LinkModel, SystemModel, TaskModel
-from ..units import fmt_number, fmt_rate
+from ..core.construct import direct_constructor
+from ..core.diagnostics import DiagnosticSink, Label, name_list
+from ..model.syntax import Tolerance
+from ..model.activations import DataTriggered
+from ..core.ids import TaskId
+from ..model.system import CompoundModel, LinkModel, SystemModel, TaskModel
+from ..model.units import fmt_number, fmt_rate
 
 ZERO = Fraction(0)
 
@@ -112,7 +112,7 @@ class ActivationInfo:
     in_cycle: bool = False
 
 
-#: the constructors of the objects above, built by the thousand (``verify.construct``)
+#: the constructors of the objects above, built by the thousand (``verify.core.construct``)
 _new_rate_interval = direct_constructor(RateInterval)
 _new_source = direct_constructor(Source)
 _new_activation_info = direct_constructor(ActivationInfo)
@@ -366,7 +366,7 @@ class EventModel:
         return max(self.a_max, self.first_max)
 
 
-_new_event_model = direct_constructor(EventModel)  # (``verify.construct``: built by the thousand)
+_new_event_model = direct_constructor(EventModel)  # (``verify.core.construct``: built by the thousand)
 
 
 SILENT = EventModel(None, None, None, None, None, silent=True)
@@ -565,7 +565,7 @@ class LinkSampling:
     by_trigger: bool = False
 
 
-_new_link_sampling = direct_constructor(LinkSampling)  # (``verify.construct``: built by the thousand)
+_new_link_sampling = direct_constructor(LinkSampling)  # (``verify.core.construct``: built by the thousand)
 
 
 def sampling_relations(system: SystemModel, infos: Mapping[str, ActivationInfo]) -> tuple[LinkSampling, ...]:

@@ -19,7 +19,7 @@ from collections.abc import Iterable
 from fractions import Fraction
 from typing import Any
 
-from ..units import fmt_number, fmt_time
+from ..model.units import fmt_number, fmt_time
 from . import AnalysisResult, TaskTiming
 from .chains import SPEC_WORDS, Bound, ChainBounds, Step, Term
 from .rates import EventModel, LinkSampling, RateInterval
@@ -39,7 +39,7 @@ def exact(value: Fraction | int | None) -> dict[str, str | None] | None:
         value = Fraction(value)
     num, den = value.numerator, value.denominator  # (a Fraction is in lowest terms)
     text = str(num) if den == 1 else f"{num}/{den}"
-    # (fmt_number renders an int as well; verify/units.py declares only Fraction)
+    # (fmt_number renders an int as well; verify/model/units.py declares only Fraction)
     decimal = fmt_number(value)  # type: ignore[arg-type]
     return {"exact": text, "decimal": None if "/" in decimal else decimal}
 

@@ -21,9 +21,9 @@ from dataclasses import dataclass, replace
 from fractions import Fraction
 from collections.abc import Mapping, Sequence
 
-from ..diagnostics import DiagnosticSink, Label, name_list
-from ..model import LinkModel, SystemModel, TaskModel
-from ..units import fmt_number, fmt_time
+from ..core.diagnostics import DiagnosticSink, Label, name_list
+from ..model.system import LinkModel, SystemModel, TaskModel
+from ..model.units import fmt_number, fmt_time
 from .pipeline import Case, cases, upstream
 from .rates import ActivationInfo, EventModel, ratio_sum
 

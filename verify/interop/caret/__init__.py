@@ -12,9 +12,9 @@ import os
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from ...diagnostics import DiagnosticSink
-from ...limits import DEFAULT_LIMITS, Limits
-from ...source import SourceFile, Span
+from ...core.diagnostics import DiagnosticSink
+from ...core.limits import DEFAULT_LIMITS, Limits
+from ...core.source import SourceFile, Span
 from .. import files_under
 from .read import Architecture, read
 from .to_vfy import Imported, import_architecture
@@ -32,8 +32,8 @@ class Read:
 
 def read_files(paths: Sequence[str], sink: DiagnosticSink, limits: Limits = DEFAULT_LIMITS) -> Read:
     """Every architecture file named by ``paths`` (files, or directories searched recursively in name order)."""
-    from ...fileaccess import area_of
-    from ...loader import read_text as read_file
+    from ...core.fileaccess import area_of
+    from ...frontend.loader import read_text as read_file
 
     area = area_of(paths)  # (a file found there that is a link leading out is refused: E006)
     found: list[str] = []

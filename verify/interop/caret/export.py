@@ -18,10 +18,10 @@ from typing import Any, Protocol
 
 import yaml
 
-from ...diagnostics import DiagnosticSink
-from ...activations import Periodic
-from ...model import ChainModel, SystemModel, TaskModel
-from ...source import Span
+from ...core.diagnostics import DiagnosticSink
+from ...model.activations import Periodic
+from ...model.system import ChainModel, SystemModel, TaskModel
+from ...core.source import Span
 from .read import UNDEFINED, Architecture
 
 #: our executor kinds as CARET's executor types

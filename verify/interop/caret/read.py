@@ -13,12 +13,12 @@ from dataclasses import dataclass, field
 
 import yaml
 
-from ...diagnostics import DiagnosticSink
-from ...limits import DEFAULT_LIMITS, Limits
-from ...source import Span
+from ...core.diagnostics import DiagnosticSink
+from ...core.limits import DEFAULT_LIMITS, Limits
+from ...core.source import Span
 
 UNDEFINED = "UNDEFINED"
-#: the most characters of a number (the language's own limit, ``verify.limits``: E005)
+#: the most characters of a number (the language's own limit, ``verify.core.limits``: E005)
 NUMBER_LENGTH = DEFAULT_LIMITS.number_length
 #: topics CARET leaves out of every architecture
 IGNORED_TOPICS = ("/parameter_events", "/rosout", "/clock")

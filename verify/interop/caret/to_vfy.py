@@ -25,9 +25,9 @@ import re
 from dataclasses import dataclass, field
 from fractions import Fraction
 
-from ...diagnostics import DiagnosticSink
-from ...sanitize import comment
-from ...units import fmt_time
+from ...core.diagnostics import DiagnosticSink
+from ...core.sanitize import comment
+from ...model.units import fmt_time
 from .read import Architecture, Callback, Group, NamedPath, Node
 
 #: CARET executor types and the kinds of specs/timing.md §9
@@ -45,7 +45,7 @@ class Imported:
 
 @functools.lru_cache(maxsize=1)
 def _reserved() -> frozenset[str]:
-    from ...larkparse import _keyword_terminals
+    from ...frontend.larkparse import _keyword_terminals
 
     return frozenset(_keyword_terminals()) | frozenset(("kHz", "Hz", "ms", "us", "ns", "s"))
 

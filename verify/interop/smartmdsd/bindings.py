@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from ...units import fmt_time
+from ...model.units import fmt_time
 from .read import Activity, Chain, Component, Instance, Name, Node, Port
 
 if TYPE_CHECKING:
@@ -110,7 +110,7 @@ def _activation(b: _Builder, inst: Instance, comp: Component, act: Activity, nod
 
 
 def _hz(value: object) -> str:
-    from ...units import fmt_number
+    from ...model.units import fmt_number
 
     return f"{fmt_number(value)} Hz"  # type: ignore[arg-type]
 

@@ -14,10 +14,10 @@ import math
 from dataclasses import dataclass
 from fractions import Fraction
 
-from ...activations import DataTriggered, Periodic, SporadicSource
-from ...diagnostics import DiagnosticSink
-from ...model import SystemModel, TaskModel
-from ...source import Span
+from ...model.activations import DataTriggered, Periodic, SporadicSource
+from ...core.diagnostics import DiagnosticSink
+from ...model.system import SystemModel, TaskModel
+from ...core.source import Span
 from .read import ComponentArch, Files
 from .to_vfy import UNPINNED
 

@@ -10,8 +10,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from fractions import Fraction
 
-from ...diagnostics import DiagnosticSink
-from ...source import Span
+from ...core.diagnostics import DiagnosticSink
+from ...core.source import Span
 from ..xtext import Cursor, Stop, Tok, tokenize
 
 #: the extensions of the four kinds

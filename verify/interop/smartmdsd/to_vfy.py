@@ -12,10 +12,10 @@ from collections.abc import Iterable
 from dataclasses import dataclass, field
 from fractions import Fraction
 
-from ...diagnostics import DiagnosticSink, Label, Severity
-from ...sanitize import comment
-from ...source import Span
-from ...units import fmt_number, fmt_time
+from ...core.diagnostics import DiagnosticSink, Label, Severity
+from ...core.sanitize import comment
+from ...core.source import Span
+from ...model.units import fmt_number, fmt_time
 from .read import (Activity, ActivityArch, Chain, ChainModel, Component, ComponentArch, Files, Instance, Name, Node,
                    Port)
 
@@ -25,7 +25,7 @@ _UNITS = ("kHz", "Hz", "ms", "us", "ns", "s")
 
 
 def reserved() -> frozenset[str]:
-    from ...larkparse import _keyword_terminals
+    from ...frontend.larkparse import _keyword_terminals
 
     return frozenset(_keyword_terminals()) | frozenset(_UNITS)
 

@@ -1,8 +1,9 @@
-"""Parse one source text into the typed tree of ``verify.syntax``.
+"""Parse one source text into the typed tree of ``verify.model.syntax``.
 
 Lark LALR with positions; the grammar is data in ``grammar/verify.lark``. Valid input goes through the
-fast path (``verify.lalr``, its tables kept by ``verify.parsecache``: Lark is not even imported); input
-it rejects goes through Lark, whose error path (``verify.larkparse``)
+fast path (``verify.frontend.lalr``, its tables kept by ``verify.frontend.parsecache``: Lark is not even
+imported); input
+it rejects goes through Lark, whose error path (``verify.frontend.larkparse``)
 recovers from syntax errors so that one run reports several of them, each in the language's own words.
 The transformer only builds nodes.
 """
@@ -14,12 +15,12 @@ from dataclasses import dataclass
 from fractions import Fraction
 from typing import TYPE_CHECKING, Any, Literal, cast
 
-from . import syntax as s
-from .construct import direct_constructor
-from .diagnostics import Diagnostic, DiagnosticSink
+from ..model import syntax as s
+from ..core.construct import direct_constructor
+from ..core.diagnostics import Diagnostic, DiagnosticSink
 from .lalr import _SKIP, _WORD_RE, FastParser, TooManyTokens, Unparsable, position
-from .limits import DEFAULT_LIMITS, Limits
-from .source import Span
+from ..core.limits import DEFAULT_LIMITS, Limits
+from ..core.source import Span
 
 if TYPE_CHECKING:  # (Lark is imported where a text takes the error path: valid text never needs it)
     from lark import Token, Tree
@@ -66,7 +67,7 @@ def parse_text(text: str, path: str, sink: DiagnosticSink, limits: Limits = DEFA
 def parse_source(text: str, path: str, limits: Limits = DEFAULT_LIMITS) -> Parsed:
     """Parse ``text`` (the contents of file ``path``).
 
-    The fast path (``verify.lalr``) decides valid input; anything it does not accept — every syntax
+    The fast path (``verify.frontend.lalr``) decides valid input; anything it does not accept — every syntax
     error, a number error (E005), or a lexical corner it leaves to Lark — is parsed again by Lark with
     error recovery, which gives the reports. Both build the tree with the same ``_Builder``. A text of
     more than ``limits.tokens`` tokens is refused at the first one too many (E008).
@@ -122,8 +123,10 @@ def _lark_parse(text: str, path: str, sink: DiagnosticSink,
     from lark import Token
     from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken
 
-    from .larkparse import (_accepted, _glued_keyword, _keyword_terminals, _parser, _repair, _report_unexpected,
-                            _skip_unterminated_string, counting_tokens)
+    from .larkparse import (
+        _accepted, _glued_keyword, _keyword_terminals, _parser, _repair, _report_unexpected,
+        _skip_unterminated_string, counting_tokens
+    )
 
     errors: list[UnexpectedInput] = []
     last_line = [-1]
@@ -242,7 +245,7 @@ def _fast_parser() -> FastParser | None:
     return load_fast_parser()
 
 
-#: a 10,000-task file has about 400,000 spans and 150,000 names: they are built directly (``verify.construct``)
+#: a 10,000-task file has about 400,000 spans and 150,000 names: they are built directly (``verify.core.construct``)
 _new_span = direct_constructor(Span)
 _new_name = direct_constructor(s.Name)
 
@@ -323,13 +326,13 @@ def _positions(where: Token | Meta) -> tuple[int, int]:
 
 
 class _Builder:
-    """Builds ``verify.syntax`` nodes; collects repeated clauses for validation to report.
+    """Builds ``verify.model.syntax`` nodes; collects repeated clauses for validation to report.
 
     One method per rule (its alias or name), called with the rule's start and end positions
     (``lalr.position``; None for an empty rule) and its children as Lark's tree would hold them: nodes built by these
     methods and the tokens the rule keeps (``tokens``: a NAME is a ``syntax.Name``, a NUMBER the tuple (value,
     start, end) — its span is made only where a rule keeps one —, an RBRACE its ``Span``, a STRING (its text,
-    its ``Span``), a UNIT its text). ``verify.lalr`` calls them while parsing; ``transform`` applies them to a
+    its ``Span``), a UNIT its text). ``verify.frontend.lalr`` calls them while parsing; ``transform`` applies them to a
     Lark tree (the error-recovering path)."""
 
     def __init__(self, path: str, sink: DiagnosticSink, limits: Limits = DEFAULT_LIMITS) -> None:

@@ -10,7 +10,7 @@ lines are added above it (``verifyFingerprint/v1``: the code, the file and the t
 line, numbered among equal ones). URIs are relative to the working directory with
 forward slashes (percent-encoded); a file outside it gets an absolute ``file:`` URI. The output is
 deterministic (no timestamps; no absolute paths for files below the working directory). Message texts
-are shown as the text renderer shows them (``verify.sanitize.shown``: no control character, no line
+are shown as the text renderer shows them (``verify.core.sanitize.shown``: no control character, no line
 break from a name; notes and help each on a line of their own).
 """
 from __future__ import annotations
@@ -24,12 +24,12 @@ from collections.abc import Mapping
 from typing import Any
 from urllib.parse import quote
 
-from . import __version__ as VERSION
-from .codes import CODES, spec_anchor
-from .diagnostics import Diagnostic, Severity
-from .explain import explain
-from .sanitize import shown
-from .source import SourceFile, Span
+from .. import __version__ as VERSION
+from ..core.codes import CODES, spec_anchor
+from ..core.diagnostics import Diagnostic, Severity
+from ..core.explain import explain
+from ..core.sanitize import shown
+from ..core.source import SourceFile, Span
 
 SCHEMA_URI = "https://json.schemastore.org/sarif-2.1.0.json"
 LEVELS = {Severity.ERROR: "error", Severity.WARNING: "warning", Severity.NOTE: "note"}

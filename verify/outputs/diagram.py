@@ -16,12 +16,12 @@ import subprocess
 from collections.abc import Iterable
 from fractions import Fraction
 
-from .activations import DataTriggered
-from .model import CompoundDecl, SystemModel, TaskModel
-from .timing import AnalysisResult
-from .timing.rates import LinkSampling
-from .timing.report import sampling_marks
-from .units import fmt_number, fmt_time
+from ..model.activations import DataTriggered
+from ..model.system import CompoundDecl, SystemModel, TaskModel
+from ..timing import AnalysisResult
+from ..timing.rates import LinkSampling
+from ..timing.report import sampling_marks
+from ..model.units import fmt_number, fmt_time
 
 #: one colour per chain, in source order (ColorBrewer Dark2, then repeated)
 CHAIN_COLOURS = ("#1b9e77", "#d95f02", "#7570b3", "#e7298a", "#66a61e", "#e6ab02", "#a6761d", "#666666")

@@ -6,7 +6,7 @@ from fractions import Fraction
 from typing import ClassVar, Literal, TypedDict
 
 from .. import syntax as s
-from ..source import NO_SPAN, Span
+from ...core.source import NO_SPAN, Span
 from .base import Activation
 
 
@@ -83,7 +83,7 @@ class _HoleFields(TypedDict, total=False):
 
 
 def _hole_fields(node: s.Activation) -> _HoleFields:
-    from ..fmt import format_activation, format_number, format_quantity
+    from ...frontend.fmt import format_activation, format_number, format_quantity
 
     text = format_activation(node)
     if isinstance(node, s.Timer) and isinstance(node.period, s.PeriodHole):

@@ -10,8 +10,8 @@ from dataclasses import dataclass, field, replace
 from collections.abc import Callable, Iterable
 from typing import Literal, TypeVar
 
-from . import syntax as s
-from .diagnostics import DiagnosticSink, Label, suggest
+from ..model import syntax as s
+from ..core.diagnostics import DiagnosticSink, Label, suggest
 from .loader import Project
 
 MemberKind = Literal["in-port", "out-port", "compound in-port", "task"]

@@ -2,7 +2,7 @@
 
 A new kind is one module here — a frozen dataclass deriving from ``Activation`` with its ``kind`` name,
 overriding the behaviour that applies to it — registered in ``KINDS`` below, plus its tests; the model
-builder (``verify.model``) makes it from its syntax.
+builder (``verify.model.system``) makes it from its syntax.
 """
 from __future__ import annotations
 

@@ -53,7 +53,7 @@ LEXICAL_SHAPE = {  # (Lark writes white space into its patterns as the character
     "UNIT": r"(kHz|Hz|ms|us|ns|s)(?![A-Za-z0-9_])",
 }
 UNIT_WORDS = frozenset({"kHz", "Hz", "ms", "us", "ns", "s"})
-#: white space and comments; a word (also used by the error path, ``verify.larkparse``)
+#: white space and comments; a word (also used by the error path, ``verify.frontend.larkparse``)
 _SKIP = re.compile(r"(?:\s+|//[^\n]*|/\*[\s\S]*?\*/)*")
 _WORD_RE = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 _WORD, _NUMBER, _PUNCT, _STRING = 1, 2, 3, 4

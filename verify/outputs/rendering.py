@@ -1,8 +1,8 @@
 """Renderers for diagnostics: rustc-style text with source snippets, and JSON (schema below).
 
-JSON schema ``verify.diagnostics/1``::
+JSON schema ``verify.core.diagnostics/1``::
 
-    {"schema": "verify.diagnostics/1",
+    {"schema": "verify.core.diagnostics/1",
      "diagnostics": [{"code", "severity", "message", "file", "line", "column", "end_line",
                       "end_column", "label", "secondary": [{"file", "line", "column", "end_line",
                       "end_column", "message"}], "notes": [...], "help": str | null, "spec": str}],
@@ -12,7 +12,7 @@ Lines and columns are 1-based; ``end_column`` is exclusive; 0 for a diagnostic a
 named on the command line that cannot be read) or about no file. A snippet of source text shows at most
 ``source.SNIPPET_WIDTH`` characters of a line (``source.excerpt``), and nothing of a file that is not a
 model but its offending token (``SourceFile.only``). In text, every field (file names, message, labels,
-notes, help) and every snippet is shown through ``verify.sanitize``: a character that is not printable
+notes, help) and every snippet is shown through ``verify.core.sanitize``: a character that is not printable
 (ESC, BEL, CR, a newline in a name from another tool's file) appears as its escape (``\\x1b``), never
 raw; JSON escapes them itself.
 """
@@ -21,10 +21,10 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from .codes import spec_anchor
-from .diagnostics import Diagnostic, Label, Severity
-from .sanitize import shown, shown_columns
-from .source import ELLIPSIS, SourceFile, Span, excerpt
+from ..core.codes import spec_anchor
+from ..core.diagnostics import Diagnostic, Label, Severity
+from ..core.sanitize import shown, shown_columns
+from ..core.source import ELLIPSIS, SourceFile, Span, excerpt
 
 #: the most diagnostics of one file that the text rendering shows; the rest are counted in one line
 #: ("… and N more errors in FILE"; JSON and SARIF list every one)
@@ -141,7 +141,7 @@ def diagnostic_json(d: Diagnostic) -> dict[str, Any]:
 
 def diagnostics_json(diagnostics: Sequence[Diagnostic]) -> dict[str, Any]:
     return {
-        "schema": "verify.diagnostics/1",
+        "schema": "verify.core.diagnostics/1",
         "diagnostics": [diagnostic_json(d) for d in diagnostics],
         "summary": {
             "errors": sum(1 for d in diagnostics if d.severity is Severity.ERROR),

@@ -2,9 +2,9 @@
 
 Files are read as bytes and decoded as strict UTF-8; unreadable, missing or non-UTF-8 files become
 located diagnostics (E003, E004), never exceptions. An import is confined to the project's allowed
-directories before anything is opened (``verify.roots``: E006, E007), every file read — the root file
-too — obeys the rule of ``verify.fileaccess`` (inside those directories once links are followed, a
-regular file: E006, E004), and what one run reads is bounded (``verify.limits``: E008). Text held in
+directories before anything is opened (``verify.frontend.roots``: E006, E007), every file read — the root file
+too — obeys the rule of ``verify.core.fileaccess`` (inside those directories once links are followed, a
+regular file: E006, E004), and what one run reads is bounded (``verify.core.limits``: E008). Text held in
 memory (an editor's unsaved buffers) takes the place of a file of the same path (``overlay``).
 """
 from __future__ import annotations
@@ -14,13 +14,13 @@ from dataclasses import dataclass, field
 from collections.abc import Callable, Mapping
 from typing import BinaryIO
 
-from . import syntax as s
-from .diagnostics import DiagnosticSink
-from .fileaccess import Area, Refused, read_regular
-from .limits import DEFAULT_LIMITS, Limits
+from ..model import syntax as s
+from ..core.diagnostics import DiagnosticSink
+from ..core.fileaccess import Area, Refused, read_regular
+from ..core.limits import DEFAULT_LIMITS, Limits
 from .parse import looks_like_model, parse_source
 from .roots import Refusal, Roots
-from .source import Span, SourceFile
+from ..core.source import Span, SourceFile
 
 
 #: text held in memory in place of files (an editor's unsaved buffers): a mapping from paths, or a
@@ -54,7 +54,7 @@ class Project:
 
 def _shown(path: str) -> str:
     """``path`` for a message: characters that cannot be shown (NUL, control characters) escaped."""
-    from .sanitize import shown
+    from ..core.sanitize import shown
 
     return shown(path)
 
@@ -63,7 +63,7 @@ def read_bytes(path: str, sink: DiagnosticSink, at: Span | None,
                limit: int = DEFAULT_LIMITS.file_bytes, area: Area | None = None) -> bytes | None:
     """The bytes of regular file ``path``, at most ``limit`` + 1 of them (more than ``limit``: the file is
     too large), or None after reporting why it cannot be read. Within ``area`` (when given) as written
-    and once links are followed (``verify.fileaccess``: the one rule of every file read)."""
+    and once links are followed (``verify.core.fileaccess``: the one rule of every file read)."""
     where = at or Span(path, 0, 0, 0, 0)  # (a file named on the command line: no line to point at)
     shown = _shown(path)
     try:
@@ -77,7 +77,7 @@ def read_bytes(path: str, sink: DiagnosticSink, at: Span | None,
 
 
 def _refused(reason: str, shown: str, where: Span, sink: DiagnosticSink, imported: bool = True) -> None:
-    """The diagnostic of a file ``verify.fileaccess`` refuses: its name, never its content."""
+    """The diagnostic of a file ``verify.core.fileaccess`` refuses: its name, never its content."""
     if reason in ("outside", "link"):
         sink.emit("E006", f"{shown} is a symbolic link to a file outside the allowed directories; it is not read",
                   where, "leads outside", help="copy the file into the project, or name the directory it lies in "

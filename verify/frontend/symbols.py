@@ -2,7 +2,7 @@
 definition, find references and rename (specs/language.md §2 gives the scopes).
 
 ``index(resolution)`` walks the syntax trees with the scopes name resolution built, so a use resolves
-exactly as ``verify.resolve`` resolves it: a component's ports, compounds and tasks share one namespace;
+exactly as ``verify.frontend.resolve`` resolves it: a component's ports, compounds and tasks share one namespace;
 an instance's members are its component's; an unknown name is no reference (``resolve`` reports it).
 
     idx = verify.load(path).symbols
@@ -15,9 +15,9 @@ import bisect
 from dataclasses import dataclass, field
 from typing import Literal
 
-from . import syntax as s
+from ..model import syntax as s
 from .resolve import ComponentScope, Resolution, SystemScope
-from .source import Span
+from ..core.source import Span
 
 SymbolKind = Literal["component", "system", "in-port", "out-port", "compound in-port", "task", "core", "instance",
                      "chain", "executor", "group"]

@@ -1,6 +1,6 @@
 """The fast parser's tables, kept between processes without Lark (docs/guide/untrusted.md, "The cache").
 
-A command that parses valid text needs only ``verify.lalr.FastParser``: Lark's LALR table for the
+A command that parses valid text needs only ``verify.frontend.lalr.FastParser``: Lark's LALR table for the
 grammar and the lexer of ``lalr.py``. Building it needs Lark (about 20 ms to import, 9 ms to load
 its own cache of the tables); this module keeps the finished table as JSON in the user's private
 cache directory, so that a later process builds the parser from that file alone and imports Lark
@@ -9,7 +9,7 @@ only when a text needs the error path. The file's name holds a digest of the gra
 not describe a parser — not a regular file, too large, changed since it was written (its first line
 is the SHA-256 of the rest), not JSON of a parser's shape — is ignored and written anew; nothing is
 read from a directory another user could write (the same rule as Lark's own cache,
-``larkparse._cache_file``), and only regular files are read there (``verify.fileaccess``).
+``larkparse._cache_file``), and only regular files are read there (``verify.core.fileaccess``).
 """
 from __future__ import annotations
 
@@ -19,7 +19,7 @@ import json
 import os
 import stat
 
-from .fileaccess import Refused, read_regular
+from ..core.fileaccess import Refused, read_regular
 from .lalr import FastParser
 
 #: the directory (under ``$XDG_CACHE_HOME``, else ``~/.cache``) that holds the parser's tables

@@ -5,7 +5,7 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import ClassVar
 
-from ..source import NO_SPAN, Span
+from ...core.source import NO_SPAN, Span
 from ..units import fmt_time
 from .base import Activation
 

@@ -1,6 +1,6 @@
 """The canonical formatter: one way to write every model, with every comment kept.
 
-``format_module`` prints a ``verify.syntax.Module`` in canonical form (two-space indentation, one clause
+``format_module`` prints a ``verify.model.syntax.Module`` in canonical form (two-space indentation, one clause
 per line, defaults omitted, exact numbers); ``parse(format(m)) == m`` and formatting is idempotent.
 Comments are not part of the tree: ``collect_comments`` scans them from the text and ``format_module``
 re-attaches each one to the node it stands before (own-line comments) or behind (end-of-line comments).
@@ -15,11 +15,11 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import NamedTuple
 
-from . import syntax as s
-from .diagnostics import Diagnostic, DiagnosticSink
+from ..model import syntax as s
+from ..core.diagnostics import Diagnostic, DiagnosticSink
 from .parse import parse_text
-from .source import Span
-from .units import fmt_number
+from ..core.source import Span
+from ..model.units import fmt_number
 
 INDENT = "  "
 

@@ -1,6 +1,6 @@
 """One self-contained HTML page about a configured system (``verify report``): what a design review reads.
 
-The page holds, in this order: a summary of the verdicts; the system diagram (``verify.diagram``, laid
+The page holds, in this order: a summary of the verdicts; the system diagram (``verify.outputs.diagram``, laid
 out by Graphviz as inline SVG; without Graphviz, its DOT text); the outline of the analysis (each task's
 activation, rate, execution and response times, and how it samples each input); the cores' loads; the
 chain table (bounds, specs, margins, and what ``prove`` established); and the Gantt chart of every
@@ -14,13 +14,14 @@ import html
 import re
 from collections.abc import Iterable
 
-from . import __version__, diagram
-from .model import SystemModel
-from .prove.verdict import ProofResult, Verdict
-from .timing import AnalysisResult
-from .timing.rates import LinkSampling
-from .timing.report import sampling_marks
-from .units import fmt_number, fmt_time
+from .. import __version__
+from . import diagram
+from ..model.system import SystemModel
+from ..prove.verdict import ProofResult, Verdict
+from ..timing import AnalysisResult
+from ..timing.rates import LinkSampling
+from ..timing.report import sampling_marks
+from ..model.units import fmt_number, fmt_time
 
 STYLE = """
 body { font-family: "DejaVu Sans", sans-serif; margin: 24px; color: #222; max-width: 1400px; }
@@ -135,7 +136,7 @@ def _counterexamples(model: SystemModel, proof: ProofResult) -> str:
     drawn = [v for v in proof.verdicts if v.counterexample is not None]
     if not drawn:
         return "<p>No counterexample: no property was violated.</p>"
-    from .prove.gantt import chart_runs, to_svg
+    from ..prove.gantt import chart_runs, to_svg
 
     traces = chart_runs(model, drawn)
     parts = []

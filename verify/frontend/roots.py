@@ -6,7 +6,7 @@ file, then in each library directory in order. The file must lie inside an *allo
 project root or a library directory — both as written (a ``..`` that climbs out is refused) and once
 symbolic links are followed (a link that leads out is refused). An absolute path is refused. The file
 given on the command line obeys the same rule, and so does the ``pyproject.toml`` (inside its own
-directory): ``verify.fileaccess`` states it once for every file verify reads or writes.
+directory): ``verify.core.fileaccess`` states it once for every file verify reads or writes.
 
 The project root is the directory of the file given on the command line, unless ``--root DIR`` or the
 ``root`` of a ``[tool.verify]`` table in the nearest ``pyproject.toml`` says otherwise; library
@@ -19,8 +19,8 @@ import os
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-from .fileaccess import Area, Refused, inside, read_regular
-from .source import Span
+from ..core.fileaccess import Area, Refused, inside, read_regular
+from ..core.source import Span
 
 
 @dataclass(frozen=True)
@@ -41,7 +41,7 @@ class Roots:
     include: tuple[str, ...] = ()
     #: how messages name the root (default: its path)
     label: str = field(default="", compare=False)
-    #: the allowed directories, as written and once links are followed (``verify.fileaccess``)
+    #: the allowed directories, as written and once links are followed (``verify.core.fileaccess``)
     area: Area = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -73,7 +73,7 @@ class Roots:
     def resolve(self, importer: str, target: str) -> str | Refusal:
         """The file that ``import "target"`` in file ``importer`` names, or why it is refused. The file is
         not opened; it need not exist (the loader then reports E004)."""
-        from .sanitize import shown as printable
+        from ..core.sanitize import shown as printable
 
         shown = printable(target)
         if "\0" in target:
@@ -185,7 +185,7 @@ def read_settings(pyproject: str) -> Settings | SettingsError:
     if not isinstance(table, dict):
         return fail(where("verify"), "`tool.verify` must be a table", "not a table",
                     'write `[tool.verify]` with `root = "DIR"` or `include = ["DIR", ...]` below it')
-    from .diagnostics import suggest
+    from ..core.diagnostics import suggest
 
     for key in table:
         if key not in SETTING_KEYS:

@@ -1,7 +1,7 @@
 """Diagnostics as values: code, severity, message, primary and secondary labels, notes, help.
 
-Renderers (``verify.render``) turn them into text, JSON or SARIF; nothing here prints. Every code is
-registered in ``verify.codes`` with its title and the section of ``specs/diagnostics.md`` that shows a
+Renderers (``verify.outputs.rendering``) turn them into text, JSON or SARIF; nothing here prints. Every code is
+registered in ``verify.core.codes`` with its title and the section of ``specs/diagnostics.md`` that shows a
 minimal failing example.
 """
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """The Lark parser of ``grammar/verify.lark`` and its error path: what the parser expected, in the
 language's words (never ``__ANON_0`` or ``$END``), help for the usual slips (a misspelt or glued keyword,
 an exponent, an unterminated comment or string), and recovery by inserting or dropping a token, so that
-one run reports several errors. ``verify.parse`` runs it when the fast path rejects the input.
+one run reports several errors. ``verify.frontend.parse`` runs it when the fast path rejects the input.
 """
 from __future__ import annotations
 
@@ -19,11 +19,11 @@ from lark.lark import PostLex
 from lark.exceptions import LarkError, UnexpectedCharacters, UnexpectedInput, UnexpectedToken
 from lark.parsers.lalr_interactive_parser import InteractiveParser
 
-from .diagnostics import DiagnosticSink, Label
+from ..core.diagnostics import DiagnosticSink, Label
 from .lalr import _SKIP, _WORD_RE, TooManyTokens, position
 from .parsecache import clear_if_not_regular, private_cache_dir
-from .resources import data_text
-from .source import Span
+from ..core.resources import data_text
+from ..core.source import Span
 
 MAX_EXPECTED_SHOWN = 4  # (E002: a longer list says little about a stray character)
 
@@ -49,7 +49,7 @@ class _WholeWords(PostLex):
     that accepts keywords but no name, a keyword would match the start of a longer word (``outx`` as
     ``out`` + ``x``). With NAME always in, a word is matched whole and is a keyword only if it is exactly
     one that the state accepts (Lark's embedding of keywords into NAME); otherwise it is a NAME, which
-    such a state rejects with an error naming the word. The fast path (``verify.lalr``) lexes words the
+    such a state rejects with an error naming the word. The fast path (``verify.frontend.lalr``) lexes words the
     same way. The tokens themselves pass through unchanged."""
 
     always_accept = ("NAME",)

@@ -23,17 +23,17 @@ from .activations import KINDS as KINDS
 from .activations import Activation as Activation
 from .activations import DataTriggered, Hole, Periodic, SporadicSource
 from .activations import HoleWhat as HoleWhat
-from .construct import direct_constructor
-from .ids import PortId, TaskId
-from .resolve import SystemScope, ros_message
-from .source import NO_SPAN, Span
+from ..core.construct import direct_constructor
+from ..core.ids import PortId, TaskId
+from ..frontend.resolve import SystemScope, ros_message
+from ..core.source import NO_SPAN, Span
 
 
 def _span() -> Span:
     return field(default=NO_SPAN, compare=False, repr=False)
 
 
-# ------------------------------------------------------------------ activations (verify.activations)
+# ------------------------------------------------------------------ activations (verify.model.activations)
 
 ActivationModel = Periodic | SporadicSource | DataTriggered | Hole
 
@@ -448,7 +448,7 @@ class SystemModel:
 # ------------------------------------------------------------------ building
 
 
-#: a 10,000-task system has as many of these (``verify.construct``)
+#: a 10,000-task system has as many of these (``verify.core.construct``)
 _new_task = direct_constructor(TaskModel)
 _new_read = direct_constructor(ReadModel)
 _new_periodic = direct_constructor(Periodic)

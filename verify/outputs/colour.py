@@ -1,6 +1,6 @@
 """Colour for diagnostics on a terminal (rustc's palette): added to the rendered text, never part of it.
 
-``paint`` adds ANSI escapes to text that ``verify.render.render_all_text`` made — severity and code,
+``paint`` adds ANSI escapes to text that ``verify.outputs.rendering.render_all_text`` made — severity and code,
 the ``-->`` locations, the gutter, the carets under the source, ``help`` and ``note`` — and removing
 them gives the text back unchanged. ``wanted(stream)`` says whether a stream gets colour: by default
 (``--color auto``) only a terminal, never a pipe or a file, and never when ``NO_COLOR`` is set to

@@ -44,7 +44,7 @@ def _options(parser: argparse.ArgumentParser) -> tuple[Option, ...]:
 
 def commands(parser: argparse.ArgumentParser) -> tuple[tuple[Option, ...], tuple[Command, ...]]:
     """The top-level options and every command, as the parser has them."""
-    from .codes import CODES
+    from ..core.codes import CODES
 
     found: list[Command] = []
     for action in parser._actions:

@@ -57,5 +57,5 @@ def direct_constructor(cls: type[T]) -> Callable[..., T]:
     namespace = {"_new": object.__new__, "_set": object.__setattr__, "_cls": cls, **defaults}
     exec(source, namespace)  # as dataclasses builds __init__: one function with the fields as parameters
     make: Callable[..., T] = namespace[f"new_{cls.__name__}"]
-    make.__doc__ = f"``{cls.__qualname__}(...)``, built directly (verify.construct)."
+    make.__doc__ = f"``{cls.__qualname__}(...)``, built directly (verify.core.construct)."
     return make

@@ -1,6 +1,6 @@
 """The typed syntax tree: what the user wrote, as frozen dataclasses with a source span on every node.
 
-The parser (``verify.parse``) builds these; nothing here resolves names or checks meaning. Spans never
+The parser (``verify.frontend.parse``) builds these; nothing here resolves names or checks meaning. Spans never
 take part in equality, so two trees that say the same thing compare equal wherever they were written
 (``parse(format(m)) == m``). Names and references carry their own span so that diagnostics can point at
 exactly the word that is wrong.
@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import Literal
 
-from .source import NO_SPAN, Span
+from ..core.source import NO_SPAN, Span
 
 TIME_UNITS: dict[str, Fraction] = {
     "s": Fraction(1),
@@ -356,7 +356,7 @@ class Import:
 @dataclass(frozen=True)
 class Message:
     """``message NAME = ros "PACKAGE/TYPE"``: message type NAME is a ROS message (``ros``: the string's
-    text, unchecked; ``verify.resolve`` checks it)."""
+    text, unchecked; ``verify.frontend.resolve`` checks it)."""
 
     name: Name
     ros: str

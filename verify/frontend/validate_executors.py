@@ -12,10 +12,10 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from . import syntax as s
-from .diagnostics import DiagnosticSink, Label
+from ..model import syntax as s
+from ..core.diagnostics import DiagnosticSink, Label
 from .resolve import SystemScope
-from .units import fmt_number
+from ..model.units import fmt_number
 
 Bound = tuple[s.Instance, s.Task, s.TaskBinding | None]
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import ClassVar, Literal
 
-from ..source import NO_SPAN, Span
+from ...core.source import NO_SPAN, Span
 from .base import Activation
 
 

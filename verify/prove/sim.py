@@ -52,7 +52,7 @@ from fractions import Fraction
 from typing import Any, cast
 from collections.abc import Callable, Mapping
 
-from .model import Activation, ChainModel, ExecutorModel, LinkModel, SystemModel, TaskModel
+from ..model.system import Activation, ChainModel, ExecutorModel, LinkModel, SystemModel, TaskModel
 
 ZERO = Fraction(0)
 GRID = 1000  # random choices lie on a grid of GRID steps across their range

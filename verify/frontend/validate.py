@@ -10,12 +10,12 @@ from collections.abc import Iterable, Iterator
 from fractions import Fraction
 from typing import TYPE_CHECKING
 
-from . import syntax as s
-from .diagnostics import DiagnosticSink, Label, name_list
-from .model import SystemModel, chain_path, quantity_base, quantity_hertz, quantity_seconds
+from ..model import syntax as s
+from ..core.diagnostics import DiagnosticSink, Label, name_list
+from ..model.system import SystemModel, chain_path, quantity_base, quantity_hertz, quantity_seconds
 from .resolve import ComponentScope, MemberNode, Resolution, SystemScope
-from .source import Span
-from .units import fmt_number, fmt_quantity, fmt_rate, fmt_time
+from ..core.source import Span
+from ..model.units import fmt_number, fmt_quantity, fmt_rate, fmt_time
 from .validate_executors import check_executors
 
 if TYPE_CHECKING:  # (networkx is imported where a cycle of triggers is reported: it costs start-up time)
