@@ -26,7 +26,7 @@ def test_check_json_schema(write, capsys):
     path = write({"m.vfy": BROKEN})
     assert main(["check", path, "--format", "json"]) == 2
     doc = json.loads(capsys.readouterr().out)
-    assert doc["schema"] == "verify.core.diagnostics/1"
+    assert doc["schema"] == "verify.diagnostics/1"
     (d,) = doc["diagnostics"]
     assert d["code"] == "E101" and d["severity"] == "error" and d["line"] == 2 and d["column"] == 25
     assert d["help"] == "did you mean `Laser`?" and d["spec"] == "specs/diagnostics.md#e101-unknown-name"

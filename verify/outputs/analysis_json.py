@@ -1,5 +1,5 @@
 """``analyze --format json``: schema ``verify.analysis/1`` (``verify.timing.report``), the problems as
-``verify.core.diagnostics/1`` items."""
+``verify.diagnostics/1`` items."""
 from __future__ import annotations
 
 import json

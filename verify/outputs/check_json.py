@@ -1,4 +1,4 @@
-"""``check --format json``: the diagnostics document (``verify.core.diagnostics/1``)."""
+"""``check --format json``: the diagnostics document (``verify.diagnostics/1``)."""
 from __future__ import annotations
 
 from .diagnostics_json import render  # noqa: F401 - the same document

@@ -1,4 +1,4 @@
-"""Diagnostics as one JSON document, schema ``verify.core.diagnostics/1`` (``verify.outputs.rendering``)."""
+"""Diagnostics as one JSON document, schema ``verify.diagnostics/1`` (``verify.outputs.rendering``)."""
 from __future__ import annotations
 
 import json

@@ -1,8 +1,8 @@
 """Renderers for diagnostics: rustc-style text with source snippets, and JSON (schema below).
 
-JSON schema ``verify.core.diagnostics/1``::
+JSON schema ``verify.diagnostics/1``::
 
-    {"schema": "verify.core.diagnostics/1",
+    {"schema": "verify.diagnostics/1",
      "diagnostics": [{"code", "severity", "message", "file", "line", "column", "end_line",
                       "end_column", "label", "secondary": [{"file", "line", "column", "end_line",
                       "end_column", "message"}], "notes": [...], "help": str | null, "spec": str}],
@@ -141,7 +141,7 @@ def diagnostic_json(d: Diagnostic) -> dict[str, Any]:
 
 def diagnostics_json(diagnostics: Sequence[Diagnostic]) -> dict[str, Any]:
     return {
-        "schema": "verify.core.diagnostics/1",
+        "schema": "verify.diagnostics/1",
         "diagnostics": [diagnostic_json(d) for d in diagnostics],
         "summary": {
             "errors": sum(1 for d in diagnostics if d.severity is Severity.ERROR),

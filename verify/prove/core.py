@@ -524,7 +524,7 @@ def diagnostics(model: SystemModel, verdicts: Sequence[Verdict]) -> list[Diagnos
             cex = v.counterexample
             assert cex is not None  # (every violation comes with its run)
             notes.append(f"established by {_method_text(v.method)}; the run replays in the reference "
-                         "simulator (verify.prove.sim)")
+                         "simulator (verify.sim)")
             if v.exact is not None:
                 notes.append(f"exact worst case: {fmt_time(v.exact)}"
                              + (" (a supremum, approached by runs like this one)" if v.exact != cex.latency else ""))

@@ -16,7 +16,7 @@ JSON schema ``verify.synth/1``::
      "core": [{"key", "kind", "text", "label", "tasks": [str], "file", "line", "column"}],
      "hints": [str], "reason": str | null, "established": [str],
      "output": {"dsl": str | null, "diff": str | null, "written": str | null},
-     "search": {...counters...}, "diagnostics": [verify.core.diagnostics/1 items]}
+     "search": {...counters...}, "diagnostics": [verify.diagnostics/1 items]}
 
 A number is ``{"exact": "p/q", "decimal": "0.25" | null}`` as in ``verify.analysis/1``; times are
 seconds. Choices are listed in source order.
