@@ -218,8 +218,14 @@ def _main() -> str:
     return "\n".join([
         '"""One process of the system: `python -m PACKAGE.main UNIT --ros-args ...`',
         '(or `ros2 run PACKAGE unit UNIT`)."""',
-        "import sys", "", "from . import system", "from .verify_ros2.unit import main as run_unit", "", "",
-        "def main() -> int:", "    return run_unit(system)", "", "",
+        "import signal", "import sys", "",
+        "# (a stop asked for while rclpy is still being imported is kept, and honoured once it is)",
+        "STOPPED: list[int] = []",
+        "for _sig in (signal.SIGINT, signal.SIGTERM):",
+        "    signal.signal(_sig, lambda sig, _frame: STOPPED.append(sig))", "",
+        "from . import system  # noqa: E402",
+        "from .verify_ros2.unit import main as run_unit  # noqa: E402", "", "",
+        "def main() -> int:", "    return run_unit(system, stopped=STOPPED)", "", "",
         'if __name__ == "__main__":', "    sys.exit(main())", ""])
 
 
@@ -235,7 +241,8 @@ def _launch(model: SystemModel, pkg: str) -> str:
     args = (("monitor", "true", "chain stamps and monitors"),
             ("summary_dir", "", "where each process ending a chain writes its monitors' summary (empty: nowhere)"),
             ("trace_dir", "", "where each process writes its job records (empty: nowhere)"),
-            ("realtime", "true", "SCHED_FIFO priorities and CPU affinity"))
+            ("realtime", "true", "SCHED_FIFO priorities and CPU affinity"),
+            ("duration", "0.0", "seconds to run after the agreed start (0: until stopped)"))
     return "\n".join([
         f'"""Launch system {comment(model.name)}: one node per process, its parameters from config/parameters.yaml."""',
         "import os", "import uuid", "",

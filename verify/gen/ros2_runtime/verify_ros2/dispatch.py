@@ -146,9 +146,11 @@ def instant(timer: Timer, k: int) -> int:
 class Timers:
     """Releases every timer task at φ + k·T ns since the epoch (CLOCK_REALTIME), from ``start`` on."""
 
-    def __init__(self, timers: list[Timer], release: Callable[[str, int, int], object]) -> None:
+    def __init__(self, timers: list[Timer], release: Callable[[str, int, int], object],
+                 setup: Callable[[], None] | None = None) -> None:
         self.timers = timers
         self._release = release
+        self._setup = setup
         self._stop = threading.Event()
         self.thread = threading.Thread(target=self._loop, name="verify-timers", daemon=True)
         self._start = 0
@@ -159,6 +161,8 @@ class Timers:
             self.thread.start()
 
     def _loop(self) -> None:
+        if self._setup is not None:
+            self._setup()
         heap = [(instant(t, first_after(t, self._start - 1)), first_after(t, self._start - 1), i)
                 for i, t in enumerate(self.timers)]
         heapq.heapify(heap)

@@ -3,7 +3,8 @@ index does not offer): the same processes, parameters and start protocol as laun
 
     python -m PACKAGE.run [--duration S] [--summary-dir DIR] [--trace-dir DIR] [--no-monitor] [--no-realtime]
 
-Stops them all (SIGINT, as launch does) after ``--duration`` seconds, or on SIGINT/SIGTERM.
+With ``--duration S`` every process stops S seconds after the agreed start (however long the start-up
+took); on SIGINT/SIGTERM the runner stops them all (SIGINT, as launch does).
 """
 from __future__ import annotations
 
@@ -33,7 +34,7 @@ def parameters_file(package: ModuleType) -> str:
 
 def command(package: str, system: ModuleType, unit: str, params: str, args: argparse.Namespace, run: str) -> list[str]:
     """The command line of process ``unit``."""
-    extra = {"verify.run": run, "verify.monitor": "false" if args.no_monitor else "true",
+    extra = {"verify.run": run, "verify.duration": str(float(args.duration)), "verify.monitor": "false" if args.no_monitor else "true",
              "verify.realtime": "false" if args.no_realtime else "true"}
     if args.summary_dir:
         extra["verify.summary_dir"] = os.path.abspath(args.summary_dir)
@@ -48,7 +49,8 @@ def command(package: str, system: ModuleType, unit: str, params: str, args: argp
 
 def main(package: ModuleType, system: ModuleType, argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(prog=f"python -m {package.__name__}.run", description=__doc__.split("\n\n")[0])
-    p.add_argument("--duration", type=float, default=0.0, help="seconds to run (0: until SIGINT)")
+    p.add_argument("--duration", type=float, default=0.0,
+                   help="seconds to run after the agreed start (0: until SIGINT)")
     p.add_argument("--summary-dir", default="", help="where each process ending a chain writes its monitors' summary")
     p.add_argument("--trace-dir", default="", help="where each process writes its job records (JSON lines)")
     p.add_argument("--params-file", default="", help="the parameter file (default: config/parameters.yaml)")
@@ -63,7 +65,8 @@ def main(package: ModuleType, system: ModuleType, argv: list[str] | None = None)
     stop = threading.Event()
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, lambda _s, _f: stop.set())
-    stop.wait(args.duration or None)
+    while not stop.wait(0.1) and any(child.poll() is None for child in children):
+        pass
     for child in children:
         if child.poll() is None:
             child.send_signal(signal.SIGINT)
@@ -74,4 +77,4 @@ def main(package: ModuleType, system: ModuleType, argv: list[str] | None = None)
         except subprocess.TimeoutExpired:
             child.kill()
             codes.append(child.wait())
-    return max(codes, default=0)
+    return next((1 for code in codes if code != 0), 0)  # (a process killed by a signal: negative)

@@ -38,6 +38,10 @@ READY_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1000, reliability=
 CONNECT_TIMEOUT_S = 30.0
 START_MARGIN_NS = 200_000_000
 MIDDLEWARE_PRIORITY = 97
+TIMER_PRIORITY = 98
+#: how long a thread holds the interpreter lock while another waits for it (Python's default: 5 ms): an
+#: arrival or a timer release waits at most this long for a running job (specs/codegen.md §9)
+SWITCH_INTERVAL_S = 0.0002
 
 
 def now() -> int:
@@ -81,6 +85,7 @@ class Unit:
         self.summary_dir = str(verify.get("summary_dir", ""))
         self.trace_dir = str(verify.get("trace_dir", ""))
         self.rt = bool(verify.get("realtime", True))
+        self.duration = float(verify.get("duration", 0.0))  # s after the agreed start (0: until stopped)
         self.tasks: dict[str, TaskConfig] = {}
         for task in spec["tasks"]:
             inst, t = task.split(".")
@@ -106,7 +111,7 @@ class Unit:
                      for t, c in self.tasks.items()}
         self.dispatcher = Dispatcher(spec["policy"], callbacks, self._run)
         self.timers = Timers([Timer(t, c.period, c.phase) for t, c in self.tasks.items() if c.activation == "timer"],
-                             self._release)
+                             self._release, self._timer_scheduling)
         self._sporadic()
         self.stopping = threading.Event()
 
@@ -373,25 +378,29 @@ class Unit:
         return max(ready.values(), default=now()) + START_MARGIN_NS
 
     def spin(self) -> None:
+        """Run until asked to stop (SIGINT, SIGTERM) or for ``verify.duration`` s: connect, agree on the start, release jobs; then stop
+        releasing, let the running job complete and what it published leave, and write the results."""
         executors = []
         for node in (self.node, self.record_node):
             executor = SingleThreadedExecutor()
             executor.add_node(node)
-            executors.append(executor)
-            threading.Thread(target=self._spin, args=(executor,), daemon=True).start()
+            thread = threading.Thread(target=self._spin, args=(executor,), daemon=True)
+            thread.start()
+            executors.append((executor, thread))
         self._wait("the connections of the ports", self._connected)
         start = self._agreed_start()
         while (remaining := start - now()) > 0 and not self.stopping.is_set():
             self.stopping.wait(remaining / 1e9)
         if not self.stopping.is_set():
             self._start_jobs(start)
-            self.stopping.wait()
+            self.stopping.wait(self.duration or None)
         self.timers.stop()
         self.dispatcher.stop()
         time.sleep(0.2)  # (what the last jobs published leaves while the middleware is up)
         self._write_results()
-        for executor in executors:
-            executor.shutdown(timeout_sec=1.0)
+        for executor, thread in executors:
+            executor.shutdown(timeout_sec=2.0)
+            thread.join(timeout=2.0)
 
     def _spin(self, executor: SingleThreadedExecutor) -> None:
         if self.rt:
@@ -402,6 +411,10 @@ class Unit:
     def _start_jobs(self, start: int) -> None:
         self.dispatcher.start(self._scheduling if self.rt else None)
         self.timers.start(start)
+
+    def _timer_scheduling(self) -> None:
+        if self.rt:
+            realtime(None, TIMER_PRIORITY, self.log, "timers")
 
     def _scheduling(self) -> None:
         unit = self.config.get("unit", {})
@@ -421,13 +434,20 @@ class Unit:
                     f.write(json.dumps(record) + "\n")
 
 
-def main(system: ModuleType, argv: list[str] | None = None) -> int:
-    """The process ``argv[1]`` of ``system`` (the generated package's ``system`` module)."""
+def main(system: ModuleType, argv: list[str] | None = None, stopped: list[int] | None = None) -> int:
+    """The process ``argv[1]`` of ``system`` (the generated package's ``system`` module); ``stopped``
+    holds the signals that asked it to stop before it could start (it then stops at once)."""
+    stopped = stopped if stopped is not None else []
     argv = list(sys.argv if argv is None else argv)
     names = [a for a in argv[1:argv.index("--ros-args") if "--ros-args" in argv else len(argv)]]
     if len(names) != 1 or names[0] not in system.UNITS:
         print(f"usage: {argv[0]} UNIT [--ros-args ...], UNIT one of: {', '.join(system.UNITS)}", file=sys.stderr)
         return 2
+    if stopped:
+        return 0
+    sys.setswitchinterval(SWITCH_INTERVAL_S)
+    if "verify.realtime:=false" not in argv:  # (the middleware's threads, made by init, inherit it)
+        realtime(None, MIDDLEWARE_PRIORITY, rclpy.logging.get_logger(names[0]), "the middleware")
     rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
     try:
         unit = Unit(system, names[0])
@@ -437,6 +457,8 @@ def main(system: ModuleType, argv: list[str] | None = None) -> int:
         return 2
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, lambda _s, _f: unit.stopping.set())
+    if stopped:
+        unit.stopping.set()
     try:
         unit.spin()
     finally:
