@@ -3,7 +3,9 @@
 when it is missing: skip on a developer's machine, fail under CI (``CI=true``)."""
 from __future__ import annotations
 
+import contextlib
 import os
+import signal
 import subprocess
 from pathlib import Path
 
@@ -48,8 +50,62 @@ def start(project: Path, package: str, env: dict[str, str], seconds: float, out:
     """The generated runner: every process of the system for ``seconds``, summaries and job records in
     ``out``/summary and ``out``/trace, its output in ``out``/run.log."""
     out.mkdir(parents=True, exist_ok=True)
-    log = open(out / "run.log", "wb")  # (closed with the process: the test waits for it)
-    return subprocess.Popen(["timeout", str(int(seconds) + GRACE_S), python(), "-m", f"{package}.run",
-                             "--duration", str(seconds), "--summary-dir", str(out / "summary" / "made"),
-                             "--trace-dir", str(out / "trace"), *extra], cwd=project, env=env, stdout=log,
-                            stderr=subprocess.STDOUT)
+    with open(out / "run.log", "wb") as log:  # (the process has its own copy)
+        return subprocess.Popen(["timeout", str(int(seconds) + GRACE_S), python(), "-m", f"{package}.run",
+                                 "--duration", str(seconds), "--summary-dir", str(out / "summary" / "made"),
+                                 "--trace-dir", str(out / "trace"), *extra], cwd=project, env=env, stdout=log,
+                                stderr=subprocess.STDOUT, start_new_session=True)
+
+
+def end(procs: list[subprocess.Popen[bytes]]) -> None:
+    """Kill what is left of each started process group (the runner's processes, a probe, a listener)."""
+    for proc in procs:
+        with contextlib.suppress(ProcessLookupError, PermissionError):
+            os.killpg(proc.pid, signal.SIGKILL)
+
+
+#: a probe of the platform: at SCHED_FIFO 99 on one CPU it asks to wake every millisecond and records
+#: each wake-up more than 1 ms late ([due, woken] in ns): time the CPU was taken from every thread of the
+#: machine (the hypervisor, the kernel, real-time throttling), which no analysis of the model covers
+PROBE = """\
+import json, os, sys, time
+cpu, out, stop = int(sys.argv[1]), sys.argv[2], sys.argv[3]
+os.sched_setaffinity(0, {cpu})
+try:
+    os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(99))
+except OSError:
+    pass
+stalls, due, n = [], time.time_ns(), 0
+while True:
+    due += 1_000_000
+    if due > time.time_ns():
+        time.sleep((due - time.time_ns()) / 1e9 if due > time.time_ns() else 0)
+    woken = time.time_ns()
+    if woken - due > 1_000_000:
+        stalls.append([due, woken])
+        due = woken
+    n += 1
+    if n % 100 == 0 and os.path.exists(stop):
+        break
+with open(out, "w") as f:
+    json.dump(stalls, f)
+"""
+
+
+def probes(directory: Path, stop: Path) -> list[subprocess.Popen[bytes]]:
+    """A platform probe (PROBE) per CPU, until ``stop`` exists; their stalls in ``directory``/stalls-CPU.json."""
+    script = directory / "probe.py"
+    script.write_text(PROBE, encoding="utf-8")
+    return [subprocess.Popen(["timeout", "600", python(), str(script), str(cpu), str(directory / f"stalls-{cpu}.json"),
+                              str(stop)], start_new_session=True) for cpu in sorted(os.sched_getaffinity(0))]
+
+
+def stalls(directory: Path) -> list[tuple[int, int]]:
+    """The stalls the probes saw, [due, woken] ns."""
+    import json
+
+    return sorted((a, b) for path in directory.glob("stalls-*.json") for a, b in json.loads(path.read_text()))
+
+
+def overlaps(window: tuple[int, int], found: list[tuple[int, int]]) -> bool:
+    return any(a < window[1] and window[0] < b for a, b in found)

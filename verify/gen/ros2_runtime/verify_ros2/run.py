@@ -34,7 +34,8 @@ def parameters_file(package: ModuleType) -> str:
 
 def command(package: str, system: ModuleType, unit: str, params: str, args: argparse.Namespace, run: str) -> list[str]:
     """The command line of process ``unit``."""
-    extra = {"verify.run": run, "verify.duration": str(float(args.duration)), "verify.monitor": "false" if args.no_monitor else "true",
+    extra = {"verify.run": run, "verify.duration": str(float(args.duration)),
+             "verify.monitor": "false" if args.no_monitor else "true",
              "verify.realtime": "false" if args.no_realtime else "true"}
     if args.summary_dir:
         extra["verify.summary_dir"] = os.path.abspath(args.summary_dir)

@@ -59,6 +59,13 @@ def realtime(cpu: int | None, priority: int, logger: Any, what: str) -> None:
                        "the analysis' bounds do not apply")
 
 
+def middleware_executor() -> Any:
+    """What takes arrivals from the middleware: rclpy's single-threaded executor, whose thread waits
+    in the middleware while nothing arrives (rclpy's experimental events executor polls, which at a
+    real-time priority takes a whole CPU). The order of jobs is never the executor's (``dispatch``)."""
+    return SingleThreadedExecutor()
+
+
 class Register:
     """An in-port's register: the value that arrived last (keep-last, depth 1) and its record."""
 
@@ -74,7 +81,8 @@ class Unit:
         self.system = system
         self.name = name
         spec = system.UNITS[name]
-        self.node = Node(name, namespace="/" + system.NAMESPACE,
+        # (no parameter services: each is one more entity rclpy's executor walks at every arrival)
+        self.node = Node(name, namespace="/" + system.NAMESPACE, start_parameter_services=False,
                          automatically_declare_parameters_from_overrides=True)
         self.log = self.node.get_logger()
         flat = {k: p.value for k, p in self.node.get_parameters_by_prefix("").items()}
@@ -104,7 +112,8 @@ class Unit:
         self.records: list[dict[str, Any]] = []
         self.monitors = self._monitors()
         self.violations_pub = self.node.create_publisher(message_class(None), "/verify/violations", WIRE_QOS)
-        self.record_node = Node(name + "_records", namespace="/" + system.NAMESPACE)
+        self.record_node = Node(name + "_records", namespace="/" + system.NAMESPACE, start_parameter_services=False,
+                                enable_rosout=False)
         self._instances()
         self._ports()
         callbacks = {t: Callback(c.priority, c.activation == "timer", system.TASKS[t]["order"])
@@ -354,7 +363,7 @@ class Unit:
             if time.monotonic() > deadline:
                 self.log.warning(f"{what}: still waiting after {CONNECT_TIMEOUT_S:.0f} s; starting anyway")
                 return
-            time.sleep(0.01)
+            time.sleep(0.05)
 
     def _agreed_start(self) -> int:
         """The instant all processes of this run start at: 200 ms after the last one was ready (§4)."""
@@ -378,11 +387,12 @@ class Unit:
         return max(ready.values(), default=now()) + START_MARGIN_NS
 
     def spin(self) -> None:
-        """Run until asked to stop (SIGINT, SIGTERM) or for ``verify.duration`` s: connect, agree on the start, release jobs; then stop
-        releasing, let the running job complete and what it published leave, and write the results."""
+        """Run until asked to stop (SIGINT, SIGTERM) or for ``verify.duration`` s: connect, agree on the
+        start, release jobs; then stop releasing, let the running job complete and what it published
+        leave, and write the results."""
         executors = []
         for node in (self.node, self.record_node):
-            executor = SingleThreadedExecutor()
+            executor = middleware_executor()
             executor.add_node(node)
             thread = threading.Thread(target=self._spin, args=(executor,), daemon=True)
             thread.start()
@@ -402,7 +412,7 @@ class Unit:
             executor.shutdown(timeout_sec=2.0)
             thread.join(timeout=2.0)
 
-    def _spin(self, executor: SingleThreadedExecutor) -> None:
+    def _spin(self, executor: Any) -> None:
         if self.rt:
             realtime(None, MIDDLEWARE_PRIORITY, self.log, "arrivals")
         with contextlib.suppress(Exception):  # (shutdown)
