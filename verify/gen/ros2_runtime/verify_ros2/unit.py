@@ -200,14 +200,16 @@ class Unit:
     def _arrival(self, port: str, data: bytes) -> None:
         info = self.system.PORTS[port]
         pairing = self.pairings[port]
-        writers = self.record_node.count_publishers(info["topic"] + "/verify") > 0
-        record = pairing.take(digest(data), wait=writers)
         try:
-            value = from_wire(deserialize_message(data, message_class(info["type"])), info["type"] is not None)
+            message = deserialize_message(data, message_class(info["type"]))
+            value = from_wire(message, info["type"] is not None)
+            key = digest(serialize_message(message))  # (as the writer serialized it: the wire may pad it)
         except Exception as err:  # (anything a foreign publisher may send)
             self.log.warning(f"a message on {info['topic']} that is not a {info['type']} was dropped: {err}",
                              throttle_duration_sec=1.0)
             return
+        writers = self.record_node.count_publishers(info["topic"] + "/verify") > 0
+        record = pairing.take(key, wait=writers)
         at = now()
         with self.lock:
             reg = self.registers[port]

@@ -1,7 +1,8 @@
 """The wire (specs/codegen.md §6): a port's value as its plain ROS 2 message, and the writer job's
 identity and chain stamps out of band, one record per message on ``TOPIC/verify`` (an
-``std_msgs/msg/String`` holding JSON), correlated with its message by the digest of the message's
-serialized bytes (BLAKE2b, 8 bytes) and, among equal digests, by their order."""
+``std_msgs/msg/String`` holding JSON), correlated with its message by the digest of the message as
+``serialize_message`` makes it (BLAKE2b, 8 bytes: the reader serializes what it received again, as the
+wire may pad the bytes it carries) and, among equal digests, by their order."""
 from __future__ import annotations
 
 import hashlib
