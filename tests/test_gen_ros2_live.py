@@ -281,3 +281,156 @@ def test_a_too_tight_spec_changes_only_the_parameter_file_and_is_reported(live):
     heard = [v for v in live["heard_tight"]["violations"] if (v["chain"], v["metric"]) == ("reactive", "reaction_time")]
     assert heard and all(v["value_ns"] > v["bound_ns"] == 1_000_000 for v in heard)
     assert len(heard) == monitor["violations"]
+
+
+# ------------------------------------------------------------------ executors, compounds, sporadic releases
+
+#: two executors of the model: a single-threaded one running two timers and a sporadic callback (its
+#: process takes no arrival), a multi-threaded one on one core with an AND and an OR compound callback in
+#: a mutually exclusive and a reentrant group
+EXECUTORS = """\
+message Num = ros "std_msgs/Int64"
+
+component Src {
+  out o : Num
+  task Tick {
+    produces o
+    wcet 5 ms
+  }
+}
+
+component Fuse {
+  in a : Num
+  in b : Num
+  in both = a & b
+  in either = a | b
+  out o : Num
+  task All {
+    reads a
+    reads b
+    produces o
+    wcet 5 ms
+  }
+  task Any {
+    reads a
+    reads b
+    wcet 5 ms
+  }
+}
+
+component Ext {
+  out o : Num
+  task Kick {
+    produces o
+    wcet 5 ms
+  }
+}
+
+system Exec {
+  core c0
+  core c1
+  executor st single_threaded on c0 priority 5
+  executor mt multi_threaded 2 threads on c1 priority 4
+  instance s1 : Src {
+    task Tick executor st timer 20 ms
+  }
+  instance s2 : Src {
+    task Tick executor st timer 30 ms
+  }
+  instance e : Ext {
+    task Kick executor st sporadic 100 ms .. 2 s
+  }
+  instance f : Fuse {
+    group g1 mutually_exclusive
+    group g2 reentrant
+    task All executor mt group g1 trigger both
+    task Any executor mt group g2 trigger either
+  }
+  connect s1.o -> f.a delay 50 us .. 5 ms
+  connect s2.o -> f.b delay 50 us .. 5 ms
+}
+"""
+
+#: a hand-written node releasing the sporadic callback from outside, five times, once the system runs
+RELEASER = """\
+import sys, time
+import rclpy
+from rclpy.node import Node
+from std_msgs.msg import Empty, Int64
+
+rclpy.init()
+node = Node("releaser")
+running = []
+node.create_subscription(Int64, "/Exec/s1/o", lambda m: running.append(1), 10)
+pub = node.create_publisher(Empty, "/Exec/e/release/Kick", 10)
+while not running:
+    rclpy.spin_once(node, timeout_sec=0.1)
+for _ in range(5):
+    time.sleep(0.3)
+    pub.publish(Empty())
+time.sleep(0.5)
+"""
+EXEC_SECONDS = 5
+
+
+@pytest.fixture(scope="module")
+def executors(tmp_path_factory):
+    ros2run.require_ros2()
+    base = tmp_path_factory.mktemp("ros2-executors")
+    (base / "exec.vfy").write_text(EXECUTORS, encoding="utf-8")
+    project = base / "exec"
+    assert main(["gen", "ros2", str(base / "exec.vfy"), "-o", str(project)]) == 0
+    env = ros2run.environment(project, base / "home", 82 + os.getpid() % 10)
+    (base / "releaser.py").write_text(RELEASER, encoding="utf-8")
+    stop = base / "stop"
+    probes = ros2run.probes(base, stop)
+    run = ros2run.start(project, "exec_nodes", env, EXEC_SECONDS, base / "run")
+    releaser = subprocess.Popen(["timeout", str(EXEC_SECONDS + ros2run.GRACE_S), ros2run.python(),
+                                 str(base / "releaser.py")], env=env, start_new_session=True)
+    try:
+        code = run.wait(timeout=EXEC_SECONDS + ros2run.GRACE_S + 10)
+        stop.touch()
+        assert releaser.wait(timeout=60) == 0
+        assert [p.wait(timeout=60) for p in probes] == [0] * len(probes)
+    finally:
+        stop.touch()
+        ros2run.end([run, releaser, *probes])
+    assert code == 0, (base / "run" / "run.log").read_text(errors="replace")[-3000:]
+    model = verify.load(str(base / "exec.vfy")).system(None)
+    return {"model": model, "analysis": analyze(model), "jobs": _jobs(base / "run"), "stalls": ros2run.stalls(base)}
+
+
+def test_an_executor_runs_its_callbacks_one_at_a_time(executors):
+    for unit in ("st", "mt"):
+        jobs = sorted((j for j in executors["jobs"] if j["unit"] == unit), key=lambda j: j["start"])
+        assert len(jobs) > 50, unit
+        assert all(a["finish"] <= b["start"] for a, b in zip(jobs, jobs[1:])), unit
+
+
+def test_an_and_compound_releases_once_every_member_is_fresh(executors):
+    jobs = _by_task(executors["jobs"], "f.All")
+    assert len(jobs) > 20
+    for a, b in zip(jobs, jobs[1:]):  # (each release consumed a fresh value of each member)
+        assert b["event"] > a["event"] and b["reads"]["a"][2] > a["reads"]["a"][2]
+        assert b["reads"]["b"][2] > a["reads"]["b"][2]
+
+
+def test_an_or_compound_counts_every_arrival_and_a_pending_callback_absorbs(executors):
+    jobs = _by_task(executors["jobs"], "f.Any")
+    events = [j["event"] for j in jobs]
+    assert events == sorted(set(events)) and len(jobs) > 50
+    written = len(_by_task(executors["jobs"], "s1.Tick")) + len(_by_task(executors["jobs"], "s2.Tick"))
+    assert written - 4 <= events[-1] <= written  # (every arrival an event; the last few may be in flight)
+
+
+def test_a_sporadic_callback_runs_when_released_from_outside(executors):
+    assert [j["event"] for j in _by_task(executors["jobs"], "e.Kick")] == [1, 2, 3, 4, 5]
+
+
+def test_callbacks_of_an_executor_taking_no_arrival_stay_within_their_bounds(executors):
+    live = {"jobs": executors["jobs"], "stalls": executors["stalls"]}
+    for task in ("s1.Tick", "s2.Tick"):
+        jobs = _by_task(executors["jobs"], task)
+        worst = max(_unstalled(live, [(j["finish"] - j["release"], j["release"], j["finish"]) for j in jobs]))
+        bound = executors["analysis"].task(task).response.wcrt
+        assert Fraction(worst, 1_000_000_000) <= bound, (task, worst, float(bound))

@@ -123,6 +123,7 @@ class Unit:
                              self._release, self._timer_scheduling)
         self._sporadic()
         self.stopping = threading.Event()
+        self.started = threading.Event()
 
     # ---------------------------------------------------------------- set-up
 
@@ -245,7 +246,7 @@ class Unit:
         return releases
 
     def _release(self, task: str, event: int, at: int) -> None:
-        if not self.stopping.is_set():
+        if self.started.is_set() and not self.stopping.is_set():  # (none before the agreed start, §4)
             self.dispatcher.release(task, event, at)
 
     def _sporadic_release(self, task: str) -> None:
@@ -421,6 +422,7 @@ class Unit:
             executor.spin()
 
     def _start_jobs(self, start: int) -> None:
+        self.started.set()
         self.dispatcher.start(self._scheduling if self.rt else None)
         self.timers.start(start)
 
