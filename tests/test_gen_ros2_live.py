@@ -434,3 +434,42 @@ def test_callbacks_of_an_executor_taking_no_arrival_stay_within_their_bounds(exe
         worst = max(_unstalled(live, [(j["finish"] - j["release"], j["release"], j["finish"]) for j in jobs]))
         bound = executors["analysis"].task(task).response.wcrt
         assert Fraction(worst, 1_000_000_000) <= bound, (task, worst, float(bound))
+
+
+# ------------------------------------------------------------------ the Autoware reference system
+
+AUTOWARE = EXAMPLES / "autoware-reference"
+AUTOWARE_SECONDS = 3
+
+
+@pytest.fixture(scope="module")
+def autoware(tmp_path_factory):
+    """The Autoware reference system on its single-threaded executors, its functional code empty. Its
+    model has four cores and this machine two: a process on a missing CPU warns and runs without."""
+    ros2run.require_ros2()
+    base = tmp_path_factory.mktemp("ros2-autoware")
+    project = base / "aw"
+    assert main(["gen", "ros2", str(AUTOWARE / "autoware-executors.vfy"), "-o", str(project)]) == 0
+    env = ros2run.environment(project, base / "home", 92 + os.getpid() % 8)
+    run = ros2run.start(project, "autoware_executors_nodes", env, AUTOWARE_SECONDS, base / "run")
+    try:
+        code = run.wait(timeout=AUTOWARE_SECONDS + ros2run.GRACE_S + 10)
+    finally:
+        ros2run.end([run])
+    log = (base / "run" / "run.log").read_text(errors="replace")
+    assert code == 0, log[-3000:]
+    return {"model": verify.load(str(AUTOWARE / "autoware-executors.vfy")).system(None), "jobs": _jobs(base / "run"),
+            "out": base / "run", "log": log}
+
+
+def test_the_autoware_reference_runs_every_callback_and_monitors_its_chains(autoware):
+    model = autoware["model"]
+    for task in model.tasks:
+        assert _by_task(autoware["jobs"], task.id), task.id
+    ends = {c.tasks[-1] for c in model.chains}
+    units = {j["unit"] for j in autoware["jobs"] if j["task"] in ends}
+    made = {p.name for p in (autoware["out"] / "summary" / "made").iterdir()}
+    assert made == {f"AutowareExecutors_{u}.json" for u in units}
+    if os.cpu_count() and os.cpu_count() < len(model.cores):
+        assert "no real-time scheduling (CPU" in autoware["log"]
+    assert "Traceback" not in autoware["log"]
