@@ -37,7 +37,10 @@ from .tree import File, Tree, stamped
 TARGET = "ros2"
 HELP = "ROS 2 (rclpy) nodes in an ament_python package, parameters, a launch file and a runner"
 GENERATOR = "verify gen ros2"
-RUNTIME = ("__init__.py", "component.py", "dispatch.py", "monitor.py", "params.py", "run.py", "unit.py", "wire.py")
+#: the runtime's modules, as the package holds them: source file (verify/gen/ros2_runtime/verify_ros2) and
+#: name (its ``__init__.py`` is ``package_init.py`` here: the runtime is data of verify, not a package of it)
+RUNTIME = (("package_init.py", "__init__.py"), *((f, f) for f in ("component.py", "dispatch.py", "monitor.py",
+                                                                  "params.py", "run.py", "unit.py", "wire.py")))
 
 #: names a generated Python name must not take (keywords, and the names the glue modules bind); ``_``
 #: is appended (``py``)
@@ -151,7 +154,7 @@ def generate(model: SystemModel) -> Tree:
     """The package of a configured system (no synthesis holes: the command checks that first)."""
     pkg = package_name(model.name)
     messages = {m.name: m for m in model.messages}
-    files = [File(f"{pkg}/verify_ros2/{name}", _runtime(name), "glue") for name in RUNTIME]
+    files = [File(f"{pkg}/verify_ros2/{name}", _runtime(source), "glue") for source, name in RUNTIME]
     files += [File("package.xml", _package_xml(model, pkg), "glue"), File("setup.py", _setup_py(model, pkg), "glue"),
               File("setup.cfg", _setup_cfg(pkg), "glue"), File(f"resource/{pkg}", "", "glue"),
               File("requirements.txt", "\n".join(requirements()) + "\n", "glue"),
