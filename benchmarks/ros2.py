@@ -138,7 +138,7 @@ def register(stage: Callable[..., Callable], error: type[Exception], unavailable
     @stage("ros2-glue", "the generated ROS 2 (rclpy) nodes: the glue's cost per job and per hop (median / p99 / "
            "max), and per task the largest measured response time over the bound analyze gives (the size is "
            "ignored)", sizes=(1,), quick_sizes=(1,), generator=pipeline_text, setup=setup,
-           params={"seconds": 10.0}, quick_params={"seconds": 3.0})
+           params={"seconds": 10.0}, quick_params={"seconds": 1.0})
     def ros2_glue(inst, seconds: float) -> dict:
         from verify import load_text
         from verify.timing import analyze
