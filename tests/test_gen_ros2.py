@@ -36,7 +36,7 @@ def runtime():
     """The runtime's modules that need no rclpy, imported from verify/gen/ros2_runtime."""
     sys.path.insert(0, str(RUNTIME))
     try:
-        yield {name: importlib.import_module(f"verify_ros2.{name}") for name in ("dispatch", "monitor", "params")}
+        yield {name: importlib.import_module(f"verify_ros2.{name}") for name in ("dispatch", "monitor", "params", "wire")}
     finally:
         sys.path.remove(str(RUNTIME))
 
@@ -310,6 +310,20 @@ def test_the_monitor_computes_reaction_time_data_age_and_jitter_by_their_definit
                                                                             "violations": 1}
 
 
+def test_records_pair_with_their_messages_by_digest_and_in_order(runtime):
+    w, m = runtime["wire"], runtime["monitor"]
+    stamp = m.Stamp("reactive", 1, 10, 5)
+    records = [w.Record("laser", i, i, "laser.LaserTask", 0, 1, 2, i, (stamp,), key)
+               for i, key in ((1, "aa"), (2, "bb"), (3, "aa"))]
+    assert w.Record.decode(records[0].encode()) == records[0]
+    pairing = w.Pairing()
+    for record in records:
+        pairing.add(record)
+    assert [pairing.take(k, wait=False).index for k in ("aa", "aa", "bb")] == [1, 3, 2]  # (equal digests: in order)
+    assert pairing.take("aa", wait=False) is None  # a message from elsewhere: no record
+    assert w.digest(b"x") == w.digest(b"x") != w.digest(b"y")
+
+
 def test_parameters_are_read_exactly_and_a_bad_one_is_named(runtime):
     p = runtime["params"]
     flat = {"tasks.a.T.activation": "timer", "tasks.a.T.period_ns": "100/3", "tasks.a.T.priority": 2,
@@ -327,7 +341,7 @@ def test_the_runtime_imports_rclpy_only_where_it_talks_to_ros():
         imported = {n.module or "" for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)}
         imported |= {a.name for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names}
         uses_ros = any(m.split(".")[0] == "rclpy" for m in imported)
-        assert uses_ros == (path.name == "unit.py"), path.name
+        assert uses_ros == (path.name == "unit.py"), path.name  # (wire.py imports messages when asked)
 
 
 CONFIGURED = sorted(p for p in EXAMPLES.rglob("*.vfy") if p.name != "components.vfy" and p.parent.name != "systems"
