@@ -36,7 +36,8 @@ def runtime():
     """The runtime's modules that need no rclpy, imported from verify/gen/ros2_runtime."""
     sys.path.insert(0, str(RUNTIME))
     try:
-        yield {name: importlib.import_module(f"verify_ros2.{name}") for name in ("dispatch", "monitor", "params", "wire")}
+        yield {name: importlib.import_module(f"verify_ros2.{name}")
+               for name in ("dispatch", "monitor", "params", "wire")}
     finally:
         sys.path.remove(str(RUNTIME))
 
