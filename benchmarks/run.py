@@ -87,7 +87,7 @@ from collections.abc import Callable
 
 import verify
 
-from . import hostile, lsp, ros1, startup, tightness
+from . import hostile, lsp, ros1, ros2, startup, tightness
 from .generate import generate_chain_system, generate_executor_system, generate_pipeline_system, generate_system
 
 DEFAULT_OUT = Path(__file__).resolve().parent / "out" / "results.json"
@@ -648,6 +648,7 @@ _register_prove()
 _register_synth()
 startup.register(stage, BenchmarkError)
 ros1.register(stage, BenchmarkError, UNAVAILABLE)
+ros2.register(stage, BenchmarkError, UNAVAILABLE)
 lsp.register(stage, BenchmarkError, UNAVAILABLE)
 tightness.register(stage, BenchmarkError, UNAVAILABLE)
 

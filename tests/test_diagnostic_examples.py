@@ -41,6 +41,7 @@ class Block:
     command: str
     rlimit: str | None = None
     limit: str | None = None
+    target: str = "ros1"  # (``command=gen``: the target, ``target=ros2``)
 
 
 @dataclass(frozen=True)
@@ -66,7 +67,8 @@ def _blocks(body: str) -> tuple[Block, ...]:
     for match in _FENCE.finditer(body):
         attrs = dict(item.split("=", 1) for item in match.group(1).split())
         blocks.append(Block(attrs.get("file", "main.vfy"), match.group(2), attrs.get("encoding", "utf-8"),
-                            attrs.get("command", "check"), attrs.get("rlimit"), attrs.get("limit")))
+                            attrs.get("command", "check"), attrs.get("rlimit"), attrs.get("limit"),
+                            attrs.get("target", "ros1")))
     return tuple(blocks)
 
 
@@ -116,7 +118,7 @@ def run_example(section: Section, directory: Path):
     if section.command == "export":
         return export_diagnostics(model), result.sources
     if section.command == "gen":
-        diagnostics, files = gen_diagnostics(model, directory)
+        diagnostics, files = gen_diagnostics(model, directory, section.blocks[0].target)
         return diagnostics, {**result.sources, **files}
     if section.command == "prove":
         from verify.prove import prove
@@ -125,18 +127,20 @@ def run_example(section: Section, directory: Path):
     return list(timing.diagnostics_of(timing.analyze(model))), result.sources
 
 
-def gen_diagnostics(model, directory: Path):
-    """What `verify gen ros1 main.vfy -o out` reports for the example (its other blocks may lie in out/):
+def gen_diagnostics(model, directory: Path, name: str):
+    """What `verify gen TARGET main.vfy -o out` reports for the example (its other blocks may lie in out/):
     (diagnostics, the files they show)."""
-    from verify.commands.gen import clashing_names, refusals, unsupported_parts
-    from verify.gen import ros1
+    from verify.commands.gen import clashing_names, differing_semantics, refusals, unsupported_parts
+    from verify.gen import target
     from verify.gen.tree import plan
 
-    unsupported = unsupported_parts(ros1, "ros1", model) + clashing_names(ros1, model)
+    module = target(name)
+    unsupported = (unsupported_parts(module, name, model) + differing_semantics(module, name, model)
+                   + clashing_names(module, model))
     if unsupported:
         return unsupported, {}
     out = str(directory / "out")
-    return refusals(plan(ros1.generate(model), out, force=False), out)
+    return refusals(plan(module.generate(model), out, force=False), out)
 
 
 def import_diagnostics(directory: Path):

@@ -131,8 +131,8 @@ def test_an_output_that_is_a_file_is_refused(models, tmp_path, capsys):
 
 
 def test_an_unknown_target_is_a_usage_error(models, capsys):
-    assert main(["gen", "ros2", str(models / "navigation.vfy"), "-o", "x"]) == 2
-    assert "invalid choice: 'ros2'" in capsys.readouterr().err
+    assert main(["gen", "ros3", str(models / "navigation.vfy"), "-o", "x"]) == 2
+    assert "invalid choice: 'ros3'" in capsys.readouterr().err
 
 
 def test_parameters_are_exact_and_complete(tmp_path, write):

@@ -31,7 +31,7 @@ if TYPE_CHECKING:
     from ..gen.tree import Outcome
     from ..model.system import SystemModel
 
-HELP = "generate the code that runs a configured system (ROS 1 nodes)"
+HELP = "generate the code that runs a configured system (ROS 1 or ROS 2 nodes)"
 RESULT = "generation"
 MODEL, SYSTEM = True, True
 
@@ -88,6 +88,15 @@ def unsupported_parts(module: ModuleType, name: str, system: SystemModel) -> lis
     return sink.items
 
 
+def differing_semantics(module: ModuleType, name: str, system: SystemModel) -> list[Diagnostic]:
+    """E604 for every part of ``system`` that target ``module``'s runtime would run otherwise than the
+    analysis assumes (specs/codegen.md §9 for ros2)."""
+    sink = DiagnosticSink()
+    for span, what, help in getattr(module, "differs", lambda _model: [])(system):
+        sink.emit("E604", what, span, f"the {name} target would not run it as analysed", help=help)
+    return sink.items
+
+
 def clashing_names(module: ModuleType, system: SystemModel) -> list[Diagnostic]:
     """E603 for every name of ``system`` that becomes, in target ``module``'s code, the name of another
     (a class, a file, a parameter, a node): one would overwrite or hide the other."""
@@ -108,7 +117,8 @@ def run(args: argparse.Namespace) -> int:
         return loaded
     result, system = loaded
     module = target(args.target)
-    unsupported = unsupported_parts(module, args.target, system) + clashing_names(module, system)
+    unsupported = (unsupported_parts(module, args.target, system) + differing_semantics(module, args.target, system)
+                   + clashing_names(module, system))
     if unsupported:
         show_diagnostics(args, unsupported, result.sources)
         return EXIT_INVALID
