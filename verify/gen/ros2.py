@@ -27,10 +27,10 @@ import re
 from collections.abc import Callable
 from importlib import resources
 
-from ..activations import DataTriggered, Periodic, SporadicSource
-from ..model import ComponentModel, ExecutorModel, MessageModel, SystemModel, TaskDecl, TaskModel
-from ..sanitize import comment, yaml_string
-from ..source import Span
+from ..model.activations import DataTriggered, Periodic, SporadicSource
+from ..model.system import ComponentModel, ExecutorModel, MessageModel, SystemModel, TaskDecl, TaskModel
+from ..core.sanitize import comment, yaml_string
+from ..core.source import Span
 from .ros1 import chain_roles, human, nanoseconds, os_priorities, package_name
 from .tree import File, Tree, stamped
 
