@@ -19,7 +19,8 @@ from .core.gcpause import paused_gc
 from .core.limits import DEFAULT_LIMITS, Limits
 from .frontend.loader import Overlay, Project, load_project, project_from_text
 from .frontend.roots import project_roots
-from .model.system import SystemModel, build_system
+from .frontend.build import build_system
+from .model.system import SystemModel
 from .frontend.resolve import Resolution, SystemScope, resolve
 from .core.source import SourceFile, Span
 from .frontend.validate import validate, validate_chains
