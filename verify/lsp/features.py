@@ -325,7 +325,7 @@ def member_items(model: SystemModel, instance: str, before: str) -> list[lsp.Com
 def keyword_items(before: str) -> list[lsp.CompletionItem]:
     """The keywords the parser accepts at the cursor (its expected tokens), or every keyword when the
     text before it does not parse."""
-    from ..frontend.larkparse import expected_keywords
+    from ..frontend.grammar import expected_keywords
 
     return [lsp.CompletionItem(k, kind=lsp.CompletionItemKind.Keyword) for k in expected_keywords(before)]
 

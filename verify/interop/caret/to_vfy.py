@@ -45,9 +45,9 @@ class Imported:
 
 @functools.lru_cache(maxsize=1)
 def _reserved() -> frozenset[str]:
-    from ...frontend.larkparse import _keyword_terminals
+    from ...frontend.grammar import reserved_words
 
-    return frozenset(_keyword_terminals()) | frozenset(("kHz", "Hz", "ms", "us", "ns", "s"))
+    return reserved_words()
 
 
 class _Names:

@@ -21,13 +21,12 @@ from .read import (Activity, ActivityArch, Chain, ChainModel, Component, Compone
 
 #: the core of activities without a ``cpuAffinity`` (Linux may run them anywhere)
 UNPINNED = "unpinned"
-_UNITS = ("kHz", "Hz", "ms", "us", "ns", "s")
 
 
 def reserved() -> frozenset[str]:
-    from ...frontend.larkparse import _keyword_terminals
+    from ...frontend.grammar import reserved_words
 
-    return frozenset(_keyword_terminals()) | frozenset(_UNITS)
+    return reserved_words()
 
 
 @dataclass
