@@ -16,11 +16,9 @@ from ...core.diagnostics import DiagnosticSink, Label, Severity
 from ...core.sanitize import comment
 from ...core.source import Span
 from ...model.units import fmt_number, fmt_time
+from .bindings import UNPINNED, binding, chain_text
 from .read import (Activity, ActivityArch, Chain, ChainModel, Component, ComponentArch, Files, Instance, Name, Node,
                    Port)
-
-#: the core of activities without a ``cpuAffinity`` (Linux may run them anywhere)
-UNPINNED = "unpinned"
 
 
 def reserved() -> frozenset[str]:
@@ -326,8 +324,6 @@ class _Builder:
     # -------------------------------------------------------------- the system
 
     def system_text(self, links: list[tuple[str, Port, str, Port]]) -> str:
-        from .bindings import binding
-
         body: list[str] = []
         inst_lines: list[str] = []
         for inst, comp in self.instances:
@@ -358,8 +354,6 @@ class _Builder:
         return header + f"system {self.name(self.arch.name)} {{\n" + "\n".join(body) + "\n}\n"
 
     def chain_texts(self, links: list[tuple[str, Port, str, Port]]) -> Iterable[str]:
-        from .bindings import chain_text
-
         for model in self.chain_models():
             for chain in model.chains:
                 text = chain_text(self, chain, links)
