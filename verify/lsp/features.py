@@ -125,8 +125,8 @@ def _symbol(name: str, kind: lsp.SymbolKind, whole: Span, at: Span, lines: Sourc
                               children=children or None)
 
 
-def _whole(node: object) -> Span:
-    span: Span = node.span  # type: ignore[attr-defined]
+def _whole(node: s.Task | s.Component | s.Instance | s.Chain | s.System) -> Span:
+    span = node.span
     end = getattr(node, "end", None)
     return span.to(end) if end is not None and end.file == span.file and end.line >= span.line else span
 

@@ -3,10 +3,11 @@ activity architecture node, and the cause-effect chains (specs/interop.md, "Smar
 from __future__ import annotations
 
 from collections.abc import Callable
+from fractions import Fraction
 from typing import Protocol
 
 from ...core.diagnostics import DiagnosticSink
-from ...model.units import fmt_time
+from ...model.units import fmt_number, fmt_time
 from .read import Activity, ActivityArch, Chain, Component, Instance, Name, Node, Port
 
 Link = tuple[str, Port, str, Port]
@@ -133,13 +134,12 @@ def _activation(b: ImportContext, inst: Instance, comp: Component, act: Activity
     return " activation ?"
 
 
-def _hz(value: object) -> str:
-    from ...model.units import fmt_number
-
-    return f"{fmt_number(value)} Hz"  # type: ignore[arg-type]
+def _hz(value: Fraction) -> str:
+    return f"{fmt_number(value)} Hz"
 
 
-def _sporadic(b: ImportContext, act: Activity, low: object, high: object, gaps: list[str]) -> str:
+def _sporadic(b: ImportContext, act: Activity, low: Fraction | None, high: Fraction | None,
+              gaps: list[str]) -> str:
     c = act.constraints
     if high is None and c is not None and c.max_freq is not None:
         high = c.max_freq
