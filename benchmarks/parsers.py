@@ -1,18 +1,18 @@
 """Parser engines for the ``parse-*`` stages of ``benchmarks.run``: verify's own parse against Lark's.
 
 Every engine turns the text of a valid model into the same ``verify.model.syntax.Module`` with the same
-``_Builder`` callbacks of ``verify.frontend.parse`` (one per grammar rule, ``(start, end, children)`` with positions
-``lalr.position(line, column)``), so that what is compared is the machinery around them:
+``TreeBuilder`` callbacks of ``verify.frontend.parse`` (one per grammar rule, ``(start, end, children)`` with positions
+``fastparse.position(line, column)``), so that what is compared is the machinery around them:
 
-- ``verify``: ``verify.frontend.parse.parse_source`` — the fast path of ``verify/frontend/lalr.py``
+- ``verify``: ``verify.frontend.parse.parse_source`` — the fast path of ``verify/frontend/fastparse.py``
   (Lark's table, a one-regex
   lexer, callbacks at each reduction);
 - ``lark-transformer``: ``Lark(..., parser="lalr", lexer="contextual", transformer=T)``, Lark's own tree-less
   LALR: Lark calls ``T``'s methods at each reduction and builds no tree;
 - ``lark-standalone``: the same with the parser that ``python -m lark.tools.standalone`` generates (written
   to ``benchmarks/out/`` at benchmark time, never committed) and the same transformer;
-- ``lark-tree``: Lark's parse tree, then ``_Builder.transform`` (what ``verify.frontend.parse`` does on its error path;
-  a reference, not a candidate).
+- ``lark-tree``: Lark's parse tree, then ``TreeBuilder.transform`` (what ``verify.frontend.recovery`` does on its
+  error path; a reference, not a candidate).
 
 **Positions with a transformer.** Lark passes an internal transformer no ``meta`` (``v_args(meta=True)``
 raises "Meta args not supported for internal transformer") and ``propagate_positions`` sets positions only
@@ -21,7 +21,7 @@ are the same; a rule's callback also receives its keywords and punctuation) and 
 and the adapter (``transformer``) does what Lark's position rule does: a node spans from the start of its first
 child to the end of its last one, anonymous tokens included; each value travels up as ``(value, start, end)``.
 It then drops the anonymous tokens (the terminals the ordinary parser filters out: keywords, punctuation) and
-converts the kept ones with ``_Builder.tokens()``, and calls the builder's callback. Lark's own inlining of
+converts the kept ones with ``TreeBuilder.tokens()``, and calls the builder's callback. Lark's own inlining of
 ``_rule``/``x*`` helpers (a ``Tree`` per helper reduction, spliced by the parent) and ``?rule`` expansion are
 left as Lark does them.
 """
@@ -39,11 +39,11 @@ OUT = Path(__file__).resolve().parent / "out"
 
 
 def dropped_terminals() -> frozenset[str]:
-    """The terminals the ordinary parser (``verify.frontend.larkparse._parser``) leaves out of its trees."""
-    from verify.frontend.larkparse import _parser
+    """The terminals the ordinary parser (``verify.frontend.grammar.lark_parser``) leaves out of its trees."""
+    from verify.frontend.grammar import lark_parser
 
     dropped, kept = set(), set()
-    for rule in _parser().rules:
+    for rule in lark_parser().rules:
         for sym in rule.expansion:
             if sym.is_term:
                 (dropped if sym.filter_out else kept).add(str(sym.name))
@@ -53,21 +53,21 @@ def dropped_terminals() -> frozenset[str]:
 
 
 def callback_names() -> list[str]:
-    """The rules (aliases or names) that build a value: every method of ``_Builder`` a rule calls."""
-    from verify.frontend.parse import _fast_parser
+    """The rules (aliases or names) that build a value: every method of ``TreeBuilder`` a rule calls."""
+    from verify.frontend.parse import fast_parser
 
-    fast = _fast_parser()
+    fast = fast_parser()
     if fast is None:  # pragma: no cover - the fast path is off for this grammar
-        raise RuntimeError("verify's fast path (verify/frontend/lalr.py) is disabled for this grammar")
+        raise RuntimeError("verify's fast path (verify/frontend/fastparse.py) is disabled for this grammar")
     return sorted(fast.callback_names())
 
 
 def transformer(transformer_class: type):
     """An instance of a subclass of ``transformer_class`` (``lark.Transformer``, or the standalone module's
-    copy of it) that builds ``verify.model.syntax`` with ``_Builder``; ``begin(path)`` before each parse (a new
+    copy of it) that builds ``verify.model.syntax`` with ``TreeBuilder``; ``begin(path)`` before each parse (a new
     builder: spans carry the path). Its parse returns ``(module, start, end)``."""
     from verify.core.diagnostics import DiagnosticSink
-    from verify.frontend.parse import _Builder
+    from verify.frontend.treebuild import TreeBuilder
 
     names = callback_names()
     dropped = dropped_terminals()
@@ -81,7 +81,7 @@ def transformer(transformer_class: type):
                 setattr(self, name, self._method(name))
 
         def begin(self, path: str) -> None:
-            builder = _Builder(path, DiagnosticSink())
+            builder = TreeBuilder(path, DiagnosticSink())
             self.callbacks = {name: getattr(builder, name) for name in names}
             self.tokens = builder.tokens()
 
@@ -119,11 +119,11 @@ class LarkTransformerEngine:
     def __init__(self):
         from lark import Lark, Transformer
 
-        from verify.frontend.larkparse import _WholeWords, grammar_text
+        from verify.frontend.grammar import WholeWords, grammar_text
 
         self.transformer = transformer(Transformer)
         self.lark = Lark(grammar_text(), parser="lalr", lexer="contextual", keep_all_tokens=True,
-                         propagate_positions=False, postlex=_WholeWords(), transformer=self.transformer)
+                         propagate_positions=False, postlex=WholeWords(), transformer=self.transformer)
 
     def parse(self, text: str, path: str):
         self.transformer.begin(path)
@@ -136,7 +136,7 @@ def generate_standalone(out_dir: Path = OUT) -> Path:
     may share the directory). Regenerated at each call."""
     import lark
 
-    from verify.frontend.larkparse import grammar_text
+    from verify.frontend.grammar import grammar_text
 
     grammar = grammar_text()
     digest = hashlib.sha256(f"{lark.__version__}\n{grammar}".encode()).hexdigest()[:12]
@@ -158,7 +158,7 @@ class LarkStandaloneEngine:
     generated module's own ``Transformer``)."""
 
     def __init__(self, out_dir: Path = OUT):
-        from verify.frontend.larkparse import _WholeWords
+        from verify.frontend.grammar import WholeWords
 
         self.path = generate_standalone(out_dir)
         spec = importlib.util.spec_from_file_location(f"verify_bench_{self.path.stem}", self.path)
@@ -166,7 +166,7 @@ class LarkStandaloneEngine:
         spec.loader.exec_module(module)
         self.module = module
         self.transformer = transformer(module.Transformer)
-        self.lark = module.Lark_StandAlone(transformer=self.transformer, postlex=_WholeWords(),
+        self.lark = module.Lark_StandAlone(transformer=self.transformer, postlex=WholeWords(),
                                            propagate_positions=False)
 
     def parse(self, text: str, path: str):
@@ -175,22 +175,22 @@ class LarkStandaloneEngine:
 
 
 class LarkTreeEngine:
-    """Lark's parse tree with positions (``verify.frontend.larkparse._parser()``), then ``_Builder.transform``."""
+    """Lark's parse tree with positions (``verify.frontend.grammar.lark_parser()``), then ``TreeBuilder.transform``."""
 
     def __init__(self):
-        from verify.frontend.larkparse import _parser
+        from verify.frontend.grammar import lark_parser
 
-        self.lark = _parser()
+        self.lark = lark_parser()
 
     def parse(self, text: str, path: str):
         from verify.core.diagnostics import DiagnosticSink
-        from verify.frontend.parse import _Builder
+        from verify.frontend.treebuild import TreeBuilder
 
-        return _Builder(path, DiagnosticSink()).transform(self.lark.parse(text))
+        return TreeBuilder(path, DiagnosticSink()).transform(self.lark.parse(text))
 
 
 class VerifyEngine:
-    """``verify.frontend.parse.parse_source``: the fast path of ``verify/frontend/lalr.py`` on valid input."""
+    """``verify.frontend.parse.parse_source``: the fast path of ``verify/frontend/fastparse.py`` on valid input."""
 
     def parse(self, text: str, path: str):
         from verify.frontend.parse import parse_source
@@ -207,10 +207,11 @@ class VerifyEngine:
         """The module straight from ``FastParser.parse`` (raises ``Unparsable`` if the fast path rejects the
         text, in which case ``parse_source`` would have timed Lark's error path instead)."""
         from verify.core.diagnostics import DiagnosticSink
-        from verify.frontend.parse import _Builder, _fast_parser
+        from verify.frontend.parse import fast_parser
+        from verify.frontend.treebuild import TreeBuilder
 
-        builder = _Builder(path, DiagnosticSink())
-        return _fast_parser().parse(text, builder.callbacks(), builder.tokens())
+        builder = TreeBuilder(path, DiagnosticSink())
+        return fast_parser().parse(text, builder.callbacks(fast_parser().callback_names()), builder.tokens())
 
 
 def sampled_spans(value, most: int = 200) -> list:

@@ -20,10 +20,10 @@ took). It may return a dict of result fields (status, evaluations, ...), shown i
 - ``parse+check``: ``verify.load_text`` on the text (parse, resolve, validate, build the model, chain
   checks). The system must load without a single diagnostic.
 - ``parse-verify``, ``parse-lark-transformer``, ``parse-lark-standalone``, ``parse-lark-tree``: one valid text
-  into the ``verify.model.syntax`` tree by verify's own parse (the fast path of ``verify/frontend/lalr.py``),
+  into the ``verify.model.syntax`` tree by verify's own parse (the fast path of ``verify/frontend/fastparse.py``),
   by Lark's LALR with
   ``transformer=`` (no parse tree), by the parser of ``python -m lark.tools.standalone`` with the same
-  transformer, and by Lark's tree then ``_Builder.transform`` (``benchmarks.parsers``), the collector paused as
+  transformer, and by Lark's tree then ``TreeBuilder.transform`` (``benchmarks.parsers``), the collector paused as
   ``verify.load_text`` runs (``--param gc=on``: on). Every run's tree must equal the fast path's, spans
   included (a sample of them). Run them together with ``--interleave``.
 - ``analyze``: ``verify.timing.analyze`` on the loaded model.
@@ -155,17 +155,18 @@ class Instance:
     @cached_property
     def syntax(self):
         """The ``verify.model.syntax.Module`` of the text, straight from verify's fast path
-        (``verify/frontend/lalr.py``): the
+        (``verify/frontend/fastparse.py``): the
         reference of the ``parse-*`` stages. Raises BenchmarkError if the fast path does not accept the text
         (``parse_source`` would then time Lark's error path)."""
-        from verify.frontend.lalr import Unparsable
+        from verify.frontend.fastparse import Unparsable
 
         from .parsers import VerifyEngine
 
         try:
             return VerifyEngine.fast_path(self.text, self.name)
         except Unparsable:
-            raise BenchmarkError(f"verify's fast path (verify/frontend/lalr.py) does not accept {self.name}") from None
+            raise BenchmarkError(f"verify's fast path (verify/frontend/fastparse.py) does not accept "
+                                 f"{self.name}") from None
 
     @cached_property
     def syntax_spans(self) -> list:
@@ -314,14 +315,14 @@ def _register_parsers() -> None:
         return {"tree": "equal", "spans equal": len(spans)}
 
     descriptions = {
-        "verify": "verify.frontend.parse.parse_source on valid input: the fast path of verify/frontend/lalr.py "
+        "verify": "verify.frontend.parse.parse_source on valid input: the fast path of verify/frontend/fastparse.py "
                   "(Lark's table, "
-                  "its own lexer, _Builder's callbacks at each reduction)",
-        "lark-transformer": "Lark LALR, contextual lexer, transformer= (no parse tree): _Builder's callbacks "
+                  "its own lexer, TreeBuilder's callbacks at each reduction)",
+        "lark-transformer": "Lark LALR, contextual lexer, transformer= (no parse tree): TreeBuilder's callbacks "
                             "through an adapter (keep_all_tokens, positions from the children)",
         "lark-standalone": "the parser of python -m lark.tools.standalone (generated into benchmarks/out/ at "
                            "benchmark time) with the same transformer",
-        "lark-tree": "Lark's parse tree with positions, then _Builder.transform (verify's error path; a "
+        "lark-tree": "Lark's parse tree with positions, then TreeBuilder.transform (verify's error path; a "
                      "reference)",
     }
 

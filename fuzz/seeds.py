@@ -90,9 +90,9 @@ def _lsp() -> dict[str, bytes]:
 
 def dictionary() -> list[str]:
     """libFuzzer dictionary entries: the keywords, punctuation and units of the grammar."""
-    from verify.frontend.larkparse import _literal_words
+    from verify.frontend.grammar import literal_words
 
-    words = sorted({w[1:-1] for w in _literal_words().values()} | {"ms", "us", "ns", "s", "Hz", "kHz", "?"})
+    words = sorted({w[1:-1] for w in literal_words().values()} | {"ms", "us", "ns", "s", "Hz", "kHz", "?"})
     return [json_quote(w) for w in words]
 
 

@@ -13,7 +13,7 @@ from fractions import Fraction
 from hypothesis import strategies as st
 
 from verify.model import syntax as s
-from verify.frontend.larkparse import grammar_text
+from verify.frontend.grammar import grammar_text
 
 MODULE_PATH = "<text>"
 

@@ -339,12 +339,12 @@ def test_blank_lines_between_members_are_kept_once():
 
 def _models_of_tree(module: s.Module):
     """The semantic models of a syntax tree itself, built without any text (resolve, validate, build)."""
-    from verify.api import _finish
+    from verify.api import finish_load
     from verify.frontend.loader import Project
     from verify.core.source import SourceFile
 
     sink = DiagnosticSink()
-    return _finish(Project(MODULE_PATH, (module,), {MODULE_PATH: SourceFile(MODULE_PATH, "")}), sink)
+    return finish_load(Project(MODULE_PATH, (module,), {MODULE_PATH: SourceFile(MODULE_PATH, "")}), sink)
 
 
 @pytest.mark.slow

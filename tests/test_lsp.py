@@ -275,6 +275,23 @@ async def test_an_incremental_change_is_applied_at_its_utf16_range(client: Langu
     assert unknown.range.start == start and "unknown component `Lazer`" in unknown.message
 
 
+
+async def test_a_byte_order_mark_and_an_astral_character_on_one_line_are_counted_as_lsp_counts(
+        client: LanguageClient):
+    # line 0 holds the mark (no position of its own: the editor does not show it) and an emoji (two UTF-16
+    # units, one code point), both before a misspelt keyword
+    text = "\ufeff/* 😀 */ componnt Extra { }\n" + NAVIGATION
+    uri = _open(client, "bom-astral.vfy", text)
+    typo = next(d for d in await _diagnostics(client, uri, 1) if d.code == "E001")
+    start = len("/* 😀 */ ".encode("utf-16-le")) // 2
+    assert start == 9 and "did you mean `component`?" in typo.message
+    assert typo.range == lsp.Range(lsp.Position(0, start), lsp.Position(0, start + len("componnt")))
+    # the same range, sent back as an incremental change, replaces exactly the word
+    client.text_document_did_change(lsp.DidChangeTextDocumentParams(
+        lsp.VersionedTextDocumentIdentifier(2, uri), [lsp.TextDocumentContentChangePartial(range=typo.range,
+                                                                                           text="component")]))
+    assert await _diagnostics(client, uri, 2) == []
+
 GROUPS = """component Node {
   in data : M
   out r : M

@@ -5,7 +5,9 @@ import verify
 from verify.model import syntax as s
 from verify.core.diagnostics import DiagnosticSink
 from verify.frontend.fmt import format_text
-from verify.frontend.parse import _Builder, _fast_parser, _parse_with_lark, parse_text
+from verify.frontend.parse import fast_parser, parse_text
+from verify.frontend.recovery import recover
+from verify.frontend.treebuild import TreeBuilder
 
 TEXT = """\
 // the scan is the laser's own message
@@ -44,9 +46,9 @@ def test_a_declaration_names_the_ros_message():
 
 
 def test_the_fast_path_and_lark_build_the_same_tree():
-    builder = _Builder("m.vfy", DiagnosticSink())
-    fast = _fast_parser().parse(TEXT, builder.callbacks(), builder.tokens())
-    lark = _parse_with_lark(TEXT, "m.vfy", DiagnosticSink())
+    builder = TreeBuilder("m.vfy", DiagnosticSink())
+    fast = fast_parser().parse(TEXT, builder.callbacks(fast_parser().callback_names()), builder.tokens())
+    lark = recover(TEXT, "m.vfy", DiagnosticSink()).module
     assert fast == lark == _module(TEXT)
 
 

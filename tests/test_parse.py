@@ -124,9 +124,9 @@ system S {
 
 
 def _keywords():
-    from verify.frontend.larkparse import _keyword_terminals
+    from verify.frontend.grammar import keyword_terminals
 
-    return sorted(_keyword_terminals())
+    return sorted(keyword_terminals())
 
 
 def test_the_keyword_sample_parses_and_has_every_keyword():
@@ -138,14 +138,16 @@ def test_the_keyword_sample_parses_and_has_every_keyword():
 
 def _both_paths(text):
     """(whether the fast path accepted ``text``, Lark's diagnostics)."""
-    from verify.frontend.lalr import Unparsable
-    from verify.frontend.parse import _Builder, _fast_parser, _parse_with_lark
+    from verify.frontend.fastparse import Unparsable
+    from verify.frontend.parse import fast_parser
+    from verify.frontend.recovery import recover
+    from verify.frontend.treebuild import TreeBuilder
 
     sink = DiagnosticSink()
-    _parse_with_lark(text, "m.vfy", sink)
-    builder = _Builder("m.vfy", DiagnosticSink())
+    recover(text, "m.vfy", sink)
+    builder = TreeBuilder("m.vfy", DiagnosticSink())
     try:
-        _fast_parser().parse(text, builder.callbacks(), builder.tokens())
+        fast_parser().parse(text, builder.callbacks(fast_parser().callback_names()), builder.tokens())
         fast = True
     except Unparsable:
         fast = False

@@ -15,7 +15,7 @@ import lark.lark
 import pytest
 
 import verify
-from verify.frontend import larkparse, parse, parsecache
+from verify.frontend import grammar, parse, parsecache
 
 from .conftest import EXAMPLES
 
@@ -26,17 +26,17 @@ BROKEN = "component Laser {\n  task LaserTask {\n    wcet 2 mss\n    wcet 3 ms\n
 def fresh(monkeypatch, tmp_path):
     """An empty cache home, and no parser built yet in this process (restored afterwards)."""
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
-    larkparse._parser.cache_clear()
-    parse._fast_parser.cache_clear()
+    grammar.lark_parser.cache_clear()
+    parse.fast_parser.cache_clear()
     yield tmp_path
-    larkparse._parser.cache_clear()
-    parse._fast_parser.cache_clear()
+    grammar.lark_parser.cache_clear()
+    parse.fast_parser.cache_clear()
 
 
 def _outputs() -> list:
     texts = [(EXAMPLES / "navigation" / "navigation.vfy").read_text(), BROKEN]
     return [(r.module, r.diagnostics) for r in (parse.parse_source(t, "x.vfy") for t in texts)] + \
-        [larkparse._parser().parse(texts[0])]
+        [grammar.lark_parser().parse(texts[0])]
 
 
 def test_the_tables_are_kept_and_loaded_to_the_same_parser(fresh, monkeypatch):
@@ -45,8 +45,8 @@ def test_the_tables_are_kept_and_loaded_to_the_same_parser(fresh, monkeypatch):
     [cached] = [f for f in directory.iterdir() if f.name.startswith("lark-")]
     assert cached.name == f"lark-{lark.__version__}-parser.cache"
     assert stat.S_IMODE(os.stat(directory).st_mode) == 0o700
-    larkparse._parser.cache_clear()
-    parse._fast_parser.cache_clear()
+    grammar.lark_parser.cache_clear()
+    parse.fast_parser.cache_clear()
 
     def no_grammar(*args, **kwargs):
         raise AssertionError("the grammar was compiled again although its tables are cached")
@@ -55,21 +55,21 @@ def test_the_tables_are_kept_and_loaded_to_the_same_parser(fresh, monkeypatch):
     assert _outputs() == built
     assert verify.load_text(BROKEN, "b.vfy").diagnostics[0].message == "unknown unit `mss`; did you mean `ms`?"
     cached.unlink()  # (and without the file, the grammar is compiled: the check above can fail)
-    larkparse._parser.cache_clear()
-    parse._fast_parser.cache_clear()
+    grammar.lark_parser.cache_clear()
+    parse.fast_parser.cache_clear()
     with pytest.raises(AssertionError, match="compiled again"):
-        larkparse._parser()
+        grammar.lark_parser()
 
 
 def test_a_directory_others_may_write_is_not_used(fresh):
     directory = fresh / parsecache.CACHE_DIR
     directory.mkdir(mode=0o700)
     os.chmod(directory, 0o777)
-    assert larkparse._cache_file() is False
+    assert grammar.lark_cache_file() is False
     assert _outputs()  # (built without a cache)
     assert list(directory.iterdir()) == []
     os.chmod(directory, 0o700)
-    assert larkparse._cache_file() == str(directory / f"lark-{lark.__version__}-parser.cache")
+    assert grammar.lark_cache_file() == str(directory / f"lark-{lark.__version__}-parser.cache")
 
 
 def test_valid_text_parses_from_the_kept_fast_tables_without_lark(fresh, monkeypatch):
@@ -78,14 +78,14 @@ def test_valid_text_parses_from_the_kept_fast_tables_without_lark(fresh, monkeyp
     [table] = [f for f in directory.iterdir() if f.name.startswith("fast-")]
     assert table == directory / os.path.basename(parsecache.table_file(str(directory)))
     assert stat.S_IMODE(os.stat(table).st_mode) == 0o600
-    larkparse._parser.cache_clear()
-    parse._fast_parser.cache_clear()
+    grammar.lark_parser.cache_clear()
+    parse.fast_parser.cache_clear()
 
     def no_lark():
         raise AssertionError("Lark's parser was built although the fast tables are kept")
 
     no_lark.cache_clear = lambda: None  # type: ignore[attr-defined]  # (the fixture clears it afterwards)
-    monkeypatch.setattr(larkparse, "_parser", no_lark)
+    monkeypatch.setattr(grammar, "lark_parser", no_lark)
     nav = (EXAMPLES / "navigation" / "navigation.vfy").read_text()
     assert parse.parse_source(nav, "x.vfy").module == built[0][0]
     # a later process: valid text never imports Lark (an error would)
@@ -105,7 +105,7 @@ def test_a_kept_table_that_is_not_one_is_built_again(fresh):
     for junk in ("{", "[]", json.dumps({"rows": [], "start": 0}), json.dumps({**data, "shapes": [[0, "x"]]})):
         for text in (junk, parsecache.stamped_table(junk)):  # (changed after it was written, or written so)
             table.write_text(text)
-            parse._fast_parser.cache_clear()
+            parse.fast_parser.cache_clear()
             assert _outputs() == built
             assert parsecache.read_table(str(table)) is not None  # (written anew)
     with pytest.raises(ValueError, match="not a parser description"):
@@ -113,9 +113,9 @@ def test_a_kept_table_that_is_not_one_is_built_again(fresh):
 
 
 def test_the_kept_table_is_the_parser_lark_builds(fresh):
-    from verify.frontend.lalr import FastParser
+    from verify.frontend.fastparse import FastParser
 
-    fast = FastParser.build(larkparse._parser())
+    fast = FastParser.build(grammar.lark_parser())
     again = FastParser.from_data(json.loads(json.dumps(fast.to_data())))
     assert again.to_data() == fast.to_data()
     assert again.lexeme.pattern == fast.lexeme.pattern

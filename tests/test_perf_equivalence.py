@@ -86,15 +86,17 @@ def teardown_module():
 def _both_paths(text: str):
     """(fast result or None if the fast path left the text to Lark, Lark's result, Lark's diagnostics)."""
     from verify.core.diagnostics import DiagnosticSink
-    from verify.frontend.lalr import Unparsable
-    from verify.frontend.parse import _Builder, _fast_parser, _NumberError, _parse_with_lark
+    from verify.frontend.fastparse import Unparsable
+    from verify.frontend.parse import fast_parser
+    from verify.frontend.recovery import recover
+    from verify.frontend.treebuild import NumberError, TreeBuilder
 
     sink = DiagnosticSink()
-    slow = _parse_with_lark(text, "t.vfy", sink)
+    slow = recover(text, "t.vfy", sink).module
     try:
-        builder = _Builder("t.vfy", DiagnosticSink())
-        fast = _fast_parser().parse(text, builder.callbacks(), builder.tokens())
-    except (Unparsable, _NumberError):
+        builder = TreeBuilder("t.vfy", DiagnosticSink())
+        fast = fast_parser().parse(text, builder.callbacks(fast_parser().callback_names()), builder.tokens())
+    except (Unparsable, NumberError):
         fast = None
     return fast, slow, sink.items
 
@@ -108,9 +110,9 @@ def _assert_fast_path_exact(text: str) -> bool:
 
 
 def test_the_fast_path_is_enabled_for_the_grammar():
-    from verify.frontend.parse import _fast_parser
+    from verify.frontend.parse import fast_parser
 
-    assert _fast_parser() is not None
+    assert fast_parser() is not None
 
 
 @pytest.mark.parametrize("text", [

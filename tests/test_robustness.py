@@ -87,7 +87,7 @@ def test_deep_nesting_and_huge_numbers():
 
 @pytest.mark.slow
 def test_every_syntax_error_has_a_help_and_an_accepted_expected_set():
-    from verify.frontend.larkparse import describe_token_type
+    from verify.frontend.grammar import describe_token_type
 
     rng = random.Random(2026)
     source = COMPONENTS + "\n" + NAVIGATION.replace('import "components.vfy"', "")

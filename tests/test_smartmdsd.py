@@ -276,6 +276,17 @@ def test_a_keyword_as_a_name_is_renamed_and_reported(tmp_path):
     assert any(d.code == "E703" and "`task`" in d.message for d in diagnostics)
 
 
+
+@pytest.mark.parametrize("bounds, clause", [("minActFreq=5.0 Hz", "activation min 5 Hz"),
+                                            ("maxActFreq=50.0 Hz", "activation max 50 Hz"),
+                                            ("minActFreq=0.0 Hz", "activation min 0 Hz")])
+def test_one_bound_of_an_activation_constraint_is_imported_as_written(tmp_path, bounds, clause):
+    # (a zero minimum once fell through to the missing maximum: an internal error instead of the clause)
+    comp = FILTER.replace("minActFreq=5.0 Hz maxActFreq=50.0 Hz", bounds)
+    result, diagnostics = imported([small(tmp_path, **{"Filter.component": comp})])
+    assert result is not None, diagnostics
+    assert f"    {clause}\n" in result.text
+
 def test_a_small_system_round_trips_without_an_origin(tmp_path):
     d = small(tmp_path)
     result, _ = imported([d])

@@ -9,7 +9,7 @@ import subprocess
 
 import pytest
 
-from verify.frontend.larkparse import _keyword_terminals
+from verify.frontend.grammar import keyword_terminals
 
 from .conftest import EXAMPLES, ROOT, in_ci
 
@@ -48,7 +48,7 @@ def test_the_navigation_example_is_highlighted():
 
 
 def test_every_keyword_of_the_grammar_is_a_keyword_and_only_as_a_whole_word(tmp_path):
-    words = sorted(_keyword_terminals())
+    words = sorted(keyword_terminals())
     sample = tmp_path / "words.vfy"
     sample.write_text("\n".join(words) + "\noutx taskname msx 5 msx 2.5 us /* a\nblock */ ? a.b\n", encoding="utf-8")
     found = tokens(sample)
@@ -66,4 +66,4 @@ def test_the_grammar_knows_every_keyword_the_parser_knows():
     grammar = (ROOT / "editors" / "vfy.tmLanguage.json").read_text(encoding="utf-8")
     listed = set(re.findall(r"[a-z_]+", " ".join(re.findall(r'\\\\b\(\?:([a-z_|]+)\)', grammar))))
     listed |= {"import"}
-    assert listed == set(_keyword_terminals())
+    assert listed == set(keyword_terminals())

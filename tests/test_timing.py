@@ -231,7 +231,7 @@ def compound_text(any="", all="", port="any"):
     """The model of ``_COMPOUNDS``. `check` rejects a compound outside its constraint (E314), so such a
     model is built from the resolved system directly, for the analysis to be examined on it."""
     import verify
-    from verify.model.system import build_system
+    from verify.frontend.build import build_system
 
     result = verify.load_text(_COMPOUNDS.format(any=any, all=all, port=port), "q.vfy")
     assert {d.code for d in result.diagnostics} <= {"E314"}, [d.message for d in result.diagnostics]

@@ -19,7 +19,8 @@ from .core.gcpause import paused_gc
 from .core.limits import DEFAULT_LIMITS, Limits
 from .frontend.loader import Overlay, Project, load_project, project_from_text
 from .frontend.roots import project_roots
-from .model.system import SystemModel, build_system
+from .frontend.build import build_system
+from .model.system import SystemModel
 from .frontend.resolve import Resolution, SystemScope, resolve
 from .core.source import SourceFile, Span
 from .frontend.validate import validate, validate_chains
@@ -71,13 +72,12 @@ class LoadResult:
         if name is None:
             if len(names) != 1:
                 found = ", ".join(f"`{n}`" for n in names) or "none"
-                # (None only to unpack no system: ``first`` is read only when ``others`` holds a system)
-                first, *others = list(systems.values()) or [None]  # type: ignore[list-item]
+                listed = list(systems.values())
                 secondary: tuple[Label, ...] = ()
-                if others:  # point at the second system, the first one as context
-                    where, secondary = others[0].name.span, (Label(first.name.span, "first system"),)
+                if len(listed) > 1:  # point at the second system, the first one as context
+                    where, secondary = listed[1].name.span, (Label(listed[0].name.span, "first system"),)
                 sink.emit("E105", f"{self.project.root} must hold exactly one system to choose from "
-                          f"(found {found})", where, "a second system" if others else "",
+                          f"(found {found})", where, "a second system" if len(listed) > 1 else "",
                           secondary=secondary, help="name one with `--system NAME`")
                 raise SelectionError(sink.items[0])
             name = names[0]
@@ -108,7 +108,9 @@ def require_configured(model: SystemModel, command: str) -> list[Diagnostic]:
     return sink.items
 
 
-def _finish(project: Project, sink: DiagnosticSink) -> LoadResult:
+def finish_load(project: Project, sink: DiagnosticSink) -> LoadResult:
+    """The result of loading a parsed ``project``: resolution, validation, the models of the valid systems
+    and their chain checks; ``sink`` holds what loading reported so far (parsing, files)."""
     if not project.modules:
         return LoadResult(project, None, {}, tuple(sorted(sink.items, key=Diagnostic.sort_key)))
     resolution = resolve(project, sink)
@@ -203,7 +205,7 @@ def load(path: str | os.PathLike[str], *, root: str | os.PathLike[str] | None = 
         if problems:
             return LoadResult(Project(os.path.normpath(path), (), sources), None, {}, tuple(sink.items))
         project = load_project(path, sink, roots=roots, limits=limits, overlay=overlay)
-        return _finish(project, sink)
+        return finish_load(project, sink)
 
 
 def load_text(text: str, path: str = "<text>", *, limits: Limits = DEFAULT_LIMITS) -> LoadResult:
@@ -211,4 +213,4 @@ def load_text(text: str, path: str = "<text>", *, limits: Limits = DEFAULT_LIMIT
     with paused_gc():
         sink = DiagnosticSink()
         project = project_from_text(text, path, sink, limits)
-        return _finish(project, sink)
+        return finish_load(project, sink)

@@ -18,7 +18,8 @@ import verify
 from verify.cli import main
 from verify.core.diagnostics import DiagnosticSink, Severity
 from verify.core.limits import DEFAULT_LIMITS, Limits
-from verify.frontend.parse import parse_source, recovery_limit
+from verify.frontend.parse import parse_source
+from verify.frontend.recovery import recovery_limit
 from verify.outputs.rendering import TEXT_PER_FILE, render_all_text
 from verify.core.source import SourceFile
 
@@ -152,9 +153,9 @@ def test_check_prints_the_cap_and_json_lists_every_diagnostic(tmp_path, capsys):
 
 def _recoveries(monkeypatch, text: str, limits: Limits = DEFAULT_LIMITS) -> tuple[int, list]:
     """(errors Lark's recovery was called for, the diagnostics) of parsing ``text``."""
-    from verify.frontend.larkparse import _parser
+    from verify.frontend.grammar import lark_parser
 
-    lark = _parser()
+    lark = lark_parser()
     real = lark.parse
     calls = [0]
 

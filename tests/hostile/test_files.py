@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pytest
 
-from verify.frontend import larkparse, parse, parsecache
+from verify.frontend import grammar, parse, parsecache
 from verify.cli import main
 
 from ..conftest import EXAMPLES
@@ -308,18 +308,18 @@ def test_a_dsl_number_of_any_length_is_a_located_error(tmp_path, capsys):
 def cache(monkeypatch, tmp_path):
     """An empty cache home, no parser built yet in this process; returns the fast table's path."""
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
-    larkparse._parser.cache_clear()
-    parse._fast_parser.cache_clear()
+    grammar.lark_parser.cache_clear()
+    parse.fast_parser.cache_clear()
     directory = parsecache.private_cache_dir()
     assert directory is not None
     yield Path(parsecache.table_file(directory))
-    larkparse._parser.cache_clear()
-    parse._fast_parser.cache_clear()
+    grammar.lark_parser.cache_clear()
+    parse.fast_parser.cache_clear()
 
 
 def fresh_parse() -> bool:
     """A parse of the example by a parser loaded anew (from the cache when it holds a valid table)."""
-    parse._fast_parser.cache_clear()
+    parse.fast_parser.cache_clear()
     text = (NAVIGATION / "navigation.vfy").read_text()
     return parse.parse_source(text, "navigation.vfy").module is not None
 
@@ -432,6 +432,6 @@ def test_a_cache_directory_a_checkout_made_is_never_used(tmp_path, monkeypatch):
     bait = planted / f"lark-{lark.__version__}-parser.cache"
     bait.write_bytes(b"not a pickle of a parser\n")
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "checkout" / ".cache"))
-    assert parsecache.private_cache_dir() is None and larkparse._cache_file() is False
+    assert parsecache.private_cache_dir() is None and grammar.lark_cache_file() is False
     os.chmod(planted, 0o700)
     assert parsecache.private_cache_dir() == str(planted)

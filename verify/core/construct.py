@@ -15,6 +15,7 @@ the speed.
 from __future__ import annotations
 
 import dataclasses
+import inspect
 from typing import TYPE_CHECKING, TypeGuard, TypeVar
 from collections.abc import Callable
 
@@ -31,10 +32,13 @@ def is_plain_frozen(cls: type) -> TypeGuard[type[DataclassInstance]]:
         return False
     if "__post_init__" in dir(cls) or any("__slots__" in vars(k) for k in cls.__mro__[:-1]):
         return False
-    all_fields = [f for f in cls.__dataclass_fields__.values()
-                  if f._field_type is not dataclasses._FIELD_CLASSVAR]  # type: ignore[attr-defined]
-    return all(f._field_type is dataclasses._FIELD and f.init and not f.kw_only  # type: ignore[attr-defined]
-               and f.default_factory is dataclasses.MISSING for f in all_fields)
+    # every field a parameter of ``__init__``, in order, none keyword-only (no ``InitVar``, no
+    # ``init=False``, no ``kw_only``), and no default factory
+    fields = dataclasses.fields(cls)
+    params = list(inspect.signature(cls.__init__).parameters.values())[1:]
+    return ([p.name for p in params] == [f.name for f in fields]
+            and all(p.kind is p.POSITIONAL_OR_KEYWORD for p in params)
+            and all(f.default_factory is dataclasses.MISSING for f in fields))
 
 
 def direct_constructor(cls: type[T]) -> Callable[..., T]:

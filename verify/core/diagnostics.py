@@ -8,16 +8,11 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
-from enum import StrEnum
 from itertools import islice
 
+from .codes import CODES
+from .severity import Severity as Severity
 from .source import NO_SPAN, Span
-
-
-class Severity(StrEnum):
-    ERROR = "error"
-    WARNING = "warning"
-    NOTE = "note"
 
 
 @dataclass(frozen=True)
@@ -66,8 +61,6 @@ class DiagnosticSink:
         help: str | None = None,
         severity: Severity | None = None,
     ) -> Diagnostic:
-        from .codes import CODES
-
         severity = severity or CODES[code].severity
         d = Diagnostic(code, severity, message, Label(span, label), tuple(secondary), tuple(notes), help)
         self.items.append(d)

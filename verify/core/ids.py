@@ -18,9 +18,3 @@ def task_id(instance: str, task: str) -> TaskId:
 
 def port_id(instance: str, port: str) -> PortId:
     return PortId(f"{instance}.{port}")
-
-
-def split_id(ident: str) -> tuple[str, str]:
-    """(instance, member) of a task or port id."""
-    instance, _, member = ident.partition(".")
-    return instance, member

@@ -20,7 +20,7 @@ def data_dir(package: str) -> Traversable:
     try:
         return resources.files(f"verify.{package}")
     except ModuleNotFoundError:
-        source = Path(__file__).resolve().parent.parent / package
+        source = Path(__file__).resolve().parents[2] / package  # (beside the package: verify/core/ -> the clone)
         if not source.is_dir():
             raise
         return source

@@ -96,20 +96,25 @@ def _bounds(low: s.Quantity, high: s.Quantity) -> str:
 
 def _require(condition: bool, what: str) -> None:
     if not condition:
-        raise ValueError(f"cannot format: {what}")
+        raise _unformattable(what)
+
+
+def _unformattable(what: str) -> ValueError:
+    return ValueError(f"cannot format: {what}")
 
 
 # ------------------------------------------------------------------ clause texts
 
 
 def _constraint(c: s.ActivationConstraint) -> str:
-    _require(c.min is not None or c.max is not None, "activation constraint without bounds")
     if c.min is not None and c.max is not None:
         bounds = _bounds(c.min, c.max)
     elif c.min is not None:
         bounds = f"min {format_quantity(c.min)}"
+    elif c.max is not None:
+        bounds = f"max {format_quantity(c.max)}"
     else:
-        bounds = f"max {format_quantity(c.max)}"  # type: ignore[arg-type]  # not None: _require above
+        raise _unformattable("activation constraint without bounds")
     return f"activation {bounds}" + ("" if c.changeable else " fixed")
 
 
@@ -122,8 +127,9 @@ def _compound(c: s.CompoundPort) -> str:
 
 def _tolerance(t: s.Tolerance) -> str:
     if t.kind == "max":
-        _require(t.factor is not None, "sampling tolerance `<=` without a factor")
-        return f"<= {format_number(t.factor.value)}"  # type: ignore[union-attr]  # _require above
+        if t.factor is None:
+            raise _unformattable("sampling tolerance `<=` without a factor")
+        return f"<= {format_number(t.factor.value)}"
     return t.kind
 
 
@@ -139,21 +145,24 @@ def _read(r: s.Read) -> str:
 def _period(p: s.Quantity | s.PeriodHole) -> str:
     if isinstance(p, s.Quantity):
         return format_quantity(p)
-    _require((p.low is None) == (p.high is None) and (p.step is None or p.low is not None),
-             "period hole needs both bounds, and a step only with bounds")
-    if p.low is None:
+    low, high = p.low, p.high
+    if low is None and high is None and p.step is None:
         return "?"
-    text = f"? in {format_quantity(p.low)} .. {format_quantity(p.high)}"  # type: ignore[arg-type]  # a range has both ends
+    if low is None or high is None:
+        raise _unformattable("period hole needs both bounds, and a step only with bounds")
+    text = f"? in {format_quantity(low)} .. {format_quantity(high)}"
     return text + (f" step {format_quantity(p.step)}" if p.step else "")
 
 
 def _prescaler(p: s.Number | s.PrescalerHole) -> str:
     if isinstance(p, s.Number):
         return "" if p.value == 1 else f" every {format_number(p.value)}"
-    _require((p.low is None) == (p.high is None), "prescaler hole needs both bounds or none")
-    if p.low is None:
+    low, high = p.low, p.high
+    if low is None and high is None:
         return " every ?"
-    return f" every ? in {format_number(p.low.value)} .. {format_number(p.high.value)}"  # type: ignore[union-attr]  # both ends
+    if low is None or high is None:
+        raise _unformattable("prescaler hole needs both bounds or none")
+    return f" every ? in {format_number(low.value)} .. {format_number(high.value)}"
 
 
 def format_activation(a: s.Activation) -> str:
@@ -192,10 +201,11 @@ def _executor(e: s.Executor) -> str:
 
 
 def _connection(c: s.Connection) -> str:
-    _require((c.delay_min is None) == (c.delay_max is None), "connection delay needs both bounds or none")
+    low, high = c.delay_min, c.delay_max
+    if (low is None) != (high is None):
+        raise _unformattable("connection delay needs both bounds or none")
     text = f"connect {c.source} -> {c.target}"
-    return (text if c.delay_min is None
-            else f"{text} delay {_bounds(c.delay_min, c.delay_max)}")  # type: ignore[arg-type]  # both: _require
+    return f"{text} delay {_bounds(low, high)}" if low is not None and high is not None else text
 
 
 def _spec(spec: s.Spec) -> str:

@@ -18,7 +18,8 @@ from ..model import syntax as s
 from ..core.diagnostics import DiagnosticSink
 from ..core.fileaccess import Area, Refused, read_regular
 from ..core.limits import DEFAULT_LIMITS, Limits
-from .parse import looks_like_model, parse_source
+from .fastparse import looks_like_model
+from .parse import parse_source
 from .roots import Refusal, Roots
 from ..core.source import Span, SourceFile
 

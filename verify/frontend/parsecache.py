@@ -1,15 +1,15 @@
 """The fast parser's tables, kept between processes without Lark (docs/guide/untrusted.md, "The cache").
 
-A command that parses valid text needs only ``verify.frontend.lalr.FastParser``: Lark's LALR table for the
-grammar and the lexer of ``lalr.py``. Building it needs Lark (about 20 ms to import, 9 ms to load
+A command that parses valid text needs only ``verify.frontend.fastparse.FastParser``: Lark's LALR table for
+the grammar and the lexer of ``fastparse.py``. Building it needs Lark (about 20 ms to import, 9 ms to load
 its own cache of the tables); this module keeps the finished table as JSON in the user's private
 cache directory, so that a later process builds the parser from that file alone and imports Lark
 only when a text needs the error path. The file's name holds a digest of the grammar and of
-``lalr.py`` (which decides what the table holds): editing either makes a new file. A file that does
+``fastparse.py`` (which decides what the table holds): editing either makes a new file. A file that does
 not describe a parser — not a regular file, too large, changed since it was written (its first line
 is the SHA-256 of the rest), not JSON of a parser's shape — is ignored and written anew; nothing is
 read from a directory another user could write (the same rule as Lark's own cache,
-``larkparse._cache_file``), and only regular files are read there (``verify.core.fileaccess``).
+``grammar.lark_cache_file``), and only regular files are read there (``verify.core.fileaccess``).
 """
 from __future__ import annotations
 
@@ -20,7 +20,10 @@ import os
 import stat
 
 from ..core.fileaccess import Refused, read_regular
-from .lalr import FastParser
+from collections.abc import Callable
+
+from ..core.resources import data_text
+from .fastparse import FastParser
 
 #: the directory (under ``$XDG_CACHE_HOME``, else ``~/.cache``) that holds the parser's tables
 CACHE_DIR = "verify-timing"
@@ -57,33 +60,29 @@ def _grammar_bytes() -> bytes:
                 return fh.read()
         except OSError:
             continue
-    from .larkparse import grammar_text  # (a packaging without plain files: ask importlib.resources)
-
-    return grammar_text().encode("utf-8")
+    return data_text("grammar", "verify.lark").encode("utf-8")  # (a packaging without plain files)
 
 
 def table_file(directory: str) -> str:
-    """The cache file of the current grammar and ``lalr.py``."""
-    from . import lalr
+    """The cache file of the current grammar and ``fastparse.py``."""
+    from . import fastparse
 
     digest = hashlib.sha256(_grammar_bytes())
-    with open(lalr.__file__, "rb") as fh:
+    with open(fastparse.__file__, "rb") as fh:
         digest.update(fh.read())
     return os.path.join(directory, f"fast-{digest.hexdigest()[:24]}.json")
 
 
-def load_fast_parser() -> FastParser | None:
-    """The fast parser: from the cache file when there is a valid one, else built from Lark's parser
-    (and the file written); None when the grammar is not of the shape the fast path handles."""
+def load_fast_parser(build: Callable[[], FastParser | None]) -> FastParser | None:
+    """The fast parser: from the cache file when there is a valid one, else ``build()`` (from Lark's
+    parser; the file written); None when the grammar is not of the shape the fast path handles."""
     directory = private_cache_dir()
     path = table_file(directory) if directory is not None else None
     if path is not None:
         cached = read_table(path)
         if cached is not None:
             return cached
-    from .larkparse import _parser
-
-    fast = FastParser.build(_parser())
+    fast = build()
     if fast is not None and path is not None:
         _write(path, stamped_table(json.dumps(fast.to_data(), separators=(",", ":"))))
     return fast

@@ -12,10 +12,11 @@ from typing import TYPE_CHECKING
 
 from ..model import syntax as s
 from ..core.diagnostics import DiagnosticSink, Label, name_list
-from ..model.system import SystemModel, chain_path, quantity_base, quantity_hertz, quantity_seconds
+from ..model.system import SystemModel
+from .build import chain_path
 from .resolve import ComponentScope, MemberNode, Resolution, SystemScope
 from ..core.source import Span
-from ..model.units import fmt_number, fmt_quantity, fmt_rate, fmt_time
+from ..model.units import fmt_number, fmt_quantity, fmt_rate, fmt_time, quantity_base, quantity_hertz, quantity_seconds
 from .validate_executors import check_executors
 
 if TYPE_CHECKING:  # (networkx is imported where a cycle of triggers is reported: it costs start-up time)

@@ -125,8 +125,8 @@ def _symbol(name: str, kind: lsp.SymbolKind, whole: Span, at: Span, lines: Sourc
                               children=children or None)
 
 
-def _whole(node: object) -> Span:
-    span: Span = node.span  # type: ignore[attr-defined]
+def _whole(node: s.Task | s.Component | s.Instance | s.Chain | s.System) -> Span:
+    span = node.span
     end = getattr(node, "end", None)
     return span.to(end) if end is not None and end.file == span.file and end.line >= span.line else span
 
@@ -325,7 +325,7 @@ def member_items(model: SystemModel, instance: str, before: str) -> list[lsp.Com
 def keyword_items(before: str) -> list[lsp.CompletionItem]:
     """The keywords the parser accepts at the cursor (its expected tokens), or every keyword when the
     text before it does not parse."""
-    from ..frontend.larkparse import expected_keywords
+    from ..frontend.grammar import expected_keywords
 
     return [lsp.CompletionItem(k, kind=lsp.CompletionItemKind.Keyword) for k in expected_keywords(before)]
 

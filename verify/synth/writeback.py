@@ -24,7 +24,7 @@ from fractions import Fraction
 from collections.abc import Mapping
 
 from ..model import syntax as s
-from ..api import LoadResult, _finish
+from ..api import LoadResult, finish_load
 from ..core.diagnostics import DiagnosticSink
 from .problem import rejects
 from ..frontend.fmt import (
@@ -202,7 +202,7 @@ def recheck(load: LoadResult, system: str,
     modules = (module,) + tuple(m for m in load.project.modules if m.path != root)
     sources = dict(load.project.sources)
     sources[root] = SourceFile(root, text)
-    reloaded = _finish(Project(root, modules, sources), sink)
+    reloaded = finish_load(Project(root, modules, sources), sink)
     if system not in reloaded.models:
         return reloaded, None, None, [f"{d.code}: {d.message}" for d in reloaded.diagnostics] or ["not loaded"]
     model = reloaded.models[system]

@@ -111,13 +111,9 @@ class _Origin:
 
 def _origin_names(arch: Architecture) -> _Origin:
     """The names the import gave the file's nodes and topics, backwards (the import is deterministic)."""
-    from .to_vfy import _Importer
+    from .to_vfy import imported_names
 
-    importer = _Importer(arch, DiagnosticSink())
-    importer.build_nodes()
-    nodes = {n.instance: name for name, n in importer.nodes.items()}
-    topics = {(n.instance, port): topic for n in importer.nodes.values() for topic, port in n.topic_out.items()}
-    return _Origin(nodes, topics)
+    return _Origin(*imported_names(arch))
 
 
 # ------------------------------------------------------------------ named paths

@@ -45,9 +45,9 @@ class Imported:
 
 @functools.lru_cache(maxsize=1)
 def _reserved() -> frozenset[str]:
-    from ...frontend.larkparse import _keyword_terminals
+    from ...frontend.grammar import reserved_words
 
-    return frozenset(_keyword_terminals()) | frozenset(("kHz", "Hz", "ms", "us", "ns", "s"))
+    return reserved_words()
 
 
 class _Names:
@@ -357,3 +357,13 @@ def import_architecture(arch: Architecture, system: str | None, sink: Diagnostic
     importer.build_nodes()
     importer.build_executors()
     return Imported(importer.text(name), name)
+
+
+def imported_names(arch: Architecture) -> tuple[dict[str, str], dict[tuple[str, str], str]]:
+    """The names the import gives the file's nodes and topics, backwards (the import is deterministic):
+    instance -> its node's name, and (instance, out-port) -> the topic it publishes."""
+    importer = _Importer(arch, DiagnosticSink())
+    importer.build_nodes()
+    nodes = {n.instance: name for name, n in importer.nodes.items()}
+    topics = {(n.instance, port): topic for n in importer.nodes.values() for topic, port in n.topic_out.items()}
+    return nodes, topics

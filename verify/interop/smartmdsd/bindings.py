@@ -2,22 +2,49 @@
 activity architecture node, and the cause-effect chains (specs/interop.md, "SmartMDSD")."""
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from collections.abc import Callable
+from fractions import Fraction
+from typing import Protocol
 
-from ...model.units import fmt_time
-from .read import Activity, Chain, Component, Instance, Name, Node, Port
-
-if TYPE_CHECKING:
-    from .to_vfy import _Builder
+from ...core.diagnostics import DiagnosticSink
+from ...model.units import fmt_number, fmt_time
+from .read import Activity, ActivityArch, Chain, Component, Instance, Name, Node, Port
 
 Link = tuple[str, Port, str, Port]
+
+#: the core of activities without a ``cpuAffinity`` (Linux may run them anywhere)
+UNPINNED = "unpinned"
+
+
+class ImportContext(Protocol):
+    """What the bindings and chains read of the import under way (``to_vfy``'s builder): where to report,
+    the names as the language spells them, the activity architecture and its nodes; ``unpinned`` is set
+    when a task is placed on the ``UNPINNED`` core."""
+
+    unpinned: bool
+
+    @property
+    def sink(self) -> DiagnosticSink: ...
+
+    @property
+    def name(self) -> Callable[[Name], str]: ...
+
+    @property
+    def activity_arch(self) -> ActivityArch | None: ...
+
+    @property
+    def nodes(self) -> dict[str, Node]: ...
+
+    @property
+    def by_node(self) -> dict[str, tuple[str, Activity]]:  # node -> (instance, activity it configures)
+        ...
 
 
 def _last(name: Name) -> str:
     return name.text.rsplit(".", 1)[-1]
 
 
-def node_of(b: _Builder, inst: Instance, act: Activity) -> Node | None:
+def node_of(b: ImportContext, inst: Instance, act: Activity) -> Node | None:
     for node_name, (inst_name, a) in b.by_node.items():
         if inst_name == inst.name.text and a is act:
             return b.nodes[node_name]
@@ -28,7 +55,7 @@ def reads(act: Activity) -> set[str]:
     return {link.port.text for link in act.links} | ({act.handler_of.text} if act.handler_of else set())
 
 
-def binding(b: _Builder, inst: Instance, comp: Component, act: Activity, links: list[Link]) -> tuple[str, str]:
+def binding(b: ImportContext, inst: Instance, comp: Component, act: Activity, links: list[Link]) -> tuple[str, str]:
     """(core, the clauses after ``task NAME [on CORE]``) of one task; what is missing is reported (E704)."""
     node = node_of(b, inst, act)
     where = node.name.span if node else act.name.span
@@ -49,9 +76,7 @@ def binding(b: _Builder, inst: Instance, comp: Component, act: Activity, links: 
     return core, f" priority {priority}{activation}"
 
 
-def _core(b: _Builder, node: Node | None, gaps: list[str]) -> str:
-    from .to_vfy import UNPINNED
-
+def _core(b: ImportContext, node: Node | None, gaps: list[str]) -> str:
     if node is not None and node.affinity is not None:
         cores = {c.text for c, _ in (b.activity_arch.cores if b.activity_arch else ())}
         if _last(node.affinity) in cores:
@@ -63,7 +88,7 @@ def _core(b: _Builder, node: Node | None, gaps: list[str]) -> str:
     return UNPINNED
 
 
-def _priority(b: _Builder, node: Node | None, gaps: list[str]) -> int:
+def _priority(b: ImportContext, node: Node | None, gaps: list[str]) -> int:
     if node is not None and node.scheduler_type is not None and node.scheduler_type.text != "FIFO":
         b.sink.emit("E703", f"scheduler type `{node.scheduler_type.text}` has no counterpart: the task is analysed "
                     "under fixed-priority preemptive scheduling (SCHED_FIFO) with its priority",
@@ -77,7 +102,7 @@ def _priority(b: _Builder, node: Node | None, gaps: list[str]) -> int:
     return 0
 
 
-def _activation(b: _Builder, inst: Instance, comp: Component, act: Activity, node: Node | None,
+def _activation(b: ImportContext, inst: Instance, comp: Component, act: Activity, node: Node | None,
                 links: list[Link], gaps: list[str]) -> str:
     if act.handler_of is not None:  # an input handler runs on every (prescale-th) message of its port
         every = f" every {node.prescale}" if node is not None and node.prescale != 1 else ""
@@ -109,13 +134,12 @@ def _activation(b: _Builder, inst: Instance, comp: Component, act: Activity, nod
     return " activation ?"
 
 
-def _hz(value: object) -> str:
-    from ...model.units import fmt_number
-
-    return f"{fmt_number(value)} Hz"  # type: ignore[arg-type]
+def _hz(value: Fraction) -> str:
+    return f"{fmt_number(value)} Hz"
 
 
-def _sporadic(b: _Builder, act: Activity, low: object, high: object, gaps: list[str]) -> str:
+def _sporadic(b: ImportContext, act: Activity, low: Fraction | None, high: Fraction | None,
+              gaps: list[str]) -> str:
     c = act.constraints
     if high is None and c is not None and c.max_freq is not None:
         high = c.max_freq
@@ -129,7 +153,7 @@ def _sporadic(b: _Builder, act: Activity, low: object, high: object, gaps: list[
     return f" sporadic {_hz(low)} .. {_hz(high)}"
 
 
-def _trigger_port(b: _Builder, inst: Instance, act: Activity, node: Node, trigger: Name,
+def _trigger_port(b: ImportContext, inst: Instance, act: Activity, node: Node, trigger: Name,
                   links: list[Link]) -> Name | None:
     """The in-port of ``inst`` behind trigger input ``trigger`` of ``node``: the connection that carries the
     data flow into it."""
@@ -161,7 +185,7 @@ def _trigger_port(b: _Builder, inst: Instance, act: Activity, node: Node, trigge
     return found[0].name
 
 
-def chain_text(b: _Builder, chain: Chain, links: list[Link]) -> str | None:
+def chain_text(b: ImportContext, chain: Chain, links: list[Link]) -> str | None:
     tasks: list[tuple[str, Activity]] = []
     for _, ref in chain.links:
         found = b.by_node.get(_last(ref))

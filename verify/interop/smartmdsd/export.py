@@ -19,7 +19,7 @@ from ...core.diagnostics import DiagnosticSink
 from ...model.system import SystemModel, TaskModel
 from ...core.source import Span
 from .read import ComponentArch, Files
-from .to_vfy import UNPINNED
+from .bindings import UNPINNED
 
 
 @dataclass

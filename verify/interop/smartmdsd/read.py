@@ -7,8 +7,10 @@ stepped over and listed in ``Files.dropped`` (reported as E703 by the importer),
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from fractions import Fraction
+from typing import TypedDict
 
 from ...core.diagnostics import DiagnosticSink
 from ...core.source import Span
@@ -202,6 +204,25 @@ def _name(tok: Tok) -> Name:
     return Name(tok.text, tok.span)
 
 
+class _ActivityFields(TypedDict, total=False):
+    """What an activity's body declares besides its links."""
+
+    constraints: Constraints
+    default: DefaultTrigger
+
+
+class _NodeFields(TypedDict, total=False):
+    """What an activity node's body declares (``Node``'s optional fields)."""
+
+    affinity: Name
+    source: Source
+    min_time: Fraction | None
+    max_time: Fraction | None
+    time_span: Span
+    scheduler_type: Name
+    priority: tuple[int, Span]
+
+
 class _Reader:
     def __init__(self, cur: Cursor, files: Files):
         self.cur, self.files = cur, files
@@ -210,7 +231,7 @@ class _Reader:
         first, span = self.cur.skip_element(known)
         self.files.dropped.append((f"{what} `{first.text}`" if what else f"`{first.text}`", span))
 
-    def elements(self, handlers: dict[str, object], known_drops: tuple[str, ...] = ()) -> Tok:
+    def elements(self, handlers: dict[str, Callable[[], object]], known_drops: tuple[str, ...] = ()) -> Tok:
         """``{ element* }``: each element by its keyword; others are dropped (reported)."""
         cur = self.cur
         cur.expect("{")
@@ -221,7 +242,7 @@ class _Reader:
                 raise cur.fail(tok, "`}`")
             handler = handlers.get(tok.text) if tok.kind == "id" else None
             if handler is not None:
-                handler()  # type: ignore[operator]
+                handler()
             else:
                 self.drop("", keys)
         return cur.expect("}")
@@ -289,7 +310,7 @@ class _Reader:
     def activity(self, name: Name, handler_of: Name | None) -> Activity:
         cur = self.cur
         links: list[InputLink] = []
-        found: dict[str, object] = {}
+        found: _ActivityFields = {}
 
         def link() -> None:
             start = cur.next()
@@ -345,8 +366,7 @@ class _Reader:
 
         self.elements({"InputPortLink": link, "ActivationConstraints": constraints, "DefaultTrigger": default},
                       ("Observe", "RequestPortLink", "OperationModeBinding", "OpcUaClientLink", "MixedPortROSLink"))
-        return Activity(name, handler_of, tuple(links), found.get("constraints"),  # type: ignore[arg-type]
-                        found.get("default"))  # type: ignore[arg-type]
+        return Activity(name, handler_of, tuple(links), found.get("constraints"), found.get("default"))
 
     # -------------------------------------------------------------- .componentArch
 
@@ -457,7 +477,7 @@ class _Reader:
         name = _name(cur.ident())
         cur.expect("{")
         inputs: list[tuple[Name, str]] = []
-        fields: dict[str, object] = {}
+        fields: _NodeFields = {}
         if cur.accept("inputs"):
             cur.expect("{")
             while cur.at("RegisterInputNode", "TriggerInputNode"):
@@ -480,8 +500,8 @@ class _Reader:
                     times[which], _ = self.time()
                     cur.semi()
                 end = cur.expect("}")
-                fields.update(min_time=times.get("minTime"), max_time=times.get("maxTime"),
-                              time_span=key.span.to(end.span))
+                fields["min_time"], fields["max_time"] = times.get("minTime"), times.get("maxTime")
+                fields["time_span"] = key.span.to(end.span)
             elif key.text == "scheduler":
                 cur.expect("{")
                 while cur.at("type", "priority"):
@@ -494,7 +514,7 @@ class _Reader:
             else:
                 raise cur.fail(key, "cpuAffinity, activationSource, executionTime, scheduler or `}`")
         cur.expect("}")
-        return Node(name, False, tuple(inputs), **fields)  # type: ignore[arg-type]
+        return Node(name, False, tuple(inputs), **fields)
 
     def source(self) -> Source:
         cur = self.cur

@@ -11,23 +11,21 @@ import os
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from fractions import Fraction
+from typing import Literal
 
 from ...core.diagnostics import DiagnosticSink, Label, Severity
 from ...core.sanitize import comment
 from ...core.source import Span
 from ...model.units import fmt_number, fmt_time
+from .bindings import UNPINNED, binding, chain_text
 from .read import (Activity, ActivityArch, Chain, ChainModel, Component, ComponentArch, Files, Instance, Name, Node,
                    Port)
 
-#: the core of activities without a ``cpuAffinity`` (Linux may run them anywhere)
-UNPINNED = "unpinned"
-_UNITS = ("kHz", "Hz", "ms", "us", "ns", "s")
-
 
 def reserved() -> frozenset[str]:
-    from ...frontend.larkparse import _keyword_terminals
+    from ...frontend.grammar import reserved_words
 
-    return frozenset(_keyword_terminals()) | frozenset(_UNITS)
+    return reserved_words()
 
 
 @dataclass
@@ -132,7 +130,7 @@ class _Builder:
                                 "recursively)")
         return comp
 
-    def port(self, ref: Name) -> tuple[str, Port] | None | bool:
+    def port(self, ref: Name) -> tuple[str, Port] | None | Literal[False]:
         """The instance and port of ``Instance.Port``; False when the instance is not imported."""
         inst_name, _, port_name = ref.text.partition(".")
         for inst, comp in self.instances:
@@ -217,16 +215,16 @@ class _Builder:
         """(writer instance, out-port, reader instance, in-port) of every connection."""
         links = []
         for conn in self.arch.connections:
-            ends = [self.port(conn.client), self.port(conn.server)]
-            if any(e is False for e in ends):
+            client, server = self.port(conn.client), self.port(conn.server)
+            if client is False or server is False:
                 continue  # (an instance not imported: reported with it)
-            bad = [ref for ref, e in zip((conn.client, conn.server), ends) if e is None]
-            for ref in bad:
-                self.sink.emit("E702", f"`{ref.text}` is no port of its instance's component", ref.span, "not found",
-                               help="name a port the component declares")
-            if bad:
+            if client is None or server is None:
+                for ref, end in ((conn.client, client), (conn.server, server)):
+                    if end is None:
+                        self.sink.emit("E702", f"`{ref.text}` is no port of its instance's component", ref.span,
+                                       "not found", help="name a port the component declares")
                 continue
-            (ia, pa), (ib, pb) = ends  # type: ignore[misc]
+            (ia, pa), (ib, pb) = client, server
             if {pa.direction, pb.direction} != {"in", "out"}:
                 self.sink.emit("E705", f"connection `{conn.client.text} -> {conn.server.text}` joins two "
                                f"{pa.direction}-ports: data cannot flow", conn.span, "no data flow",
@@ -306,9 +304,10 @@ class _Builder:
             if c.min_freq is not None and c.max_freq is not None:
                 bounds = _hz(c.min_freq) if c.min_freq == c.max_freq else f"{_hz(c.min_freq)} .. {_hz(c.max_freq)}"
                 lines.append(f"    activation {bounds}{fixed}")
-            elif c.min_freq is not None or c.max_freq is not None:
-                which = "min" if c.min_freq is not None else "max"
-                lines.append(f"    activation {which} {_hz(c.min_freq or c.max_freq)}{fixed}")  # type: ignore[arg-type]
+            elif c.min_freq is not None:
+                lines.append(f"    activation min {_hz(c.min_freq)}{fixed}")
+            elif c.max_freq is not None:
+                lines.append(f"    activation max {_hz(c.max_freq)}{fixed}")
             elif not c.configurable:
                 self.sink.emit("E703", f"`configurable=false` of {comp.name.text}.{act.name.text} names no frequency: "
                                "there is no rate to fix, so the rate stays changeable", c.span, "no frequency",
@@ -327,8 +326,6 @@ class _Builder:
     # -------------------------------------------------------------- the system
 
     def system_text(self, links: list[tuple[str, Port, str, Port]]) -> str:
-        from .bindings import binding
-
         body: list[str] = []
         inst_lines: list[str] = []
         for inst, comp in self.instances:
@@ -359,8 +356,6 @@ class _Builder:
         return header + f"system {self.name(self.arch.name)} {{\n" + "\n".join(body) + "\n}\n"
 
     def chain_texts(self, links: list[tuple[str, Port, str, Port]]) -> Iterable[str]:
-        from .bindings import chain_text
-
         for model in self.chain_models():
             for chain in model.chains:
                 text = chain_text(self, chain, links)

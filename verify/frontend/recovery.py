@@ -1,128 +1,59 @@
-"""The Lark parser of ``grammar/verify.lark`` and its error path: what the parser expected, in the
-language's words (never ``__ANON_0`` or ``$END``), help for the usual slips (a misspelt or glued keyword,
-an exponent, an unterminated comment or string), and recovery by inserting or dropping a token, so that
-one run reports several errors. ``verify.frontend.parse`` runs it when the fast path rejects the input.
+"""Error recovery: Lark's parser (``verify.frontend.grammar``) on a text the fast path rejected, with
+what it expected in the language's words (never ``__ANON_0`` or ``$END``), help for the usual slips (a
+misspelt or glued keyword, an exponent, an unterminated comment or string), and recovery by inserting or
+dropping a token, so that one run reports several errors. ``recover`` is the one entry point
+(``verify.frontend.parse`` calls it); it also gives what recovery made of the text (``Parsed.partial``).
 """
 from __future__ import annotations
 
-import contextlib
-import contextvars
 import copy
 import functools
-import os
 import re
-from collections.abc import Iterable, Iterator
-from typing import cast
+from collections.abc import Iterable
+from dataclasses import dataclass, replace
+from typing import NamedTuple, cast
 
-from lark import Lark, Token
-from lark.lark import PostLex
-from lark.exceptions import LarkError, UnexpectedCharacters, UnexpectedInput, UnexpectedToken
+from lark import Token, Tree
+from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken
 from lark.parsers.lalr_interactive_parser import InteractiveParser
 
 from ..core.diagnostics import DiagnosticSink, Label
-from .lalr import _SKIP, _WORD_RE, TooManyTokens, position
-from .parsecache import clear_if_not_regular, private_cache_dir
-from ..core.resources import data_text
+from ..core.limits import DEFAULT_LIMITS, Limits
 from ..core.source import Span
+from ..model import syntax as s
+from .fastparse import SKIP_RE, WORD_RE, TooManyTokens, looks_like_model
+from .grammar import counting_tokens, describe_token_type, keyword_terminals, lark_parser, literal_words
+from .treebuild import NumberError, TreeBuilder, too_many_tokens
 
 MAX_EXPECTED_SHOWN = 4  # (E002: a longer list says little about a stray character)
-
-#: how terminals are named in messages
-_TOKEN_WORDS = {
-    "NAME": "a name",
-    "NUMBER": "a number",
-    "UNIT": "a unit (s, ms, us, ns, Hz, kHz)",
-    "STRING": 'a quoted file name ("...")',
-    "$END": "the end of the file",
-}
+#: error recovery gives a file up after this many errors per syntax error it may report (the errors on
+#: one line are reported once): with the default limit of 20 reported errors, 1,000 recoveries in all
+RECOVERIES_PER_SYNTAX_ERROR = 50
 
 
-@functools.lru_cache(maxsize=1)
-def grammar_text() -> str:
-    return data_text("grammar", "verify.lark")
+def recovery_limit(limits: Limits) -> int:
+    """The errors error recovery recovers from in one file before it gives the file up."""
+    return limits.syntax_errors * RECOVERIES_PER_SYNTAX_ERROR
 
 
-class _WholeWords(PostLex):
-    """Gives the contextual lexer NAME in every state, so that keywords are whole words.
+class Recovered(NamedTuple):
+    """What ``recover`` made of a text: its tree (None after a syntax error) and, after one, the tree
+    recovery built with placeholders for what was missing (None when it made nothing of the text)."""
 
-    Lark's contextual lexer lexes each parser state with the terminals that state accepts; in a state
-    that accepts keywords but no name, a keyword would match the start of a longer word (``outx`` as
-    ``out`` + ``x``). With NAME always in, a word is matched whole and is a keyword only if it is exactly
-    one that the state accepts (Lark's embedding of keywords into NAME); otherwise it is a NAME, which
-    such a state rejects with an error naming the word. The fast path (``verify.frontend.lalr``) lexes words the
-    same way. The tokens themselves pass through unchanged."""
-
-    always_accept = ("NAME",)
-
-    def process(self, stream: Iterator[Token]) -> Iterator[Token]:
-        budget = _TOKEN_BUDGET.get()
-        if budget is None:
-            return stream
-        return budget.count(stream)
+    module: s.Module | None
+    partial: s.Module | None
 
 
-class _TokenBudget:
-    """The tokens one parse may still lex (``Limits.tokens``), across the restarts of error recovery."""
+@dataclass(frozen=True)
+class _Notes:
+    """What recovery learnt about one syntax error for its report: the terminals the parser really accepts
+    there (None: asked at the report), a keyword glued to the word after it, the unit a misspelt one was
+    read as (and whether to suggest it), and the symbol inserted to go on."""
 
-    def __init__(self, limit: int):
-        self.left = limit
-
-    def count(self, stream: Iterator[Token]) -> Iterator[Token]:
-        for tok in stream:
-            self.left -= 1
-            if self.left < 0:
-                # (a lexed token has its line and column)
-                raise TooManyTokens(position(tok.line, tok.column))  # type: ignore[arg-type]
-            yield tok
-
-
-_TOKEN_BUDGET: contextvars.ContextVar[_TokenBudget | None] = contextvars.ContextVar("token_budget", default=None)
-
-
-@contextlib.contextmanager
-def counting_tokens(limit: int) -> Iterator[None]:
-    """Within the block, a parse by ``_parser()`` raises ``TooManyTokens`` at its ``limit + 1``-th token."""
-    reset = _TOKEN_BUDGET.set(_TokenBudget(limit))
-    try:
-        yield
-    finally:
-        _TOKEN_BUDGET.reset(reset)
-
-
-@functools.lru_cache(maxsize=1)
-def _parser() -> Lark:
-    """The parser; its tables are built once per Lark release and kept in ``_cache_file()`` (Lark's
-    cache: a later process loads them in a tenth of the time it takes to build them)."""
-    return Lark(grammar_text(), parser="lalr", lexer="contextual", propagate_positions=True,
-                postlex=_WholeWords(), cache=_cache_file())
-
-
-def _cache_file() -> str | bool:
-    """The file for Lark's cache of the parser tables, or False (no cache) when there is no directory
-    that only this user can write: Lark stores the tables with ``pickle``, so a file that another user
-    could have written is never read. Lark checks the grammar, its options, its own release and
-    Python's against the file's and builds the tables afresh on any difference."""
-    import lark
-
-    directory = private_cache_dir()
-    if directory is None:
-        return False
-    path = os.path.join(directory, f"lark-{lark.__version__}-parser.cache")
-    clear_if_not_regular(path)  # (Lark opens the file itself: never a FIFO it would wait on, never a link)
-    return path
-
-
-@functools.lru_cache(maxsize=1)
-def _literal_words() -> dict[str, str]:
-    words = {}
-    for term in _parser().terminals:
-        if term.pattern.type == "str":
-            words[term.name] = f"'{term.pattern.value}'"
-    return words
-
-
-def describe_token_type(name: str) -> str:
-    return _TOKEN_WORDS.get(name) or _literal_words().get(name) or name.lower()
+    accepted: set[str] | None = None
+    glued: tuple[str, Token, Token] | None = None
+    unit: tuple[str, bool] | None = None
+    inserted: str | None = None
 
 
 def _describe_expected(names: Iterable[str]) -> str:
@@ -168,16 +99,10 @@ def _number_before(text: str, token: Token) -> tuple[str, tuple[int, int, int, i
 
 
 @functools.lru_cache(maxsize=1)
-def _keyword_terminals() -> dict[str, str]:
-    """keyword -> its terminal (the literals that are words)."""
-    return {w[1:-1]: n for n, w in _literal_words().items() if re.fullmatch(r"'[A-Za-z_]\w*'", w)}
-
-
-@functools.lru_cache(maxsize=1)
 def _punct_terminals() -> list[tuple[str, str]]:
     """(literal, terminal) for the punctuation literals, longest first (as Lark's lexer tries them)."""
-    kws = set(_keyword_terminals().values())
-    return sorted(((w[1:-1], n) for n, w in _literal_words().items() if n not in kws),
+    kws = set(keyword_terminals().values())
+    return sorted(((w[1:-1], n) for n, w in literal_words().items() if n not in kws),
                   key=lambda p: (-len(p[0]), p[0]))
 
 
@@ -191,9 +116,9 @@ def _next_types(text: str, pos: int) -> list[str]:
     feeds."""
     if pos >= len(text):
         return ["$END"]
-    if m := _WORD_RE.match(text, pos):
+    if m := WORD_RE.match(text, pos):
         word = m.group(0)
-        kinds = [_keyword_terminals()[word]] if word in _keyword_terminals() else []
+        kinds = [keyword_terminals()[word]] if word in keyword_terminals() else []
         return kinds + (["UNIT"] if word in _UNITS else []) + ["NAME"]
     if _NUMBER_RE.match(text, pos):
         return ["NUMBER"]
@@ -210,11 +135,12 @@ def _lookahead(text: str, pos: int, count: int = 2) -> list[list[Token]]:
     combination of alternatives, or fewer lexemes where the text ends or a lexeme is not recognised."""
     combos: list[list[Token]] = [[]]
     for _ in range(count):
-        pos = _SKIP.match(text, pos).end()  # type: ignore[union-attr]  # (it matches the empty string)
+        skipped = SKIP_RE.match(text, pos)
+        pos = skipped.end() if skipped is not None else pos  # (it matches the empty string)
         kinds = _next_types(text, pos)
         if not kinds:
             break
-        m = _WORD_RE.match(text, pos) or _NUMBER_RE.match(text, pos)
+        m = WORD_RE.match(text, pos) or _NUMBER_RE.match(text, pos)
         length = len(m.group(0)) if m else 1
         combos = [c + [Token(k, "")] for c in combos for k in kinds]
         if kinds == ["$END"]:
@@ -259,14 +185,14 @@ def _glued_keyword(err: UnexpectedToken, text: str) -> tuple[str, Token, Token] 
     if parser is None or tok.type != "NAME" or tok.start_pos is None:
         return None
     word = str(tok)
-    keywords = _keyword_terminals()
+    keywords = keyword_terminals()
     candidates = sorted((kw for kw, name in keywords.items()
                          if name in (err.expected or ()) and len(word) > len(kw) and word.startswith(kw)),
                         key=len, reverse=True)
     ahead = _lookahead(text, tok.end_pos) if candidates else []
     for kw in candidates:
         rest = word[len(kw):]
-        kind = "NAME" if _WORD_RE.fullmatch(rest) else "NUMBER" if rest.isdigit() else None
+        kind = "NAME" if WORD_RE.fullmatch(rest) else "NUMBER" if rest.isdigit() else None
         if kind is None:
             continue
         head = Token(keywords[kw], kw, start_pos=tok.start_pos, line=tok.line, column=tok.column,
@@ -294,10 +220,10 @@ def _edit_distance(a: str, b: str) -> int:
 
 def _misspelt_keyword(word: str, accepted: set[str]) -> str | None:
     """The accepted keyword ``word`` is a likely misspelling of (``compnent``, ``priorty``), or None."""
-    if not _WORD_RE.fullmatch(word):
+    if not WORD_RE.fullmatch(word):
         return None
     best = None
-    for kw, name in _keyword_terminals().items():
+    for kw, name in keyword_terminals().items():
         if name not in accepted or kw == word or abs(len(word) - len(kw)) > 2:  # (the distance is at least that)
             continue
         dist = _edit_distance(word.lower(), kw)
@@ -320,16 +246,16 @@ def _syntax_help(expected: set[str], token: Token, glued: tuple[str, Token, Toke
     near = _misspelt_keyword(word, expected)
     if near is not None:
         return f"did you mean `{near}`?"
-    if "NAME" in expected and token.type != "NAME" and _WORD_RE.fullmatch(word):
+    if "NAME" in expected and token.type != "NAME" and WORD_RE.fullmatch(word):
         return f"`{token}` is a keyword of the language; choose another name"
     if "RBRACE" in expected and token.type == "$END":
         return "a `}` is missing: every `{` needs its `}`"
     if token.type == "$END":
         return f"the file ends too early: complete the declaration with {_describe_expected(expected)}"
-    keywords = _keyword_terminals()
+    keywords = keyword_terminals()
     if repair is not None and repair not in keywords.values():  # a missing symbol that recovery supplied
         return f"insert {describe_token_type(repair)} before {_describe_found(token)}"
-    if _WORD_RE.fullmatch(word) and any(n in keywords.values() for n in expected):
+    if WORD_RE.fullmatch(word) and any(n in keywords.values() for n in expected):
         if word in keywords:
             return (f"`{word}` cannot stand here: it belongs to another kind of declaration; "
                     f"specs/language.md gives the syntax of each")
@@ -422,12 +348,12 @@ def _nested_comment_before(text: str, tok: Token) -> tuple[int, int, int] | None
     return outer, inner, close
 
 
-def _report_unexpected(sink: DiagnosticSink, path: str, err: UnexpectedInput, text: str) -> None:
+def _report_unexpected(sink: DiagnosticSink, path: str, err: UnexpectedInput, text: str, notes: _Notes) -> None:
     if isinstance(err, UnexpectedToken):
-        expected = getattr(err, "verify_accepted", None)
+        expected = notes.accepted
         if expected is None:
             expected = _accepted(err)
-        glued = getattr(err, "verify_glued", None)
+        glued = notes.glued
         span = token_span(path, err.token)
         if err.token.type == "$END":
             span = _end_span(path, text)
@@ -444,7 +370,7 @@ def _report_unexpected(sink: DiagnosticSink, path: str, err: UnexpectedInput, te
             sink.emit("E001", f"unknown unit `{err.token}`: units are case-sensitive", span, "not a unit",
                       help=f"write `{unit}`")
             return
-        meant = getattr(err, "verify_unit", None)
+        meant = notes.unit
         if number is not None and meant is not None:
             close, sure = meant
             sink.emit("E001", f"unknown unit `{err.token}`" + (f"; did you mean `{close}`?" if sure else ""),
@@ -470,7 +396,7 @@ def _report_unexpected(sink: DiagnosticSink, path: str, err: UnexpectedInput, te
             f"expected {_describe_expected(expected)}, found {_describe_found(err.token)}",
             span,
             "unexpected here",
-            help=_syntax_help(expected, err.token, glued, getattr(err, "verify_inserted", None)),
+            help=_syntax_help(expected, err.token, glued, notes.inserted),
         )
     elif isinstance(err, UnexpectedCharacters):
         pos = cast(int, err.pos_in_stream)  # (Lark declares it None in UnexpectedInput; this subclass sets it)
@@ -489,14 +415,14 @@ def _report_unexpected(sink: DiagnosticSink, path: str, err: UnexpectedInput, te
                       help="times, frequencies and priorities are non-negative: remove the `-`")
             return
         shown = repr(ch)[1:-1] if ch.isprintable() else f"U+{ord(ch):04X}" if ch else "end of file"
-        allowed = getattr(err, "verify_accepted", None)
+        allowed = notes.accepted
         if allowed is None:
             allowed = _accepted(err)
         msg = f"unexpected character '{shown}'"
         # (a long list says little about this place: a character is rarely a misspelt word)
         if allowed and len(allowed) <= MAX_EXPECTED_SHOWN:
             msg += f"; expected {_describe_expected(allowed)}"
-        near = sorted(w for n in allowed if (w := _literal_words().get(n, "")[1:-1]) and ch and w.startswith(ch))
+        near = sorted(w for n in allowed if (w := literal_words().get(n, "")[1:-1]) and ch and w.startswith(ch))
         help = (f"did you mean `{near[0]}`?" if near
                 else "remove it; comments start with `//` or are enclosed in `/* */`")
         sink.emit("E002", msg, span, "not part of the language", help=help)
@@ -508,8 +434,8 @@ def _report_unexpected(sink: DiagnosticSink, path: str, err: UnexpectedInput, te
 _INSERTION_ORDER = ("UNIT", "COLON", "NAME", "NUMBER", "RBRACE")
 
 
-def _repair(err: UnexpectedToken, text: str) -> None:
-    """Error recovery: the smallest edit after which the parser goes on.
+def _repair(err: UnexpectedToken, text: str, notes: _Notes) -> _Notes:
+    """Error recovery: the smallest edit after which the parser goes on; ``notes`` with what it did.
 
     In order: a keyword glued to the next word is split (``outx`` read as ``out x``); the one expected
     symbol after which the offending token fits is inserted (a missing unit, colon or brace); a
@@ -521,30 +447,28 @@ def _repair(err: UnexpectedToken, text: str) -> None:
     slip from cascading into many reports.
     """
     parser = err.interactive_parser
-    glued = getattr(err, "verify_glued", None)
+    glued = notes.glued
     if glued is not None:  # `outx : T`: go on as if it read `out x : T`
         parser.feed_token(glued[1])
         parser.feed_token(glued[2])
-        return
+        return notes
     unit = _unit_in_other_case(err.token) if "UNIT" in (err.expected or ()) else None
     if unit is not None:  # `50 hz`: go on as if it read `50 Hz`
         parser.feed_token(Token("UNIT", unit, line=err.token.line, column=err.token.column))
-        return
+        return notes
     meant = _unit_meant(err.token) if "UNIT" in (err.expected or ()) else None
     if meant is not None and err.token.end_pos is not None:  # `50 mss`, `50 sec`: as if it read a unit ...
         unit_token = Token("UNIT", meant[0], line=err.token.line, column=err.token.column)
         if _fits(parser, [unit_token], _lookahead(text, err.token.end_pos)):  # ... if what follows fits then
-            err.verify_unit = meant  # type: ignore[attr-defined]  # (ours, read back with getattr)
             parser.feed_token(unit_token)
-            return
-    keywords = _keyword_terminals()
+            return replace(notes, unit=meant)
+    keywords = keyword_terminals()
     keyword_names = set(keywords.values())
     expected = sorted(err.expected or (), key=lambda n: (n not in _INSERTION_ORDER,
                                                          _INSERTION_ORDER.index(n) if n in _INSERTION_ORDER else 0, n))
     inserted = _insert_one(parser, err.token, [n for n in expected if n not in keyword_names])
     if inserted is not None:
-        err.verify_inserted = inserted  # type: ignore[attr-defined]  # (ours, read back with getattr)
-        return
+        return replace(notes, inserted=inserted)
     tok = err.token
     if tok.type == "NAME" and tok.end_pos is not None:
         ahead = _lookahead(text, tok.end_pos)
@@ -552,7 +476,7 @@ def _repair(err: UnexpectedToken, text: str) -> None:
         keyword = Token(keywords[near], near, line=tok.line, column=tok.column) if near else None
         if keyword is not None and _fits(parser, [keyword], ahead):  # replace the misspelt word
             parser.feed_token(keyword)
-            return
+            return notes
         candidates = sorted((k for k, n in keywords.items() if n in expected),
                             key=lambda k: (_edit_distance(str(tok).lower(), k), k))
         for kw in candidates:  # a keyword before it, after which the rest fits
@@ -560,13 +484,14 @@ def _repair(err: UnexpectedToken, text: str) -> None:
             if _fits(parser, [keyword, tok], ahead):
                 parser.feed_token(keyword)
                 parser.feed_token(tok)
-                return
+                return notes
         for kw in candidates:  # the closest keyword instead of it (`output x : T` read as `out x : T`)
             keyword = Token(keywords[kw], kw, line=tok.line, column=tok.column)
             if _fits(parser, [keyword], ahead):
                 parser.feed_token(keyword)
-                return
+                return notes
     _insert_one(parser, err.token, [n for n in expected if n in keyword_names])
+    return notes
 
 
 def _insert_one(parser: InteractiveParser, token: Token, names: list[str]) -> str | None:
@@ -596,7 +521,7 @@ def _skip_unterminated_string(err: UnexpectedCharacters, text: str) -> None:
 
 
 def _placeholder(name: str) -> str:
-    return {"UNIT": "ms", "NAME": "_", "NUMBER": "0", "STRING": '""'}.get(name) or _literal_words().get(
+    return {"UNIT": "ms", "NAME": "_", "NUMBER": "0", "STRING": '""'}.get(name) or literal_words().get(
         name, "'_'")[1:-1]
 
 
@@ -606,14 +531,128 @@ def _end_span(path: str, text: str) -> Span:
     return Span(path, line, col, line, col + 1)
 
 
-def expected_keywords(text: str) -> list[str]:
-    """The keywords the grammar accepts right after ``text`` (an editor's completion), sorted; every
-    keyword when ``text`` does not parse up to its end."""
+def recover(text: str, path: str, sink: DiagnosticSink, limits: Limits = DEFAULT_LIMITS) -> Recovered:
+    """Parse ``text`` (the contents of file ``path``) with error recovery: (the tree, None) of a text
+    without syntax errors; else (None, the partial tree), what recovery made of the text, completed at its
+    end where it stops early (best effort: None when even that fails). Syntax errors go to ``sink``;
+    recovery stops within ``recovery_limit(limits)`` repairs, and at the first error of a text that is not
+    a model."""
+    state = _Recovery(text, limits)
+    too_many = None
+    tree: Tree[Token] | None
     try:
-        interactive = _parser().parse_interactive(text)
-        interactive.exhaust_lexer()
-        accepted = interactive.accepts()  # type: ignore[no-untyped-call]  # (Lark leaves it unannotated)
-    except (UnexpectedInput, LarkError):
-        return sorted(_keyword_terminals())
-    words = {terminal: word for word, terminal in _keyword_terminals().items()}
-    return sorted(words[t] for t in accepted if t in words)
+        with counting_tokens(limits.tokens):
+            tree = lark_parser().parse(text, on_error=state.on_error)
+    except UnexpectedInput as err:
+        if not state.errors or getattr(err, "line", None) != state.last_line:
+            seen = state.last is not None and state.last[0] is err
+            state.errors.append((err, state.last[1] if state.last is not None and seen else _Notes()))
+        tree = state.completed
+    except TooManyTokens as err:
+        too_many, tree = err, None
+    for error, notes in state.errors:
+        _report_unexpected(sink, path, error, text, notes)
+    if too_many is not None:
+        sink.add(too_many_tokens(path, too_many.at, limits))
+    if state.errors or tree is None:
+        return Recovered(None, _partial(tree, path, limits))
+    try:
+        return Recovered(TreeBuilder(path, sink, limits).transform(tree), None)
+    except NumberError:
+        return Recovered(None, None)
+
+
+class _Recovery:
+    """One recovering parse: Lark calls ``on_error`` at each syntax error; it records the error to report
+    (one per line: a repair often trips the very next token too) with its notes, repairs, and says whether
+    to go on. Every error recovered from counts, so that recovery stops within ``recovery_limit`` repairs
+    on any text; a text that is not a model reports only its first error, so recovery stops there."""
+
+    def __init__(self, text: str, limits: Limits) -> None:
+        self.text = text
+        self.limits = limits
+        self.errors: list[tuple[UnexpectedInput, _Notes]] = []  # the errors to report
+        self.last: tuple[UnexpectedInput, _Notes] | None = None  # the error seen last, with its notes
+        self.last_line = -1
+        self.recoveries = 0
+        self.most = recovery_limit(limits) if looks_like_model(text) else 1
+        self.completed: Tree[Token] | None = None  # the tree completed where recovery gave up
+
+    def give_up(self, err: UnexpectedInput) -> bool:
+        self.completed = _complete_at_end(err)
+        return False
+
+    def on_error(self, err: UnexpectedInput) -> bool:
+        text = self.text
+        line = getattr(err, "line", -1)
+        at_end = isinstance(err, UnexpectedToken) and err.token.type == "$END"
+        notes = _Notes()
+        if isinstance(err, UnexpectedToken):
+            tok = err.token
+            keywords = keyword_terminals()
+            if tok.type == "NAME" and str(tok) in keywords:
+                # a state that does not accept it lexes a keyword as a NAME (``WholeWords``): recovery
+                # and messages treat it as the keyword it is, as Lark's root lexer would
+                err.token = Token.new_borrow_pos(keywords[str(tok)], str(tok), tok)
+            notes = _Notes(glued=_glued_keyword(err, text))  # (before the repair changes the parser)
+        reported = line != self.last_line or at_end
+        if reported:
+            notes = replace(notes, accepted=_accepted(err))
+            self.errors.append((err, notes))
+            self.last_line = line
+        self.last = (err, notes)
+        if isinstance(err, UnexpectedToken):
+            if err.token.type == "$END":
+                return self.give_up(err)
+            notes = _repair(err, text, notes)
+            self.last = (err, notes)
+            if reported:
+                self.errors[-1] = (err, notes)
+        elif isinstance(err, UnexpectedCharacters):
+            if text.startswith("/*", err.pos_in_stream):
+                return self.give_up(err)  # an unterminated comment: the rest of the file is its text
+            if text.startswith('"', err.pos_in_stream):
+                _skip_unterminated_string(err, text)
+        self.recoveries += 1
+        return (len(self.errors) < self.limits.syntax_errors and self.recoveries < self.most) or self.give_up(err)
+
+
+#: the terminals a completion at the end of the text inserts first (a closing brace, then what a
+#: clause most often lacks)
+_COMPLETION_ORDER = ("RBRACE", "NAME", "NUMBER", "UNIT", "STRING")
+
+
+def _complete_at_end(err: UnexpectedInput) -> Tree[Token] | None:
+    """The tree the parser at ``err`` reaches when the text ends there, after inserting placeholder
+    tokens (a missing ``}``, a name, a number ...) until the end is accepted; None if it cannot."""
+    parser = getattr(err, "interactive_parser", None)
+    if parser is None:
+        return None
+    # (the parser itself: it is given up after this; a copy would share its values, and a deep copy of a
+    # token drops its end position)
+    where = err.token if isinstance(err, UnexpectedToken) else None
+    line, column = getattr(err, "line", 1) or 1, getattr(err, "column", 1) or 1
+    try:
+        for _ in range(64):
+            accepted = parser.accepts()
+            if "$END" in accepted:
+                return cast("Tree[Token]", parser.feed_eof(where))  # (the tree of the start rule)
+            pick = next((n for n in _COMPLETION_ORDER if n in accepted), None) or min(accepted, default=None)
+            if pick is None:
+                return None
+            parser.feed_token(Token(pick, _placeholder(pick), line=line, column=column, end_line=line,
+                                    end_column=column))
+    except UnexpectedInput:
+        return None
+    return None
+
+
+def _partial(tree: Tree[Token] | None, path: str, limits: Limits) -> s.Module | None:
+    """The syntax tree of a recovered Lark tree (placeholders included), or None."""
+    if tree is None:
+        return None
+    try:
+        module: s.Module = TreeBuilder(path, DiagnosticSink(), limits).transform(tree)
+        return module
+    except Exception:  # best effort: a tree recovery made need not build (an impossible number, ...)
+        return None

@@ -53,15 +53,36 @@ LEXICAL_SHAPE = {  # (Lark writes white space into its patterns as the character
     "UNIT": r"(kHz|Hz|ms|us|ns|s)(?![A-Za-z0-9_])",
 }
 UNIT_WORDS = frozenset({"kHz", "Hz", "ms", "us", "ns", "s"})
-#: white space and comments; a word (also used by the error path, ``verify.frontend.larkparse``)
-_SKIP = re.compile(r"(?:\s+|//[^\n]*|/\*[\s\S]*?\*/)*")
-_WORD_RE = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+#: white space and comments; a word (also used by error recovery, ``verify.frontend.recovery``)
+SKIP_RE = re.compile(r"(?:\s+|//[^\n]*|/\*[\s\S]*?\*/)*")
+WORD_RE = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 _WORD, _NUMBER, _PUNCT, _STRING = 1, 2, 3, 4
 
 
 def position(line: int, column: int) -> int:
     """A line and a column in one integer: ``pos >> 32`` is the line, ``pos & 0xFFFFFFFF`` the column."""
     return line << 32 | column
+
+
+#: the words a model file can start with (``start: item*``, each item opened by one of them)
+_FIRST_WORDS = frozenset({"import", "component", "system", "message"})
+
+
+def looks_like_model(text: str) -> bool:
+    """The first word of ``text`` (after white space and comments) can start a model, or it has none."""
+    if text.startswith("\ufeff"):
+        text = text[1:]
+    skipped = SKIP_RE.match(text)
+    pos = skipped.end() if skipped is not None else 0  # (it matches the empty string)
+    if pos >= len(text):
+        return True
+    word = WORD_RE.match(text, pos)
+    return word is not None and word.group(0) in _FIRST_WORDS
+
+
+def _no_callback(start: int | None, end: int | None, children: Any) -> Any:
+    """The callback slot of a rule whose value no callback builds (never called)."""
+    raise AssertionError("a rule without a callback was built")
 
 
 class Unparsable(Exception):
@@ -200,6 +221,8 @@ class FastParser:
     @classmethod
     def build(cls, lark: Lark) -> FastParser | None:
         """The fast path for a Lark LALR parser, or None if its grammar is not the shape it handles."""
+        from lark.grammar import Terminal
+
         try:
             table = lark.parser.parser.parser.parse_table
         except AttributeError:  # pragma: no cover - another Lark version
@@ -239,7 +262,7 @@ class FastParser:
                 return None
             kept: list[tuple[int, bool]] = []
             for i, sym in enumerate(rule.expansion):
-                if not (sym.is_term and sym.filter_out):  # type: ignore[attr-defined]  # (a terminal has it)
+                if not (isinstance(sym, Terminal) and sym.filter_out):
                     kept.append((i, not sym.is_term and sym.name.startswith("_")))
             include = tuple(kept)
             size = len(rule.expansion)
@@ -281,7 +304,7 @@ class FastParser:
         since every token has a character)."""
         rows, rules, keywords, punct = self.rows, self.rules, self.keywords, self.punct
         token_value = tokens.get
-        build = [None if name is None else callbacks[name] for name in self.names]
+        build = [_no_callback if name is None else callbacks[name] for name in self.names]
         match = self.lexeme.match
         end_state = self.end
         stack = [self.start]  # parser states
@@ -375,7 +398,7 @@ class FastParser:
                     children, first, last = [], None, None
                 if mode == _NODE or (mode == _EXPAND1 and len(children) != 1):
                     # (a _NODE or _EXPAND1 rule has a name, so a callback)
-                    node = build[~code](first, last, children)  # type: ignore[misc]
+                    node = build[~code](first, last, children)
                 elif mode == _INLINE:
                     node = children
                 else:
