@@ -43,7 +43,8 @@ from ..model.system import ChainModel, HopModel, LinkModel, SystemModel, TaskMod
 from ..model.units import fmt_time
 from .rates import ActivationInfo, EventModel, arrival_model, combine_and, exact_sum
 from .multithreaded import may_overlap
-from .rta import TaskResponse, cooperative_counts, interferer, least_fixed_point
+from .kernel import TaskResponse, interferer, least_fixed_point
+from .rta import cooperative_counts
 
 ZERO = Fraction(0)
 

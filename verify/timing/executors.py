@@ -37,7 +37,8 @@ from ..model.system import ExecutorModel, SystemModel, TaskModel
 from .multithreaded import Workers, multi_threaded_response
 from .rates import EventModel
 from ..core.timebase import TimeBase
-from .rta import MAX_JOBS, MAX_STEPS, Interferer, TaskResponse, bcrt, deadline_of, interferer, least_fixed_point, ratio
+from .kernel import (MAX_JOBS, MAX_STEPS, Interferer, TaskResponse, bcrt, deadline_of, interferer, least_fixed_point,
+                     ratio)
 
 ZERO = Fraction(0)
 

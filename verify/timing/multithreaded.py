@@ -39,7 +39,7 @@ from fractions import Fraction
 
 from ..model.system import ExecutorModel, SystemModel, TaskModel
 from .rates import EventModel
-from .rta import MAX_STEPS, Interferer, TaskResponse, bcrt, deadline_of, interferer, ratio
+from .kernel import MAX_STEPS, Interferer, TaskResponse, bcrt, deadline_of, interferer, ratio
 
 ZERO = Fraction(0)
 
