@@ -31,7 +31,8 @@ from .refine import refine, verdict as refined_verdict
 from .exact import (SEARCH_EVENTS, Budget, ExactResult, Extreme, Goal, approach, count_representatives,
                     enumerate_exact, SearchResult, exact_class, first_scenarios, grid_of, search, search_horizon)
 from .parallel import ordered_map, resolve_workers
-from .scenario import ConcreteScenario, Measured, ResponseSample, Target, measure, replay
+from .measure import measure
+from .scenario import ConcreteScenario, Measured, ResponseSample, Target, replay
 from .verdict import Counterexample, ProofResult, Verdict
 from ..core.budgets import PROVE_BUDGET, PROVE_RLIMIT
 

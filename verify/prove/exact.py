@@ -28,7 +28,8 @@ from ..model.system import SystemModel, TaskModel
 from .sim import Sample, SimulationError
 from .parallel import ordered_map, resolve_workers
 from ..core.timebase import TimeBase, ceil_to, floor_to
-from .scenario import ConcreteScenario, Measured, ResponseSample, Target, hyperperiod, measure, measure_periodic
+from .measure import measure, measure_periodic
+from .scenario import ConcreteScenario, Measured, ResponseSample, Target, hyperperiod
 
 ZERO = Fraction(0)
 

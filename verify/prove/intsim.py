@@ -23,7 +23,7 @@ import heapq
 from bisect import bisect_left
 from collections.abc import Callable, Iterable, Sequence
 from fractions import Fraction
-from typing import TYPE_CHECKING, Protocol, TypeAlias
+from typing import Protocol, TypeAlias
 
 from ..model.system import ChainModel, LinkModel, SystemModel, TaskModel
 from .sim import (
@@ -31,11 +31,8 @@ from .sim import (
     executor_cores, snapshot_rank
 )
 from ..core.timebase import TimeBase
-
-if TYPE_CHECKING:
-    from .scenario import ConcreteScenario, Extremes, Measured, ResponseSample, Target, TimingState
-
-_ARRIVAL, _RELEASE = 1, 2  # heap phases, as in verify.prove.sim
+from .jobs import ARRIVAL, RELEASE, Job
+from .scenario import ConcreteScenario, Extremes, Measured, ResponseSample, Target, TimingState
 
 #: a message: (connection, index, writer task, writer job)
 _Msg: TypeAlias = "tuple[int, int, int, int]"
@@ -47,27 +44,9 @@ _Event: TypeAlias = "tuple[int, int, int, int | _Msg]"
 IntSample: TypeAlias = "tuple[int, int, int, int, int, int]"
 
 
-class _Job:
-    __slots__ = ("task", "index", "release", "remaining", "start", "finish", "reads", "key", "cost", "core")
-
-    task: int
-    index: int
-    release: int
-    remaining: int
-    start: int | None
-    finish: int | None
-    reads: tuple[_Msg | None, ...] | None
-    key: _Key
-    cost: int
-
-    def __init__(self, task: int, index: int, release: int, exec_time: int, key: _Key):
-        self.task, self.index, self.release, self.remaining = task, index, release, exec_time
-        self.cost = exec_time
-        self.start = self.finish = None
-        self.reads = None
-        self.key = key
-        self.core = -1  # a callback's worker core, once started
-
+#: a job of this simulator: its task by index, times in ticks, the messages (or None) of its task's
+#: read ports in ``read_ports`` order once it has started, its core by index (−1 until a callback starts)
+IntJob: TypeAlias = Job[int, int, "tuple[_Msg | None, ...] | None", int]
 
 
 class IntSimulator:
@@ -144,10 +123,10 @@ class IntSimulator:
         self._init_executors(model, cores)
         self.now = self.events = self.seq = 0
         self.heap: list[_Event] = []
-        self.jobs: list[list[_Job]] = [[] for _ in tasks]
-        self.ready: list[list[tuple[_Key, _Job]]] = [[] for _ in cores]  # heaps of (rank, job)
-        self.running: list[_Job | None] = [None] * len(cores)
-        self.holder: dict[str, _Job] = {}
+        self.jobs: list[list[IntJob]] = [[] for _ in tasks]
+        self.ready: list[list[tuple[_Key, IntJob]]] = [[] for _ in cores]  # heaps of (rank, job)
+        self.running: list[IntJob | None] = [None] * len(cores)
+        self.holder: dict[str, IntJob] = {}
         self.registers: dict[str, _Msg] = {}
         self.sent = [0] * len(self.links)
         self.last_arrival: dict[int, int] = {}
@@ -168,17 +147,17 @@ class IntSimulator:
         self.snap_rank = [snapshot_rank(t, executors[names[t.executor]]) if t.executor is not None else 0
                           for t in model.tasks]
         self.polls = [e.polls for e in executors]
-        self.ex_pending: list[list[_Job]] = [[] for _ in executors]
-        self.ex_snapshot: list[list[_Job]] = [[] for _ in executors]
+        self.ex_pending: list[list[IntJob]] = [[] for _ in executors]
+        self.ex_snapshot: list[list[IntJob]] = [[] for _ in executors]
         self.ex_workers = [[cores.index(c) for c in e.workers] for e in executors]
-        self.ex_running: list[dict[int, _Job | None]] = [dict.fromkeys(w) for w in self.ex_workers]
+        self.ex_running: list[dict[int, IntJob | None]] = [dict.fromkeys(w) for w in self.ex_workers]
         self.ex_exclusive = [{self.index_of[tid]: g for tid, g in exclusive_groups(model, e).items()}
                              for e in executors]
         self.threads: list[list[int]] = [[n for n, w in enumerate(self.ex_workers) if core in w]
                                          for core in range(len(cores))]
         self.released = [0] * len(model.tasks)
 
-    def _head(self, e: int, core: int) -> _Job | None:
+    def _head(self, e: int, core: int) -> IntJob | None:
         """The job executor ``e``'s worker on ``core`` runs when it gets its core
         (``verify.prove.sim._Executor.head``)."""
         current = self.ex_running[e][core]
@@ -195,16 +174,16 @@ class IntSimulator:
         return next((j for j in snapshot if self._takeable(e, j)), None) or min(
             (j for j in pending if self._takeable(e, j)), key=self._snap_key, default=None)
 
-    def _takeable(self, e: int, job: _Job) -> bool:
+    def _takeable(self, e: int, job: IntJob) -> bool:
         exclusive = self.ex_exclusive[e]
         group = exclusive.get(job.task)
         return group is None or not any(j is not None and exclusive.get(j.task) == group
                                         for j in self.ex_running[e].values())
 
-    def _snap_key(self, job: _Job) -> tuple[int, int, int]:
+    def _snap_key(self, job: IntJob) -> tuple[int, int, int]:
         return self.snap_rank[job.task], job.task, job.index
 
-    def _take(self, e: int, job: _Job, core: int) -> None:
+    def _take(self, e: int, job: IntJob, core: int) -> None:
         """Executor ``e``'s worker on ``core`` starts ``job``, polling first if no entry of its snapshot
         can be taken."""
         if self.polls[e]:
@@ -251,7 +230,7 @@ class IntSimulator:
             else:
                 self.gap[i] = base.ticks(low)
                 self.gap_pattern[i] = _pattern(interarrivals.get(t.id), act.gaps, base)
-            self._push(base.ticks(phase), _RELEASE, i)
+            self._push(base.ticks(phase), RELEASE, i)
         elif act.trigger_port is not None:
             c = counters.get(t.id, 0)
             if not 0 <= c < act.release_every:
@@ -296,7 +275,7 @@ class IntSimulator:
                 break
             # advance, then complete every running job that is done (in task order)
             d = nxt - now
-            due: list[_Job] | None = None
+            due: list[IntJob] | None = None
             for job in running:
                 if job is not None:
                     job.remaining -= d
@@ -309,10 +288,10 @@ class IntSimulator:
                 for job in due:
                     self._count()
                     self._complete(job)
-            while heap and heap[0][0] == nxt and heap[0][1] == _ARRIVAL:
+            while heap and heap[0][0] == nxt and heap[0][1] == ARRIVAL:
                 self._count()
                 self._arrive(pop(heap)[3])  # type: ignore[arg-type]  # an arrival carries its message
-            while heap and heap[0][0] == nxt and heap[0][1] == _RELEASE:
+            while heap and heap[0][0] == nxt and heap[0][1] == RELEASE:
                 self._count()
                 self._timed_release(pop(heap)[3])  # type: ignore[arg-type]  # a release its task
             self._dispatch()
@@ -327,7 +306,7 @@ class IntSimulator:
                 job.remaining -= d
         self.now = t
 
-    def _complete(self, job: _Job) -> None:
+    def _complete(self, job: IntJob) -> None:
         t = job.task
         job.finish = self.now  # (it leaves its core's heap once it reaches the top)
         if self.executor_of[t] >= 0:
@@ -352,7 +331,7 @@ class IntSimulator:
             if last is not None and last > arrival:
                 arrival = last
             self.last_arrival[c] = arrival
-            self._push(arrival, _ARRIVAL, (c, index, t, job.index))
+            self._push(arrival, ARRIVAL, (c, index, t, job.index))
 
     def _arrive(self, msg: _Msg) -> None:
         port = self.target[msg[0]]
@@ -377,7 +356,7 @@ class IntSimulator:
         self._release(t)
         period = self.period[t]
         if period is not None:
-            self._push(self.now + period, _RELEASE, t)
+            self._push(self.now + period, RELEASE, t)
             return
         pattern = self.gap_pattern[t]
         if pattern is None:
@@ -386,7 +365,7 @@ class IntSimulator:
             act = self.model.tasks[t].activation
             gap = pattern.at(index, lambda v: f"{self.ids[t]}#{index}: inter-arrival {v} outside "
                                               f"[{act.min_interarrival}, {act.max_interarrival}]")  # type: ignore[union-attr]
-        self._push(self.now + gap, _RELEASE, t)  # type: ignore[operator]  # (a sporadic source has its gap)
+        self._push(self.now + gap, RELEASE, t)  # type: ignore[operator]  # (a sporadic source has its gap)
 
     def _release(self, t: int) -> None:
         self.released[t] += 1
@@ -403,14 +382,14 @@ class IntSimulator:
             cost = pattern.at(index, lambda v: f"{task.id}#{index}: execution time {v} outside "
                                                f"[{task.bcet}, {task.wcet}]")
         key = (-self.prio[t], self.now, t, index)
-        job = _Job(t, index, self.now, cost, key)
+        job: IntJob = Job(t, index, self.now, cost, key, None, -1)
         jobs.append(job)
         if e >= 0:
             self.ex_pending[e].append(job)
         else:
             heapq.heappush(self.ready[self.core[t]], (key, job))
 
-    def _best(self, core: int) -> _Job | None:
+    def _best(self, core: int) -> IntJob | None:
         """The best-ranked eligible job of ``core`` (a cooperative job that has not started is not
         eligible while another job of its instance holds the token)."""
         heap = self.ready[core]
@@ -421,8 +400,8 @@ class IntSimulator:
         job = heap[0][1]
         if not self.coop[job.task] or job.start is not None or self.instance[job.task] not in self.holder:
             return job
-        skipped: list[tuple[_Key, _Job]]
-        best: _Job | None
+        skipped: list[tuple[_Key, IntJob]]
+        best: IntJob | None
         skipped, best = [], None  # rare: ineligible jobs on top
         while heap:
             entry = heapq.heappop(heap)
@@ -444,7 +423,7 @@ class IntSimulator:
         keeps it, now started), so the cores are ranked again only after such a start."""
         running, ready, coop, instance, holder = self.running, self.ready, self.coop, self.instance, self.holder
         pop = heapq.heappop
-        best: _Job | None
+        best: IntJob | None
         rank = True
         while True:
             if rank:
@@ -463,7 +442,7 @@ class IntSimulator:
                         if head is not None and (best is None or head.key < best.key):
                             best = head
                     running[core] = best
-            starting: _Job | None = None
+            starting: IntJob | None = None
             for best in running:
                 if best is not None and best.start is None and (starting is None or best.key < starting.key):
                     starting = best
@@ -473,7 +452,7 @@ class IntSimulator:
             self._start(starting)
             rank = coop[starting.task] or self.executor_of[starting.task] >= 0
 
-    def _start(self, job: _Job) -> None:
+    def _start(self, job: IntJob) -> None:
         t = job.task
         job.start = self.now
         e = self.executor_of[t]
@@ -485,7 +464,7 @@ class IntSimulator:
         if self.coop[t]:
             self.holder[self.instance[t]] = job
 
-    def pending(self, core: int) -> list[_Job]:
+    def pending(self, core: int) -> list[IntJob]:
         """The released, uncompleted jobs of ``core`` (its executors' included)."""
         jobs = [job for _key, job in self.ready[core] if job.finish is None]
         for e in self.threads[core]:
@@ -534,7 +513,7 @@ class IntSimulator:
         ready = tuple(sorted((core, tuple(sorted((j.task, j.release - at, j.remaining, j.start is not None)
                                                  for j in self.pending(core)))) for core in range(self.ncores)))
         holders = tuple(sorted((inst, j.task, j.release - at) for inst, j in self.holder.items()))
-        heap = tuple(sorted((time - at, phase, payload if phase == _RELEASE else payload[0])  # type: ignore[index]
+        heap = tuple(sorted((time - at, phase, payload if phase == RELEASE else payload[0])  # type: ignore[index]
                             for time, phase, _seq, payload in self.heap))
         back = tuple(sorted((k, v - at) for k, v in self.last_arrival.items() if v > at))
         counters = tuple(sorted(self.counter.items()))
@@ -580,7 +559,7 @@ class JobRecords(Protocol):
 
     index_of: dict[str, int]
     read_ports: list[tuple[str, ...]]
-    jobs: list[list[_Job]]
+    jobs: list[list[IntJob]]
 
 
 class ChainSamples:
@@ -601,7 +580,7 @@ class ChainSamples:
         memo: dict[tuple[int, int, int], tuple[int, int] | None] = {}
         port_index: dict[tuple[int, str], int] = {}
 
-        def message(pos: int, job: _Job) -> _Msg | None:
+        def message(pos: int, job: IntJob) -> _Msg | None:
             """What ``job`` (at chain position ``pos`` ≥ 1) read on the hop's in-port, or None."""
             pk = (job.task, hop_port[pos])
             idx = port_index.get(pk)
@@ -610,7 +589,7 @@ class ChainSamples:
                 idx = port_index[pk] = ports.index(hop_port[pos]) if hop_port[pos] in ports else -1
             return None if idx < 0 else job.reads[idx]  # type: ignore[index]  # (it has started)
 
-        def stamp(pos: int, job: _Job) -> tuple[int, int] | None:
+        def stamp(pos: int, job: IntJob) -> tuple[int, int] | None:
             if pos == 0:
                 assert job.start is not None
                 return job.index, job.start
@@ -622,7 +601,7 @@ class ChainSamples:
             memo[key] = value
             return value
 
-        holders: list[tuple[int, int, _Job]] = []
+        holders: list[tuple[int, int, IntJob]] = []
         for job in jobs[last]:
             if job.finish is None:
                 continue
@@ -671,8 +650,8 @@ class ChainSamples:
         return react if kind == "reaction_time" else react_r
 
 
-def _stamp_iterative(stamp: Callable[[int, _Job], tuple[int, int] | None], message: Callable[[int, _Job], _Msg | None],
-                     job: _Job, pos: int, jobs: list[list[_Job]],
+def _stamp_iterative(stamp: Callable[[int, IntJob], tuple[int, int] | None],
+                     message: Callable[[int, IntJob], _Msg | None], job: IntJob, pos: int, jobs: list[list[IntJob]],
                      memo: dict[tuple[int, int, int], tuple[int, int] | None]) -> tuple[int, int] | None:
     """``stamp(pos, job)``, first filling the memo along the chain of writers from the back so
     that the recursion in ``stamp`` is at most one level deep per call."""
@@ -714,8 +693,6 @@ def target_samples(model: SystemModel, scenario: ConcreteScenario, targets: Iter
     """Every sample of each target in the run of ``scenario`` over ``[0, horizon)``, as the reference
     path lists them (``scenario._chain_samples`` of the trace; for a task ``_response_samples`` with
     the jobs still open at the horizon, their value ``horizon − release``)."""
-    from .scenario import ResponseSample
-
     sim = IntSimulator.of(model, scenario, max_events, (scenario.horizon,))
     unit = sim.unit
     horizon = sim.base.ticks(scenario.horizon)
@@ -745,15 +722,13 @@ def _chain_samples_of(sim: IntSimulator, model: SystemModel) -> Callable[[str], 
     return chain_samples
 
 
-def extremes_of(targets: Iterable[Target], unit: Fraction, jobs_of: Callable[[str], list[_Job]],
+def extremes_of(targets: Iterable[Target], unit: Fraction, jobs_of: Callable[[str], list[IntJob]],
                 chain_samples: Callable[[str], ChainSamples],
                 open_until: int | None = None) -> dict[Target, Extremes]:
     """The ``scenario.Extremes`` of each target from integer job records, in seconds: ``jobs_of(task
     id)`` gives a task's jobs, ``chain_samples(chain name)`` a chain's ``ChainSamples``. A job not
     finished is left out, or, with ``open_until`` (ticks), counted with ``open_until − release`` (as
     ``scenario.extremes`` with ``with_open``). Ties go to the earliest sample, as there."""
-    from .scenario import Extremes, ResponseSample
-
     values: dict[Target, Extremes] = {}
     for t in targets:
         if t.kind == "response":
@@ -779,14 +754,12 @@ def extremes_of(targets: Iterable[Target], unit: Fraction, jobs_of: Callable[[st
 
 def measure_prefix(model: SystemModel, scenario: ConcreteScenario, targets: Iterable[Target], max_events: int,
                    event_budget: int | None = None) -> Measured:
-    """``scenario.measure`` on integers: the run of ``scenario`` over ``[0, horizon)`` and the
+    """``measure.measure`` on integers: the run of ``scenario`` over ``[0, horizon)`` and the
     extremes of every target in it, jobs still open at the horizon counted with ``horizon − release``
     (a lower bound on their response). The same run, samples and extremes as the reference path
     ``scenario.measure_reference`` (tests/test_intsim.py compares the two). With ``event_budget``
     the run may end earlier (``IntSimulator.run_to``); the result then holds the scenario with that
     shorter horizon."""
-    from .scenario import Measured
-
     sim = IntSimulator.of(model, scenario, max_events, (scenario.horizon,))
     unit = sim.unit
     horizon = sim.run_to(sim.base.ticks(scenario.horizon), event_budget)

@@ -29,7 +29,8 @@ import z3
 from ..model.system import ChainModel, SystemModel
 from .exact import Budget, Extreme, ExactResult, Grid, exact_class, grid_of, scenario_of
 from ..core.timebase import ceil_to, floor_to
-from .scenario import Measured, Target, measure_periodic
+from .measure import measure_periodic
+from .scenario import Measured, Target
 
 MAX_CELLS = 2_500  # instants × tasks: beyond, bit-blasting alone can outlast any resource limit
 MAX_PERIODS = 8  # hyperperiods tried for the start of the repetition
