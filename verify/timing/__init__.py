@@ -173,7 +173,8 @@ def _bounds(system: SystemModel, variant: str
                        tuple[ChainBounds, ...], int, bool]:
     """Rates, event models, response times (the CPA fixed point) and chain bounds: (infos, events,
     responses, chains, rounds, converged)."""
-    from .chains import Timing, chain_bounds
+    from .chains import Timing
+    from .endtoend import chain_bounds
     from .rates import activation_rates, trigger_order
 
     order = trigger_order(system)
