@@ -21,9 +21,9 @@ from __future__ import annotations
 
 import heapq
 from bisect import bisect_left
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from fractions import Fraction
-from typing import Protocol, TypeAlias
+from typing import Protocol, TypeAlias, TypeVar
 
 from ..model.system import ChainModel, LinkModel, SystemModel, TaskModel
 from .sim import (
@@ -33,6 +33,9 @@ from .sim import (
 from ..core.timebase import TimeBase
 from .jobs import ARRIVAL, RELEASE, Job
 from .scenario import ConcreteScenario, Extremes, Measured, ResponseSample, Target, TimingState
+
+ZERO = Fraction(0)
+_K = TypeVar("_K")
 
 #: a message: (connection, index, writer task, writer job)
 _Msg: TypeAlias = "tuple[int, int, int, int]"
@@ -50,7 +53,7 @@ IntJob: TypeAlias = Job[int, int, "tuple[_Msg | None, ...] | None", int]
 
 
 class IntSimulator:
-    """``verify.prove.sim._Simulator`` in integer multiples of ``unit`` seconds, for one concrete scenario.
+    """``verify.prove.sim.Simulator`` in integer multiples of ``unit`` seconds, for one concrete scenario.
 
     The scenario's choices come as in ``scenario.ConcreteScenario``: ``phases`` (timers without a fixed
     phase, first releases of sporadic sources), prescaler ``counters``, and per-job patterns —
@@ -77,16 +80,13 @@ class IntSimulator:
         for t in tasks:
             act = t.activation
             if act.gaps is not None:  # released by time: the gaps a run takes, and a fixed phase
-                times += [act.gaps[0], act.fixed_phase or 0]  # type: ignore[list-item]  # (0 counts for nothing)
-        legal_exec = {t.id: (t.bcet, t.wcet) for t in tasks}
-        legal_delay = {(lk.source, lk.target): (lk.delay_min, lk.delay_max) for lk in model.links}
-        legal_gap = {t.id: t.activation.gaps for t in tasks
-                     if t.activation.gaps is not None and t.activation.gaps[0] != t.activation.gaps[1]}
-        for patterns, legal in ((exec_times, legal_exec), (delays, legal_delay), (interarrivals, legal_gap)):
-            for key, pattern in patterns.items():
-                if key in legal:
-                    lo, hi = legal[key]  # type: ignore[index]  # (each pattern with the ranges of its keys)
-                    times += [v for v in pattern if lo <= v <= hi]
+                times += [act.gaps[0], act.fixed_phase or ZERO]  # (0 counts for nothing)
+        legal_exec: dict[str, tuple[Fraction, Fraction]] = {t.id: (t.bcet, t.wcet) for t in tasks}
+        legal_delay: dict[tuple[str, str], tuple[Fraction, Fraction]] = {
+            (lk.source, lk.target): (lk.delay_min, lk.delay_max) for lk in model.links}
+        legal_gap: dict[str, tuple[Fraction, Fraction]] = {
+            t.id: gaps for t in tasks if (gaps := t.activation.gaps) is not None and gaps[0] != gaps[1]}
+        times += _legal(exec_times, legal_exec) + _legal(delays, legal_delay) + _legal(interarrivals, legal_gap)
         self.base = base = TimeBase.gcd_of(times)
         self.unit = base.unit
         self.model, self.max_events = model, max_events
@@ -113,7 +113,7 @@ class IntSimulator:
         self.sends = [tuple(c for port in t.produces for c in links_from.get(f"{t.instance}.{port}", ()))
                       for t in tasks]
         self.period: list[int | None] = [None] * len(tasks)
-        self.gap: list[int | None] = [None] * len(tasks)  # a sporadic source's default gap
+        self.gap = [0] * len(tasks)  # a sporadic source's default gap (of the other tasks: never read)
         self.gap_pattern: list[_Pattern | None] = [None] * len(tasks)
         self.triggered: dict[str, list[tuple[int, str]]] = {}
         self.counter: dict[int, int] = {}
@@ -222,8 +222,9 @@ class IntSimulator:
                 phase = act.fixed_phase
             else:
                 phase = Fraction(0) if phase is None else phase
-                if not 0 <= phase < act.offset_window:  # type: ignore[operator]  # (free phase: a window)
-                    raise ScenarioError(f"{t.id}: {act.offset_name} {phase} outside [0, {act.offset_window})")
+                window = act.offset_window  # (a free phase has one)
+                if window is None or not 0 <= phase < window:
+                    raise ScenarioError(f"{t.id}: {act.offset_name} {phase} outside [0, {window})")
             low, high = act.gaps
             if low == high:
                 self.period[i] = base.ticks(low)
@@ -362,10 +363,9 @@ class IntSimulator:
         if pattern is None:
             gap = self.gap[t]
         else:
-            act = self.model.tasks[t].activation
-            gap = pattern.at(index, lambda v: f"{self.ids[t]}#{index}: inter-arrival {v} outside "
-                                              f"[{act.min_interarrival}, {act.max_interarrival}]")  # type: ignore[union-attr]
-        self._push(self.now + gap, RELEASE, t)  # type: ignore[operator]  # (a sporadic source has its gap)
+            low, high = pattern.legal
+            gap = pattern.at(index, lambda v: f"{self.ids[t]}#{index}: inter-arrival {v} outside [{low}, {high}]")
+        self._push(self.now + gap, RELEASE, t)
 
     def _release(self, t: int) -> None:
         self.released[t] += 1
@@ -490,15 +490,16 @@ class IntSimulator:
         for (c, index, writer, job), at in self.arrivals:
             if wanted is None or (c, index) in wanted:
                 lk = links[c]
-                messages[(c, index)] = Message(lk.source, lk.target, index, ids[writer], job,
-                                               jobs[writer][job].finish * unit, at * unit)  # type: ignore[operator]
+                written = jobs[writer][job].finish
+                assert written is not None, "a message is sent at its writer's completion"
+                messages[(c, index)] = Message(lk.source, lk.target, index, ids[writer], job, written * unit, at * unit)
         records: dict[str, tuple[JobRecord, ...]] = {}
         for i in chosen:
             ports = self.read_ports[i]
             rows = []
             for j in jobs[i]:
-                reads = () if j.start is None else tuple(dict(zip(ports, (
-                    None if m is None else messages[(m[0], m[1])] for m in j.reads))).items())  # type: ignore[union-attr]
+                reads = () if j.reads is None else tuple(dict(zip(ports, (  # (a job reads at its start)
+                    None if m is None else messages[(m[0], m[1])] for m in j.reads))).items())
                 rows.append(JobRecord(ids[i], j.index, j.release * unit, j.cost * unit,
                                       None if j.start is None else j.start * unit,
                                       None if j.finish is None else j.finish * unit, reads))
@@ -513,7 +514,8 @@ class IntSimulator:
         ready = tuple(sorted((core, tuple(sorted((j.task, j.release - at, j.remaining, j.start is not None)
                                                  for j in self.pending(core)))) for core in range(self.ncores)))
         holders = tuple(sorted((inst, j.task, j.release - at) for inst, j in self.holder.items()))
-        heap = tuple(sorted((time - at, phase, payload if phase == RELEASE else payload[0])  # type: ignore[index]
+        # (a release carries its task, an arrival its message)
+        heap = tuple(sorted((time - at, phase, payload if isinstance(payload, int) else payload[0])
                             for time, phase, _seq, payload in self.heap))
         back = tuple(sorted((k, v - at) for k, v in self.last_arrival.items() if v > at))
         counters = tuple(sorted(self.counter.items()))
@@ -523,9 +525,11 @@ class IntSimulator:
 
 
 class _Pattern(tuple[int | None, ...]):
-    """A per-job pattern in ticks; an entry outside the legal range is None (``values``: as given)."""
+    """A per-job pattern in ticks; an entry outside the legal range is None (``values``: as given,
+    ``legal``: the range)."""
 
     values: tuple[Fraction, ...]
+    legal: tuple[Fraction, Fraction]
 
     def at(self, index: int, refusal: Callable[[Fraction], str]) -> int:
         """Entry ``index mod len``, or ``ScenarioError(refusal(value as given))`` if it is out of range."""
@@ -546,7 +550,14 @@ def _pattern(values: Sequence[Fraction] | None, legal: tuple[Fraction, Fraction]
     lo, hi = legal
     pattern = _Pattern(base.ticks(v) if lo <= v <= hi else None for v in values)
     pattern.values = tuple(values)
+    pattern.legal = legal
     return pattern
+
+
+def _legal(patterns: Mapping[_K, Sequence[Fraction]], legal: Mapping[_K, tuple[Fraction, Fraction]]) -> list[Fraction]:
+    """The entries of ``patterns`` in the range ``legal`` gives their key (those of keys without one left out)."""
+    return [v for key, pattern in patterns.items() if key in legal
+            for v in pattern if legal[key][0] <= v <= legal[key][1]]
 
 
 
@@ -587,7 +598,8 @@ class ChainSamples:
             if idx is None:
                 ports = sim.read_ports[job.task]
                 idx = port_index[pk] = ports.index(hop_port[pos]) if hop_port[pos] in ports else -1
-            return None if idx < 0 else job.reads[idx]  # type: ignore[index]  # (it has started)
+            reads = job.reads  # (it has started)
+            return None if idx < 0 or reads is None else reads[idx]
 
         def stamp(pos: int, job: IntJob) -> tuple[int, int] | None:
             if pos == 0:
@@ -601,42 +613,43 @@ class ChainSamples:
             memo[key] = value
             return value
 
-        holders: list[tuple[int, int, IntJob]] = []
+        #: (stamp time, stamp index, finish, index) of each finished job of τₙ with a stamp
+        holders: list[tuple[int, int, int, int]] = []
         for job in jobs[last]:
-            if job.finish is None:
+            finish = job.finish
+            if finish is None:
                 continue
             # deep chains: resolve from the first position up so the recursion stays shallow
             st = _stamp_iterative(stamp, message, job, n - 1, jobs, memo)
             if st is not None:
-                holders.append((st[1], st[0], job))
+                holders.append((st[1], st[0], finish, job.index))
         self.holders = holders
         self.reads = reads
 
-    # (the holders are finished jobs)
     def data_age(self) -> list[IntSample]:
-        return [(job.finish - s, s, job.finish, k, k, job.index) for s, k, job in self.holders]  # type: ignore[operator, misc]
+        return [(f - s, s, f, k, k, index) for s, k, f, index in self.holders]
 
     def data_age_nonreduced(self) -> list[IntSample]:
         reads = self.reads
-        return [(job.finish - reads[k - 1], reads[k - 1], job.finish, k - 1, k, job.index)  # type: ignore[operator, misc]
-                for s, k, job in self.holders if k >= 1]
+        return [(f - reads[k - 1], reads[k - 1], f, k - 1, k, index) for _s, k, f, index in self.holders if k >= 1]
 
     def reactions(self) -> tuple[list[IntSample], list[IntSample]]:
         holders = sorted(self.holders, key=lambda h: h[0])
         stamps = [h[0] for h in holders]
-        best_from: list[tuple[int, int, int] | None] = [None] * len(holders)
+        best_from: list[tuple[int, int, int]] = []  # suffix minima of (finish, τₙ index, stamp index)
         running = None
-        for i in range(len(holders) - 1, -1, -1):
-            cand: tuple[int, int, int] = (holders[i][2].finish, holders[i][2].index, holders[i][1])  # type: ignore[assignment]
+        for _s, k, f, index in reversed(holders):
+            cand = (f, index, k)
             running = cand if running is None or cand < running else running
-            best_from[i] = running
+            best_from.append(running)
+        best_from.reverse()
         react, react_r = [], []
         reads = self.reads
         for j in sorted(reads):
             pos = bisect_left(stamps, reads[j])
             if j == 0 or pos == len(holders):
                 continue
-            f, last, k = best_from[pos]  # type: ignore[misc]  # (set at every position)
+            f, last, k = best_from[pos]
             react.append((f - reads[j - 1], reads[j - 1], f, j - 1, k, last))
             react_r.append((f - reads[j], reads[j], f, j, k, last))
         return react, react_r
@@ -732,8 +745,12 @@ def extremes_of(targets: Iterable[Target], unit: Fraction, jobs_of: Callable[[st
     values: dict[Target, Extremes] = {}
     for t in targets:
         if t.kind == "response":
-            found = [(open_until - j.release if j.finish is None else j.finish - j.release, j.index, j.release,  # type: ignore[operator]
-                      j.finish) for j in jobs_of(t.name) if j.finish is not None or open_until is not None]
+            found: list[tuple[int, int, int, int | None]] = []
+            for j in jobs_of(t.name):
+                if j.finish is not None:
+                    found.append((j.finish - j.release, j.index, j.release, j.finish))
+                elif open_until is not None:
+                    found.append((open_until - j.release, j.index, j.release, None))
             if not found:
                 values[t] = Extremes(None, None)
                 continue

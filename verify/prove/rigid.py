@@ -17,7 +17,7 @@ from fractions import Fraction
 
 from ..model.system import SystemModel
 from .intsim import ChainSamples, IntJob, IntSimulator, extremes_of
-from .jobs import ARRIVAL, Job
+from .jobs import Job
 from .scenario import ConcreteScenario, Measured, Target, repetition
 
 
@@ -52,9 +52,9 @@ class _Snapshot:
                 if j.index < self.first_pending[j.task]:
                     self.first_pending[j.task] = j.index
         in_flight = [0] * len(sim.links)
-        for _time, phase, _seq, payload in sim.heap:
-            if phase == ARRIVAL:
-                in_flight[payload[0]] += 1  # type: ignore[index]  # (an arrival carries its message)
+        for _time, _phase, _seq, payload in sim.heap:
+            if not isinstance(payload, int):  # an arrival (it carries its message; a release its task)
+                in_flight[payload[0]] += 1
         self.arrived = [sent - flying for sent, flying in zip(sim.sent, in_flight)]
         self.events = sim.events
 
@@ -100,13 +100,14 @@ class PeriodicShift:
 
     def _moved(self, task: int, src: IntJob) -> IntJob | None:
         """Job ``src.index + n`` of ``task``: the record of ``src`` moved by one period."""
-        if src.finish is None:
+        start, finish = src.start, src.finish
+        if start is None or finish is None:  # (a finished job has started)
             return None
         p, shift = self.period, self.shift
-        job = _new_job(Job)
+        job: IntJob = _new_job(Job)
         job.task, job.index, job.release = task, src.index + shift[task], src.release + p
-        # (a finished job has started; a record is never ranked again)
-        job.start, job.finish, job.remaining, job.key = src.start + p, src.finish + p, 0, None  # type: ignore[operator, assignment]
+        # (a record is never ranked again: its ``key`` is left unset)
+        job.start, job.finish, job.remaining = start + p, finish + p, 0
         reads = src.reads
         if reads:
             arrived, regs = self.arrived, self.registers[task]
@@ -128,7 +129,10 @@ class PeriodicShift:
             if n > 0:
                 append = jobs.append
                 while jobs[-n].release < last_release:
-                    append(moved(i, jobs[-n]))  # type: ignore[arg-type]  # (the source has finished)
+                    job = moved(i, jobs[-n])
+                    if job is None:  # (never: the source has finished, see ``of``)
+                        break
+                    append(job)
         self.jobs = [self._cut(jobs, horizon) for jobs in self.full]
         self.events = self.events_at(horizon)
         return self
@@ -141,11 +145,12 @@ class PeriodicShift:
         out = jobs[:k]
         for j in range(k - 1, -1, -1):
             job = out[j]
-            if job.finish < horizon:  # type: ignore[operator]  # (every job before the horizon finishes)
+            finish, start = job.finish, job.start  # (every job before the horizon finishes)
+            if finish is not None and finish < horizon:
                 break
-            cut = _new_job(Job)
-            cut.task, cut.index, cut.release, cut.remaining, cut.key = job.task, job.index, job.release, 0, None  # type: ignore[assignment]
-            started = job.start < horizon  # type: ignore[operator]
+            cut: IntJob = _new_job(Job)
+            cut.task, cut.index, cut.release, cut.remaining = job.task, job.index, job.release, 0
+            started = start is not None and start < horizon
             cut.start, cut.reads = (job.start, job.reads) if started else (None, None)
             cut.finish = None
             out[j] = cut
@@ -185,7 +190,7 @@ def measure_rigid(model: SystemModel, scenario: ConcreteScenario, targets: Itera
     def covered(target: Target, mark: int, end: int) -> bool:
         if target.kind == "response":
             return all(j.finish is not None for j in run.jobs[sim.index_of[target.name]] if j.release < end)
-        return any(s >= mark for s, _k, _job in chain_samples(target.name).holders)
+        return any(h[0] >= mark for h in chain_samples(target.name).holders)
 
     if found is not None:
         t0, period = found

@@ -256,15 +256,13 @@ def hyperperiod(model: SystemModel) -> Fraction | None:
         if act.strict_period is not None:
             eff[tid] = act.strict_period
         elif act.trigger_port is not None:
-            writers = []
-            for member in act.trigger_members:
-                lk = model.link_into(f"{t.instance}.{member}")
-                if lk is not None:
-                    writers.append(eff.get(lk.writer))
-            if any(w is None for w in writers):
+            links = [lk for member in act.trigger_members
+                     if (lk := model.link_into(f"{t.instance}.{member}")) is not None]
+            writers = [w for lk in links if (w := eff.get(lk.writer)) is not None]
+            if len(writers) < len(links):
                 eff[tid] = None
             else:
-                base = frac_lcm(writers)  # type: ignore[arg-type]  # (none is None)
+                base = frac_lcm(writers)
                 eff[tid] = None if base is None else base * act.release_every
         else:
             eff[tid] = None

@@ -320,6 +320,9 @@ def _check(ok: bool, what: str) -> None:
 
 
 class Simulator:
+    """One run of ``system`` under ``scenario`` (``simulate``); ``run_to`` and ``trace`` let a caller
+    drive it in steps (``scenario.measure_periodic_reference``)."""
+
     def __init__(self, system: SystemModel, scenario: Scenario, max_events: int, deadline: float | None = None):
         if system.holes:
             raise ScenarioError(f"cannot simulate unresolved holes: {[t.id for t in system.holes]}")

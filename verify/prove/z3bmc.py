@@ -381,13 +381,15 @@ def z3_exact(model: SystemModel, targets: list[Target], want_best: Iterable[Targ
     for t in targets:
         if t.kind == "response":
             r = analysis.task(t.name).wcrt
-            spans.append(None if r is None else H + _ceil_units(r, grid.h))
+            if r is None:
+                return None
+            spans.append(H + _ceil_units(r, grid.h))
         else:
             rb = analysis.chain(t.name).reaction_time.worst
-            spans.append(None if rb is None else 2 * H + _ceil_units(rb, grid.h))
-    if any(x is None for x in spans):
-        return None
-    W = ts + max(spans, default=H) + 1  # type: ignore[type-var, operator]  # (none is None)
+            if rb is None:
+                return None
+            spans.append(2 * H + _ceil_units(rb, grid.h))
+    W = ts + max(spans, default=H) + 1
     if W * len(model.tasks) > MAX_CELLS:
         return None
     enc.extend(W)

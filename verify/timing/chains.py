@@ -267,8 +267,12 @@ class Timing:
 
 
 def _total(parts: Iterable[tuple[str, Fraction | None]]) -> Fraction | None:
-    values = [v for _, v in parts]
-    return None if any(v is None for v in values) else exact_sum(values)  # type: ignore[arg-type]  # no None
+    values = []
+    for _, v in parts:
+        if v is None:
+            return None
+        values.append(v)
+    return exact_sum(values)
 
 
 def summed_term(rule: str, parts: Iterable[tuple[str, Fraction | None]], note: str = "") -> Term:
@@ -407,10 +411,12 @@ def _and_waits(t: Timing, hop: HopModel, k: int) -> tuple[Fraction | None, Fract
         if src.member != member:
             waits.append(model.sampling_wait)
     # (no None in waits or arrivals where they are used: checked)
-    wait = None if any(w is None for w in waits) else max(waits, default=ZERO)  # type: ignore[type-var]
+    known = [w for w in waits if w is not None]
+    wait = None if len(known) < len(waits) else max(known, default=ZERO)
     if wait is not None and cascade_fresh(t, hop):
         wait = ZERO
-    join = None if any(a is None for a in arrivals) else combine_and(arrivals).delta_plus(k)  # type: ignore[arg-type]
+    streams = [a for a in arrivals if a is not None]
+    join = None if len(streams) < len(arrivals) else combine_and(streams).delta_plus(k)
     return wait, join
 
 

@@ -117,8 +117,8 @@ def read_time_ages(t: Timing, chain: ChainModel, hops: list[HopAges], from_read:
 
 
 def _sum_terms(terms: list[Term]) -> Fraction | None:
-    values = [x.value for x in terms]
-    return None if any(v is None for v in values) else exact_sum(values)  # type: ignore[arg-type]  # no None
+    values = [v for x in terms if (v := x.value) is not None]
+    return None if len(values) < len(terms) else exact_sum(values)
 
 
 def reaction_time(steps: tuple[Step, ...]) -> Fraction | None:
@@ -171,13 +171,13 @@ def chain_bounds(t: Timing, chain: ChainModel, variant: str = "reduced") -> Chai
     best = exact_sum(s.best for s in steps)
     wait = t.events[first].sampling_wait
     reaction = reaction_time(steps)
+    origin = steps[0].best_non_reduced  # τ₁'s step has it, with a value (``first_step``, ``read_gap_min``)
     bounds = dict(
         reaction_time=_new_bound(reaction, best, "§7.5 W⁺₁ + R₁ + Σ hop reaction terms"),
         reaction_time_reduced=_new_bound(_minus(reaction, wait), best, "§7.5 R₁ + Σ hop reaction terms"),
         data_age_reduced=_new_bound(data_age(steps), best, "§7.5 Σ hop data-age terms + Rₙ"),
-        # τ₁'s step has best_non_reduced, with a value (``first_step``, ``read_gap_min``)
         data_age_non_reduced=_new_bound(data_age_non_reduced(steps),
-                                        best + steps[0].best_non_reduced.value,  # type: ignore[union-attr, operator]
+                                        best if origin is None or origin.value is None else best + origin.value,
                                         "§7.5 A⁺₁ + Σ hop data-age terms + Rₙ"),
     )
     specs = _spec_checks(chain, bounds, variant)

@@ -97,8 +97,8 @@ class Interferer:
             return ZERO
         cap = self.causal_cap(q)
         if self.cost is None or self.period is None or self.jitter is None:
-            # a capped stream (``causally_capped``) costs the task's wcet: never None
-            return None if cap is None else cap * self.cost  # type: ignore[operator, return-value]
+            # a capped stream (``causally_capped``) costs the task's wcet: its cost is known
+            return None if cap is None or self.cost is None else cap * self.cost
         count = -((-(window + self.jitter)) // self.period)
         if self.before is not None:  # that job is not in the window (verify.timing.pipeline)
             count = min(count, -((-(window + self.before + self.jitter)) // self.period) - 1)
@@ -196,11 +196,12 @@ def least_fixed_point(base: Fraction, start: Fraction, streams: list[Interferer]
         return None, f"the interfering utilisation is {ratio(load)} (at least 1)"
     w, budget = start, budget or Budget()
     while budget.take():
-        demand = [s.demand(w, q) for s in streams]
-        if any(d is None for d in demand):
-            bad = next(s.task for s, d in zip(streams, demand) if d is None)
-            return None, f"the activations of `{bad}` are not bounded"
-        new = base + sum(demand, ZERO)  # type: ignore[type-var, operator]  # no None (checked above)
+        new = base
+        for s in streams:
+            demand = s.demand(w, q)
+            if demand is None:
+                return None, f"the activations of `{s.task}` are not bounded"
+            new += demand
         if new == w:
             return w, None
         w = new
@@ -209,5 +210,10 @@ def least_fixed_point(base: Fraction, start: Fraction, streams: list[Interferer]
 
 def load_of(streams: list[Interferer]) -> Fraction | None:
     """The utilisation ``Σ C/P`` of ``streams`` (a silent one 0), or None when one is not bounded."""
-    rates = [s.rate() for s in streams]
-    return None if any(r is None for r in rates) else sum(rates, ZERO)  # type: ignore[type-var]  # no None
+    total = ZERO
+    for s in streams:
+        rate = s.rate()
+        if rate is None:
+            return None
+        total += rate
+    return total

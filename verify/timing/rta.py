@@ -59,12 +59,11 @@ def core_loads(system: SystemModel, infos: Mapping[str, ActivationInfo]) -> tupl
     for core in _cores(system):
         owner = shared.get(core)
         tasks = system.tasks_on(core) if owner is None else system.callbacks(owner.name)
-        rates = [infos[t.id].rate for t in tasks]
-        if any(r is None for r in rates):
+        rates = [r for t in tasks if (r := infos[t.id].rate) is not None]
+        if len(rates) < len(tasks):
             total = None
         else:  # Σ wcet·high as exact integer ratios, normalised once
-            total = ratio_sum(_times(t.wcet.as_integer_ratio(),
-                                     r.high.as_integer_ratio())  # type: ignore[union-attr]  # no None (checked)
+            total = ratio_sum(_times(t.wcet.as_integer_ratio(), r.high.as_integer_ratio())
                               for t, r in zip(tasks, rates))
             if owner is not None:
                 total /= len(owner.workers)
@@ -97,8 +96,8 @@ def check_utilisation(system: SystemModel, loads: tuple[CoreLoad, ...], infos: M
         if not load.overloaded or load.utilisation is None:  # (an overloaded core has a utilisation)
             continue
         # an overloaded core's tasks have bounded rates (else it has no utilisation)
-        shares = [f"`{t}` {fmt_number(system.task(t).wcet * infos[t].rate.high)}"  # type: ignore[union-attr]
-                  for t in load.tasks]
+        shares = [f"`{t}` {fmt_number(system.task(t).wcet * rate.high)}"
+                  for t in load.tasks if (rate := infos[t].rate) is not None]
         secondary = tuple(Label(system.task(t).span, f"`{t}` on `{load.core}`") for t in load.tasks)
         sink.emit("E311", f"core `{load.core}` is utilised {ratio(load.utilisation)} "
                   f"({percent(load.utilisation)}) by " + name_list(load.tasks),
@@ -213,8 +212,7 @@ def wcrt(d: Demand) -> tuple[Fraction | None, int | None, int | None, str | None
     best: tuple[Fraction, int] | None = None
     w, budget = ZERO, Budget()
     for q in range(1, MAX_JOBS + 1):
-        # δ⁻(q) is None only for a silent task and q > 1, and a silent task's window closes at q = 1
-        offset: Fraction = d.own.delta_min(q)  # type: ignore[assignment]
+        offset = least_distance(d.own, q)
         found, why = least_fixed_point(q * (d.cost + d.blocking) + d.once, w + d.cost + d.blocking, d.streams, q,
                                        budget)
         if found is None:
@@ -229,6 +227,13 @@ def wcrt(d: Demand) -> tuple[Fraction | None, int | None, int | None, str | None
                 best = offsets
             return best[0], q, best[1], None
     return None, MAX_JOBS, None, f"the busy window does not close within {MAX_JOBS} jobs"
+
+
+def least_distance(own: EventModel, q: int) -> Fraction:
+    """``δ⁻ᵢ(q)`` in a busy window of q jobs. It is None only for a silent task and q > 1, which no busy
+    window reaches (a silent task's closes at q = 1); 0 then."""
+    distance = own.delta_min(q)
+    return ZERO if distance is None else distance
 
 
 def pipeline_response(d: Demand, jobs: int) -> tuple[Fraction, int] | None:
@@ -247,7 +252,7 @@ def pipeline_response(d: Demand, jobs: int) -> tuple[Fraction, int] | None:
             if found is None:
                 return None
             w = found
-            low: Fraction = d.own.delta_min(q)  # type: ignore[assignment]  # (as in ``wcrt``)
+            low = least_distance(d.own, q)
             value = w - case.gone(q, low)
             if best is None or value > best[0]:
                 best = (value, q)
@@ -318,8 +323,8 @@ def cooperative_blocking(system: SystemModel, task: TaskModel, events: Mapping[s
     holds = {s.id: hold_time(system, s, events, estimates) for s in sibs}
 
     def most(blockers: list[TaskModel]) -> Fraction | None:
-        values = [holds[s.id] for s in blockers]
-        return None if any(v is None for v in values) else max(values, default=ZERO)  # type: ignore[type-var]
+        values = [v for s in blockers if (v := holds[s.id]) is not None]
+        return None if len(values) < len(blockers) else max(values, default=ZERO)
 
     per_job = most([s for s in sibs if s.core != task.core])
     once = most([s for s in sibs if s.core == task.core and s.priority < task.priority])
