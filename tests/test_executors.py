@@ -12,8 +12,8 @@ import pytest
 import verify
 from verify.prove import Target
 from verify.prove.exact import Budget, count_representatives, enumerate_exact, exact_class, grid_of, scenario_of
-from verify.prove.scenario import (measure, measure_periodic, measure_periodic_reference, measure_reference,
-                                   replay)
+from verify.prove.measure import measure, measure_periodic
+from verify.prove.scenario import measure_periodic_reference, measure_reference, replay
 from verify.prove.intsim import run_trace
 from verify.prove.sim import Scenario, random_scenario, simulate
 from verify.timing import analyze

@@ -15,8 +15,9 @@ import verify
 from verify.model.system import DataTriggered, Periodic, SporadicSource
 from verify.prove import Target
 from verify.prove.intsim import run_trace, target_samples
-from verify.prove.scenario import (ConcreteScenario, _chain_samples, _response_samples, extremes, measure,
-                                   measure_reference, replay)
+from verify.prove.measure import measure
+from verify.prove.scenario import (ConcreteScenario, _chain_samples, _response_samples, extremes, measure_reference,
+                                   replay)
 from verify.prove.sim import ScenarioError, SimulationError, pick_in
 
 from .test_bounds_vs_simulation import systems

@@ -10,7 +10,8 @@ import pytest
 
 import verify
 from verify.prove.intsim import run_trace
-from verify.prove.scenario import measure, measure_reference, replay
+from verify.prove.measure import measure
+from verify.prove.scenario import measure_reference, replay
 from verify.prove.sim import Scenario, simulate
 from verify.timing import analyze
 

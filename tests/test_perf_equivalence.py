@@ -171,11 +171,11 @@ except ImportError:  # pragma: no cover - hypothesis is a test dependency
     pass
 
 
-# ------------------------------------------------------------------ fastrta against rta, round by round
+# ------------------------------------------------------------------ fastrta against the reference, round by round
 
 def _rounds_agree(model, max_rounds: int = 6) -> None:
-    """Every CPA round of ``fastrta`` equals ``rta.response_times`` (the reference statement)."""
-    from verify.timing import fastrta, rta
+    """Every CPA round of ``fastrta`` equals ``reference.response_times`` (the reference statement)."""
+    from verify.timing import fastrta, reference
     from verify.timing.rates import activation_rates, event_models, trigger_order
 
     order = trigger_order(model)
@@ -188,7 +188,7 @@ def _rounds_agree(model, max_rounds: int = 6) -> None:
     for _ in range(max_rounds):
         events = event_models(model, infos, order[0], wcrt, bcrt, memo)
         assert events == event_models(model, infos, order[0], wcrt, bcrt)
-        expected = rta.response_times(model, events, wcrt)
+        expected = reference.response_times(model, events, wcrt)
         analysed = fastrta.Round(static, events, wcrt, analysed)  # with what it reuses from the last round
         assert dump(analysed.responses()) == dump(expected)
         assert dump(fastrta.Round(static, events, wcrt).responses()) == dump(expected)

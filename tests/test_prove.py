@@ -19,7 +19,8 @@ from verify.cli import main
 from verify.prove import ConcreteScenario, Target, prove, replay
 from verify.prove.exact import (Budget, count_representatives, enumerate_exact, exact_class, grid_of,
                                 representatives, scenario_of, weak_orders)
-from verify.prove.scenario import extremes, measure_periodic, measure_periodic_reference
+from verify.prove.measure import measure_periodic
+from verify.prove.scenario import extremes, measure_periodic_reference
 from verify.prove.sim import chain_latencies, simulate
 from verify.timing import analyze
 

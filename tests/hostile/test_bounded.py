@@ -305,14 +305,14 @@ def test_interferers_are_hp_in_declaration_order_and_equal_the_tuple():
 
 
 def test_interferers_agree_with_the_reference_analysis():
-    from verify.timing import analyze, rta
+    from verify.timing import analyze, reference
     from verify.timing.fastrta import response_times
 
     model = verify.load_text(_one_core(40, same_priority=False), "core.vfy").system()
     result = analyze(model)
     events = {t.id: t.events for t in result.tasks}
     estimates = {t.id: t.response.wcrt for t in result.tasks}
-    fast, slow = response_times(model, events, estimates), rta.response_times(model, events, estimates)
+    fast, slow = response_times(model, events, estimates), reference.response_times(model, events, estimates)
     assert fast == slow
     assert fast["i5.T"].interferers == ("i0.T", "i1.T", "i2.T", "i3.T", "i4.T")
 

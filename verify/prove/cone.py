@@ -22,7 +22,8 @@ from typing import TYPE_CHECKING
 
 from ..model.system import SystemModel, TaskModel
 from .intsim import target_samples
-from .scenario import ConcreteScenario, Target
+from .scenario import ConcreteScenario, ResponseSample, Target
+from .sim import Sample
 
 if TYPE_CHECKING:
     from .verdict import Counterexample
@@ -136,10 +137,17 @@ def check_all_carry_over(model: SystemModel, cexs: Iterable[Counterexample]) -> 
             if scenario is not None:
                 wanted.setdefault(scenario, []).append((cex.target, sample))
     for scenario, pairs in wanted.items():
-        ends = [getattr(s, "end", None) if t.kind != "response" else s.finish for t, s in pairs]  # type: ignore[attr-defined]
-        if all(end is not None for end in ends):  # the run up to the last sample's last event will do
-            scenario = scenario.with_horizon(min(scenario.horizon, max(ends) + Fraction(1, 10**12)))  # type: ignore[type-var, operator]
+        ends = [e for _t, s in pairs if (e := _end(s)) is not None]
+        if len(ends) == len(pairs):  # the run up to the last sample's last event will do
+            scenario = scenario.with_horizon(min(scenario.horizon, max(ends) + Fraction(1, 10**12)))
         samples = target_samples(model, scenario, sorted({t for t, _ in pairs}))
         for target, sample in pairs:
             if sample not in samples[target]:
                 raise SliceMismatch(f"the run of the cone of {target} does not carry over to `{model.name}`")
+
+
+def _end(sample: object) -> Fraction | None:
+    """The last event of a counterexample's ``sample``: a chain sample's end, a response sample's finish."""
+    if isinstance(sample, ResponseSample):
+        return sample.finish
+    return sample.end if isinstance(sample, Sample) else None

@@ -31,7 +31,8 @@ from .refine import refine, verdict as refined_verdict
 from .exact import (SEARCH_EVENTS, Budget, ExactResult, Extreme, Goal, approach, count_representatives,
                     enumerate_exact, SearchResult, exact_class, first_scenarios, grid_of, search, search_horizon)
 from .parallel import ordered_map, resolve_workers
-from .scenario import ConcreteScenario, Measured, ResponseSample, Target, measure, replay
+from .measure import measure
+from .scenario import ConcreteScenario, Measured, ResponseSample, Target, replay
 from .verdict import Counterexample, ProofResult, Verdict
 from ..core.budgets import PROVE_BUDGET, PROVE_RLIMIT
 
@@ -124,7 +125,7 @@ def _queue_text(trace: Trace, task: str) -> str:
                f"{fmt_time(trace.horizon)} ({pending} released)"
     picks = sorted({done[(len(done) - 1) * k // 3] for k in range(4)}, key=lambda j: j.index)
     shown = ", ".join(f"job #{j.index} (released at {fmt_time(j.release)}) in "
-                      f"{fmt_time(j.finish - j.release)}" for j in picks)  # type: ignore[operator]  # (finished)
+                      f"{fmt_time(finish - j.release)}" for j in picks if (finish := j.finish) is not None)
     return (f"in the run with every phase 0 and every job at its wcet, its jobs respond: {shown}; "
             f"{pending} still pending at {fmt_time(trace.horizon)}")
 
@@ -476,8 +477,8 @@ def _search_cex(ob: Obligation, found: SearchResult) -> Counterexample | None:
         b: Measured | None = found.best.get(t)
         if w is None or b is None:
             return None
-        # (a run kept in a search result has its sample)
-        if w.values[t].worst.value - b.values[t].best.value > ob.spec:  # type: ignore[union-attr]
+        worst, best = w.values[t].worst, b.values[t].best  # (a run kept in a search result has its sample)
+        if worst is not None and best is not None and worst.value - best.value > ob.spec:
             return Counterexample.of(t, w, b)
         return None
     if w is None:

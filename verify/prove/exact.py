@@ -28,7 +28,8 @@ from ..model.system import SystemModel, TaskModel
 from .sim import Sample, SimulationError
 from .parallel import ordered_map, resolve_workers
 from ..core.timebase import TimeBase, ceil_to, floor_to
-from .scenario import ConcreteScenario, Measured, ResponseSample, Target, hyperperiod, measure, measure_periodic
+from .measure import measure, measure_periodic
+from .scenario import ConcreteScenario, Measured, ResponseSample, Target, hyperperiod
 
 ZERO = Fraction(0)
 
@@ -146,10 +147,12 @@ def grid_of(model: SystemModel) -> Grid:
     timers = free_timers(model)
     m = len(timers)
     fixed = any(t.activation.fixed_phase is not None for t in model.tasks)
+    hyper = hyperperiod(model)
+    if hyper is None:
+        raise ValueError("a model without a hyperperiod is not of the exact class")
     return Grid(tick, tick / (2 * m + 1), tuple(t.id for t in timers),
-                tuple(int(t.activation.strict_period / tick) for t in timers), not fixed,  # type: ignore[operator]
-                tuple((t.id, t.activation.release_every) for t in counter_tasks(model)),
-                hyperperiod(model))  # type: ignore[arg-type]  # (a model of the exact class has one)
+                tuple(int(period / tick) for t in timers if (period := t.activation.strict_period) is not None),
+                not fixed, tuple((t.id, t.activation.release_every) for t in counter_tasks(model)), hyper)
 
 
 def _u_ranges(grid: Grid, w: tuple[int, ...]) -> list[range]:
@@ -300,7 +303,7 @@ def _account(result: ExactResult, m: Measured, tick: Fraction, targets: Iterable
             continue
         value = ceil_to(sample.value, tick)
         cur = result.worst[t]
-        if cur.value is None or value > cur.value or (value == cur.value and sample.value > cur.raw):  # type: ignore[operator]
+        if cur.value is None or cur.raw is None or value > cur.value or (value == cur.value and sample.value > cur.raw):
             result.worst[t] = Extreme(value, sample.value, m)
     for t in want_best:
         sample = m.values[t].best
@@ -308,7 +311,7 @@ def _account(result: ExactResult, m: Measured, tick: Fraction, targets: Iterable
             continue
         value = floor_to(sample.value, tick)
         cur = result.best[t]
-        if cur.value is None or value < cur.value or (value == cur.value and sample.value < cur.raw):  # type: ignore[operator]
+        if cur.value is None or cur.raw is None or value < cur.value or (value == cur.value and sample.value < cur.raw):
             result.best[t] = Extreme(value, sample.value, m)
 
 
@@ -437,7 +440,9 @@ def _mutate(model: SystemModel, sc: ConcreteScenario, rng: random.Random) -> Con
     if phases and rng.random() < 0.7:
         task = rng.choice(sorted(phases))
         act = model.task(task).activation
-        length = act.gaps[1]  # type: ignore[index]  # the phase of a task released by time lies in [0, its greatest gap)
+        gaps = act.gaps
+        assert gaps is not None, "a task with a phase is released by time"
+        length = gaps[1]  # (its phase lies in [0, its greatest gap))
         if rng.random() < 0.5:
             step = tick * Fraction(rng.choice([-4, -2, -1, 1, 2, 4]), rng.choice([1, 4, 16]))
             phases[task] = (phases[task] + step) % length
@@ -499,11 +504,13 @@ def search(model: SystemModel, goals: list[Goal], budget: Budget, horizon: Fract
         for t in targets:
             w, b = m.values[t].worst, m.values[t].best
             cur = result.worst.get(t)
-            if w is not None and (cur is None or w.value > cur.values[t].worst.value):  # type: ignore[union-attr]
+            kept = None if cur is None else cur.values[t].worst  # (a run is kept with its sample)
+            if w is not None and (kept is None or w.value > kept.value):
                 result.worst[t] = m
                 improved = True
             cur = result.best.get(t)
-            if b is not None and (cur is None or b.value < cur.values[t].best.value):  # type: ignore[union-attr]
+            kept = None if cur is None else cur.values[t].best
+            if b is not None and (kept is None or b.value < kept.value):
                 result.best[t] = m
                 improved = True
         return improved

@@ -23,7 +23,7 @@ from .sim import JobRecord, Sample, Trace
 from ..model.units import fmt_time
 from .intsim import run_trace
 from .scenario import ConcreteScenario, ResponseSample
-from .trace import ChainStep, _t, job_chain
+from .trace import ChainStep, instant, job_chain
 from .verdict import Verdict
 
 #: a row with more jobs than this in the chart's interval draws bars less than a pixel apart as one
@@ -255,7 +255,7 @@ def _flows(steps: list[ChainStep], f: _Frame, marker: str) -> list[str]:
         out.append(f'<line class="flow" x1="{_num(f.x(m.written))}" y1="{_num(f.rows[a.job.task] + ROW_H / 2)}" '
                    f'x2="{_num(f.x(b.job.start))}" y2="{_num(f.rows[b.job.task] + ROW_H / 2)}" stroke="{RED}" '
                    f'stroke-width="1.5" marker-end="url(#{marker})"><title>{escape(m.source)} -> {escape(m.target)}: '
-                   f'written {escape(_t(m.written))}, arrives {escape(_t(m.arrival))}</title></line>')
+                   f'written {escape(instant(m.written))}, arrives {escape(instant(m.arrival))}</title></line>')
     return out
 
 
@@ -300,10 +300,10 @@ def _row(jobs: list[JobRecord], x: Callable[[Fraction], float], yy: float, row_h
         on = count == 0
         if count > 1:
             title = (f"{escape(first.task)}#{first.index} to #{last.index} ({count} jobs): from "
-                     f"{escape(_t(first.start))} to {escape(_t(last.finish))}")
+                     f"{escape(instant(first.start))} to {escape(instant(last.finish))}")
         else:
-            title = (f"{escape(first.task)}#{first.index}: released {escape(_t(first.release))}, "
-                     f"starts {escape(_t(first.start))}, completes {escape(_t(first.finish))}")
+            title = (f"{escape(first.task)}#{first.index}: released {escape(instant(first.release))}, "
+                     f"starts {escape(instant(first.start))}, completes {escape(instant(first.finish))}")
         out[place] = (f'<rect class="job{" chain" if on else ""}" x="{_num(x0)}" y="{_num(yy + 5)}" '
                       f'width="{_num(max(x1 - x0, 1.0))}" height="{row_h - 10}" '
                       f'fill="{CHAIN_JOB if on else JOB}" stroke="#2c3e50"><title>{title}</title></rect>')

@@ -21,9 +21,9 @@ from __future__ import annotations
 
 import heapq
 from bisect import bisect_left
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from fractions import Fraction
-from typing import TYPE_CHECKING, Protocol, TypeAlias
+from typing import Protocol, TypeAlias, TypeVar
 
 from ..model.system import ChainModel, LinkModel, SystemModel, TaskModel
 from .sim import (
@@ -31,11 +31,11 @@ from .sim import (
     executor_cores, snapshot_rank
 )
 from ..core.timebase import TimeBase
+from .jobs import ARRIVAL, RELEASE, Job
+from .scenario import ConcreteScenario, Extremes, Measured, ResponseSample, Target, TimingState
 
-if TYPE_CHECKING:
-    from .scenario import ConcreteScenario, Extremes, Measured, ResponseSample, Target, TimingState
-
-_ARRIVAL, _RELEASE = 1, 2  # heap phases, as in verify.prove.sim
+ZERO = Fraction(0)
+_K = TypeVar("_K")
 
 #: a message: (connection, index, writer task, writer job)
 _Msg: TypeAlias = "tuple[int, int, int, int]"
@@ -47,31 +47,13 @@ _Event: TypeAlias = "tuple[int, int, int, int | _Msg]"
 IntSample: TypeAlias = "tuple[int, int, int, int, int, int]"
 
 
-class _Job:
-    __slots__ = ("task", "index", "release", "remaining", "start", "finish", "reads", "key", "cost", "core")
-
-    task: int
-    index: int
-    release: int
-    remaining: int
-    start: int | None
-    finish: int | None
-    reads: tuple[_Msg | None, ...] | None
-    key: _Key
-    cost: int
-
-    def __init__(self, task: int, index: int, release: int, exec_time: int, key: _Key):
-        self.task, self.index, self.release, self.remaining = task, index, release, exec_time
-        self.cost = exec_time
-        self.start = self.finish = None
-        self.reads = None
-        self.key = key
-        self.core = -1  # a callback's worker core, once started
-
+#: a job of this simulator: its task by index, times in ticks, the messages (or None) of its task's
+#: read ports in ``read_ports`` order once it has started, its core by index (−1 until a callback starts)
+IntJob: TypeAlias = Job[int, int, "tuple[_Msg | None, ...] | None", int]
 
 
 class IntSimulator:
-    """``verify.prove.sim._Simulator`` in integer multiples of ``unit`` seconds, for one concrete scenario.
+    """``verify.prove.sim.Simulator`` in integer multiples of ``unit`` seconds, for one concrete scenario.
 
     The scenario's choices come as in ``scenario.ConcreteScenario``: ``phases`` (timers without a fixed
     phase, first releases of sporadic sources), prescaler ``counters``, and per-job patterns —
@@ -98,16 +80,13 @@ class IntSimulator:
         for t in tasks:
             act = t.activation
             if act.gaps is not None:  # released by time: the gaps a run takes, and a fixed phase
-                times += [act.gaps[0], act.fixed_phase or 0]  # type: ignore[list-item]  # (0 counts for nothing)
-        legal_exec = {t.id: (t.bcet, t.wcet) for t in tasks}
-        legal_delay = {(lk.source, lk.target): (lk.delay_min, lk.delay_max) for lk in model.links}
-        legal_gap = {t.id: t.activation.gaps for t in tasks
-                     if t.activation.gaps is not None and t.activation.gaps[0] != t.activation.gaps[1]}
-        for patterns, legal in ((exec_times, legal_exec), (delays, legal_delay), (interarrivals, legal_gap)):
-            for key, pattern in patterns.items():
-                if key in legal:
-                    lo, hi = legal[key]  # type: ignore[index]  # (each pattern with the ranges of its keys)
-                    times += [v for v in pattern if lo <= v <= hi]
+                times += [act.gaps[0], act.fixed_phase or ZERO]  # (0 counts for nothing)
+        legal_exec: dict[str, tuple[Fraction, Fraction]] = {t.id: (t.bcet, t.wcet) for t in tasks}
+        legal_delay: dict[tuple[str, str], tuple[Fraction, Fraction]] = {
+            (lk.source, lk.target): (lk.delay_min, lk.delay_max) for lk in model.links}
+        legal_gap: dict[str, tuple[Fraction, Fraction]] = {
+            t.id: gaps for t in tasks if (gaps := t.activation.gaps) is not None and gaps[0] != gaps[1]}
+        times += _legal(exec_times, legal_exec) + _legal(delays, legal_delay) + _legal(interarrivals, legal_gap)
         self.base = base = TimeBase.gcd_of(times)
         self.unit = base.unit
         self.model, self.max_events = model, max_events
@@ -134,7 +113,7 @@ class IntSimulator:
         self.sends = [tuple(c for port in t.produces for c in links_from.get(f"{t.instance}.{port}", ()))
                       for t in tasks]
         self.period: list[int | None] = [None] * len(tasks)
-        self.gap: list[int | None] = [None] * len(tasks)  # a sporadic source's default gap
+        self.gap = [0] * len(tasks)  # a sporadic source's default gap (of the other tasks: never read)
         self.gap_pattern: list[_Pattern | None] = [None] * len(tasks)
         self.triggered: dict[str, list[tuple[int, str]]] = {}
         self.counter: dict[int, int] = {}
@@ -144,10 +123,10 @@ class IntSimulator:
         self._init_executors(model, cores)
         self.now = self.events = self.seq = 0
         self.heap: list[_Event] = []
-        self.jobs: list[list[_Job]] = [[] for _ in tasks]
-        self.ready: list[list[tuple[_Key, _Job]]] = [[] for _ in cores]  # heaps of (rank, job)
-        self.running: list[_Job | None] = [None] * len(cores)
-        self.holder: dict[str, _Job] = {}
+        self.jobs: list[list[IntJob]] = [[] for _ in tasks]
+        self.ready: list[list[tuple[_Key, IntJob]]] = [[] for _ in cores]  # heaps of (rank, job)
+        self.running: list[IntJob | None] = [None] * len(cores)
+        self.holder: dict[str, IntJob] = {}
         self.registers: dict[str, _Msg] = {}
         self.sent = [0] * len(self.links)
         self.last_arrival: dict[int, int] = {}
@@ -168,17 +147,17 @@ class IntSimulator:
         self.snap_rank = [snapshot_rank(t, executors[names[t.executor]]) if t.executor is not None else 0
                           for t in model.tasks]
         self.polls = [e.polls for e in executors]
-        self.ex_pending: list[list[_Job]] = [[] for _ in executors]
-        self.ex_snapshot: list[list[_Job]] = [[] for _ in executors]
+        self.ex_pending: list[list[IntJob]] = [[] for _ in executors]
+        self.ex_snapshot: list[list[IntJob]] = [[] for _ in executors]
         self.ex_workers = [[cores.index(c) for c in e.workers] for e in executors]
-        self.ex_running: list[dict[int, _Job | None]] = [dict.fromkeys(w) for w in self.ex_workers]
+        self.ex_running: list[dict[int, IntJob | None]] = [dict.fromkeys(w) for w in self.ex_workers]
         self.ex_exclusive = [{self.index_of[tid]: g for tid, g in exclusive_groups(model, e).items()}
                              for e in executors]
         self.threads: list[list[int]] = [[n for n, w in enumerate(self.ex_workers) if core in w]
                                          for core in range(len(cores))]
         self.released = [0] * len(model.tasks)
 
-    def _head(self, e: int, core: int) -> _Job | None:
+    def _head(self, e: int, core: int) -> IntJob | None:
         """The job executor ``e``'s worker on ``core`` runs when it gets its core
         (``verify.prove.sim._Executor.head``)."""
         current = self.ex_running[e][core]
@@ -195,16 +174,16 @@ class IntSimulator:
         return next((j for j in snapshot if self._takeable(e, j)), None) or min(
             (j for j in pending if self._takeable(e, j)), key=self._snap_key, default=None)
 
-    def _takeable(self, e: int, job: _Job) -> bool:
+    def _takeable(self, e: int, job: IntJob) -> bool:
         exclusive = self.ex_exclusive[e]
         group = exclusive.get(job.task)
         return group is None or not any(j is not None and exclusive.get(j.task) == group
                                         for j in self.ex_running[e].values())
 
-    def _snap_key(self, job: _Job) -> tuple[int, int, int]:
+    def _snap_key(self, job: IntJob) -> tuple[int, int, int]:
         return self.snap_rank[job.task], job.task, job.index
 
-    def _take(self, e: int, job: _Job, core: int) -> None:
+    def _take(self, e: int, job: IntJob, core: int) -> None:
         """Executor ``e``'s worker on ``core`` starts ``job``, polling first if no entry of its snapshot
         can be taken."""
         if self.polls[e]:
@@ -243,15 +222,16 @@ class IntSimulator:
                 phase = act.fixed_phase
             else:
                 phase = Fraction(0) if phase is None else phase
-                if not 0 <= phase < act.offset_window:  # type: ignore[operator]  # (free phase: a window)
-                    raise ScenarioError(f"{t.id}: {act.offset_name} {phase} outside [0, {act.offset_window})")
+                window = act.offset_window  # (a free phase has one)
+                if window is None or not 0 <= phase < window:
+                    raise ScenarioError(f"{t.id}: {act.offset_name} {phase} outside [0, {window})")
             low, high = act.gaps
             if low == high:
                 self.period[i] = base.ticks(low)
             else:
                 self.gap[i] = base.ticks(low)
                 self.gap_pattern[i] = _pattern(interarrivals.get(t.id), act.gaps, base)
-            self._push(base.ticks(phase), _RELEASE, i)
+            self._push(base.ticks(phase), RELEASE, i)
         elif act.trigger_port is not None:
             c = counters.get(t.id, 0)
             if not 0 <= c < act.release_every:
@@ -296,7 +276,7 @@ class IntSimulator:
                 break
             # advance, then complete every running job that is done (in task order)
             d = nxt - now
-            due: list[_Job] | None = None
+            due: list[IntJob] | None = None
             for job in running:
                 if job is not None:
                     job.remaining -= d
@@ -309,10 +289,10 @@ class IntSimulator:
                 for job in due:
                     self._count()
                     self._complete(job)
-            while heap and heap[0][0] == nxt and heap[0][1] == _ARRIVAL:
+            while heap and heap[0][0] == nxt and heap[0][1] == ARRIVAL:
                 self._count()
                 self._arrive(pop(heap)[3])  # type: ignore[arg-type]  # an arrival carries its message
-            while heap and heap[0][0] == nxt and heap[0][1] == _RELEASE:
+            while heap and heap[0][0] == nxt and heap[0][1] == RELEASE:
                 self._count()
                 self._timed_release(pop(heap)[3])  # type: ignore[arg-type]  # a release its task
             self._dispatch()
@@ -327,7 +307,7 @@ class IntSimulator:
                 job.remaining -= d
         self.now = t
 
-    def _complete(self, job: _Job) -> None:
+    def _complete(self, job: IntJob) -> None:
         t = job.task
         job.finish = self.now  # (it leaves its core's heap once it reaches the top)
         if self.executor_of[t] >= 0:
@@ -352,7 +332,7 @@ class IntSimulator:
             if last is not None and last > arrival:
                 arrival = last
             self.last_arrival[c] = arrival
-            self._push(arrival, _ARRIVAL, (c, index, t, job.index))
+            self._push(arrival, ARRIVAL, (c, index, t, job.index))
 
     def _arrive(self, msg: _Msg) -> None:
         port = self.target[msg[0]]
@@ -377,16 +357,15 @@ class IntSimulator:
         self._release(t)
         period = self.period[t]
         if period is not None:
-            self._push(self.now + period, _RELEASE, t)
+            self._push(self.now + period, RELEASE, t)
             return
         pattern = self.gap_pattern[t]
         if pattern is None:
             gap = self.gap[t]
         else:
-            act = self.model.tasks[t].activation
-            gap = pattern.at(index, lambda v: f"{self.ids[t]}#{index}: inter-arrival {v} outside "
-                                              f"[{act.min_interarrival}, {act.max_interarrival}]")  # type: ignore[union-attr]
-        self._push(self.now + gap, _RELEASE, t)  # type: ignore[operator]  # (a sporadic source has its gap)
+            low, high = pattern.legal
+            gap = pattern.at(index, lambda v: f"{self.ids[t]}#{index}: inter-arrival {v} outside [{low}, {high}]")
+        self._push(self.now + gap, RELEASE, t)
 
     def _release(self, t: int) -> None:
         self.released[t] += 1
@@ -403,14 +382,14 @@ class IntSimulator:
             cost = pattern.at(index, lambda v: f"{task.id}#{index}: execution time {v} outside "
                                                f"[{task.bcet}, {task.wcet}]")
         key = (-self.prio[t], self.now, t, index)
-        job = _Job(t, index, self.now, cost, key)
+        job: IntJob = Job(t, index, self.now, cost, key, None, -1)
         jobs.append(job)
         if e >= 0:
             self.ex_pending[e].append(job)
         else:
             heapq.heappush(self.ready[self.core[t]], (key, job))
 
-    def _best(self, core: int) -> _Job | None:
+    def _best(self, core: int) -> IntJob | None:
         """The best-ranked eligible job of ``core`` (a cooperative job that has not started is not
         eligible while another job of its instance holds the token)."""
         heap = self.ready[core]
@@ -421,8 +400,8 @@ class IntSimulator:
         job = heap[0][1]
         if not self.coop[job.task] or job.start is not None or self.instance[job.task] not in self.holder:
             return job
-        skipped: list[tuple[_Key, _Job]]
-        best: _Job | None
+        skipped: list[tuple[_Key, IntJob]]
+        best: IntJob | None
         skipped, best = [], None  # rare: ineligible jobs on top
         while heap:
             entry = heapq.heappop(heap)
@@ -444,7 +423,7 @@ class IntSimulator:
         keeps it, now started), so the cores are ranked again only after such a start."""
         running, ready, coop, instance, holder = self.running, self.ready, self.coop, self.instance, self.holder
         pop = heapq.heappop
-        best: _Job | None
+        best: IntJob | None
         rank = True
         while True:
             if rank:
@@ -463,7 +442,7 @@ class IntSimulator:
                         if head is not None and (best is None or head.key < best.key):
                             best = head
                     running[core] = best
-            starting: _Job | None = None
+            starting: IntJob | None = None
             for best in running:
                 if best is not None and best.start is None and (starting is None or best.key < starting.key):
                     starting = best
@@ -473,7 +452,7 @@ class IntSimulator:
             self._start(starting)
             rank = coop[starting.task] or self.executor_of[starting.task] >= 0
 
-    def _start(self, job: _Job) -> None:
+    def _start(self, job: IntJob) -> None:
         t = job.task
         job.start = self.now
         e = self.executor_of[t]
@@ -485,7 +464,7 @@ class IntSimulator:
         if self.coop[t]:
             self.holder[self.instance[t]] = job
 
-    def pending(self, core: int) -> list[_Job]:
+    def pending(self, core: int) -> list[IntJob]:
         """The released, uncompleted jobs of ``core`` (its executors' included)."""
         jobs = [job for _key, job in self.ready[core] if job.finish is None]
         for e in self.threads[core]:
@@ -511,15 +490,16 @@ class IntSimulator:
         for (c, index, writer, job), at in self.arrivals:
             if wanted is None or (c, index) in wanted:
                 lk = links[c]
-                messages[(c, index)] = Message(lk.source, lk.target, index, ids[writer], job,
-                                               jobs[writer][job].finish * unit, at * unit)  # type: ignore[operator]
+                written = jobs[writer][job].finish
+                assert written is not None, "a message is sent at its writer's completion"
+                messages[(c, index)] = Message(lk.source, lk.target, index, ids[writer], job, written * unit, at * unit)
         records: dict[str, tuple[JobRecord, ...]] = {}
         for i in chosen:
             ports = self.read_ports[i]
             rows = []
             for j in jobs[i]:
-                reads = () if j.start is None else tuple(dict(zip(ports, (
-                    None if m is None else messages[(m[0], m[1])] for m in j.reads))).items())  # type: ignore[union-attr]
+                reads = () if j.reads is None else tuple(dict(zip(ports, (  # (a job reads at its start)
+                    None if m is None else messages[(m[0], m[1])] for m in j.reads))).items())
                 rows.append(JobRecord(ids[i], j.index, j.release * unit, j.cost * unit,
                                       None if j.start is None else j.start * unit,
                                       None if j.finish is None else j.finish * unit, reads))
@@ -534,7 +514,8 @@ class IntSimulator:
         ready = tuple(sorted((core, tuple(sorted((j.task, j.release - at, j.remaining, j.start is not None)
                                                  for j in self.pending(core)))) for core in range(self.ncores)))
         holders = tuple(sorted((inst, j.task, j.release - at) for inst, j in self.holder.items()))
-        heap = tuple(sorted((time - at, phase, payload if phase == _RELEASE else payload[0])  # type: ignore[index]
+        # (a release carries its task, an arrival its message)
+        heap = tuple(sorted((time - at, phase, payload if isinstance(payload, int) else payload[0])
                             for time, phase, _seq, payload in self.heap))
         back = tuple(sorted((k, v - at) for k, v in self.last_arrival.items() if v > at))
         counters = tuple(sorted(self.counter.items()))
@@ -544,9 +525,11 @@ class IntSimulator:
 
 
 class _Pattern(tuple[int | None, ...]):
-    """A per-job pattern in ticks; an entry outside the legal range is None (``values``: as given)."""
+    """A per-job pattern in ticks; an entry outside the legal range is None (``values``: as given,
+    ``legal``: the range)."""
 
     values: tuple[Fraction, ...]
+    legal: tuple[Fraction, Fraction]
 
     def at(self, index: int, refusal: Callable[[Fraction], str]) -> int:
         """Entry ``index mod len``, or ``ScenarioError(refusal(value as given))`` if it is out of range."""
@@ -567,7 +550,14 @@ def _pattern(values: Sequence[Fraction] | None, legal: tuple[Fraction, Fraction]
     lo, hi = legal
     pattern = _Pattern(base.ticks(v) if lo <= v <= hi else None for v in values)
     pattern.values = tuple(values)
+    pattern.legal = legal
     return pattern
+
+
+def _legal(patterns: Mapping[_K, Sequence[Fraction]], legal: Mapping[_K, tuple[Fraction, Fraction]]) -> list[Fraction]:
+    """The entries of ``patterns`` in the range ``legal`` gives their key (those of keys without one left out)."""
+    return [v for key, pattern in patterns.items() if key in legal
+            for v in pattern if legal[key][0] <= v <= legal[key][1]]
 
 
 
@@ -580,7 +570,7 @@ class JobRecords(Protocol):
 
     index_of: dict[str, int]
     read_ports: list[tuple[str, ...]]
-    jobs: list[list[_Job]]
+    jobs: list[list[IntJob]]
 
 
 class ChainSamples:
@@ -601,16 +591,17 @@ class ChainSamples:
         memo: dict[tuple[int, int, int], tuple[int, int] | None] = {}
         port_index: dict[tuple[int, str], int] = {}
 
-        def message(pos: int, job: _Job) -> _Msg | None:
+        def message(pos: int, job: IntJob) -> _Msg | None:
             """What ``job`` (at chain position ``pos`` ≥ 1) read on the hop's in-port, or None."""
             pk = (job.task, hop_port[pos])
             idx = port_index.get(pk)
             if idx is None:
                 ports = sim.read_ports[job.task]
                 idx = port_index[pk] = ports.index(hop_port[pos]) if hop_port[pos] in ports else -1
-            return None if idx < 0 else job.reads[idx]  # type: ignore[index]  # (it has started)
+            reads = job.reads  # (it has started)
+            return None if idx < 0 or reads is None else reads[idx]
 
-        def stamp(pos: int, job: _Job) -> tuple[int, int] | None:
+        def stamp(pos: int, job: IntJob) -> tuple[int, int] | None:
             if pos == 0:
                 assert job.start is not None
                 return job.index, job.start
@@ -622,42 +613,43 @@ class ChainSamples:
             memo[key] = value
             return value
 
-        holders: list[tuple[int, int, _Job]] = []
+        #: (stamp time, stamp index, finish, index) of each finished job of τₙ with a stamp
+        holders: list[tuple[int, int, int, int]] = []
         for job in jobs[last]:
-            if job.finish is None:
+            finish = job.finish
+            if finish is None:
                 continue
             # deep chains: resolve from the first position up so the recursion stays shallow
             st = _stamp_iterative(stamp, message, job, n - 1, jobs, memo)
             if st is not None:
-                holders.append((st[1], st[0], job))
+                holders.append((st[1], st[0], finish, job.index))
         self.holders = holders
         self.reads = reads
 
-    # (the holders are finished jobs)
     def data_age(self) -> list[IntSample]:
-        return [(job.finish - s, s, job.finish, k, k, job.index) for s, k, job in self.holders]  # type: ignore[operator, misc]
+        return [(f - s, s, f, k, k, index) for s, k, f, index in self.holders]
 
     def data_age_nonreduced(self) -> list[IntSample]:
         reads = self.reads
-        return [(job.finish - reads[k - 1], reads[k - 1], job.finish, k - 1, k, job.index)  # type: ignore[operator, misc]
-                for s, k, job in self.holders if k >= 1]
+        return [(f - reads[k - 1], reads[k - 1], f, k - 1, k, index) for _s, k, f, index in self.holders if k >= 1]
 
     def reactions(self) -> tuple[list[IntSample], list[IntSample]]:
         holders = sorted(self.holders, key=lambda h: h[0])
         stamps = [h[0] for h in holders]
-        best_from: list[tuple[int, int, int] | None] = [None] * len(holders)
+        best_from: list[tuple[int, int, int]] = []  # suffix minima of (finish, τₙ index, stamp index)
         running = None
-        for i in range(len(holders) - 1, -1, -1):
-            cand: tuple[int, int, int] = (holders[i][2].finish, holders[i][2].index, holders[i][1])  # type: ignore[assignment]
+        for _s, k, f, index in reversed(holders):
+            cand = (f, index, k)
             running = cand if running is None or cand < running else running
-            best_from[i] = running
+            best_from.append(running)
+        best_from.reverse()
         react, react_r = [], []
         reads = self.reads
         for j in sorted(reads):
             pos = bisect_left(stamps, reads[j])
             if j == 0 or pos == len(holders):
                 continue
-            f, last, k = best_from[pos]  # type: ignore[misc]  # (set at every position)
+            f, last, k = best_from[pos]
             react.append((f - reads[j - 1], reads[j - 1], f, j - 1, k, last))
             react_r.append((f - reads[j], reads[j], f, j, k, last))
         return react, react_r
@@ -671,8 +663,8 @@ class ChainSamples:
         return react if kind == "reaction_time" else react_r
 
 
-def _stamp_iterative(stamp: Callable[[int, _Job], tuple[int, int] | None], message: Callable[[int, _Job], _Msg | None],
-                     job: _Job, pos: int, jobs: list[list[_Job]],
+def _stamp_iterative(stamp: Callable[[int, IntJob], tuple[int, int] | None],
+                     message: Callable[[int, IntJob], _Msg | None], job: IntJob, pos: int, jobs: list[list[IntJob]],
                      memo: dict[tuple[int, int, int], tuple[int, int] | None]) -> tuple[int, int] | None:
     """``stamp(pos, job)``, first filling the memo along the chain of writers from the back so
     that the recursion in ``stamp`` is at most one level deep per call."""
@@ -714,8 +706,6 @@ def target_samples(model: SystemModel, scenario: ConcreteScenario, targets: Iter
     """Every sample of each target in the run of ``scenario`` over ``[0, horizon)``, as the reference
     path lists them (``scenario._chain_samples`` of the trace; for a task ``_response_samples`` with
     the jobs still open at the horizon, their value ``horizon − release``)."""
-    from .scenario import ResponseSample
-
     sim = IntSimulator.of(model, scenario, max_events, (scenario.horizon,))
     unit = sim.unit
     horizon = sim.base.ticks(scenario.horizon)
@@ -745,20 +735,22 @@ def _chain_samples_of(sim: IntSimulator, model: SystemModel) -> Callable[[str], 
     return chain_samples
 
 
-def extremes_of(targets: Iterable[Target], unit: Fraction, jobs_of: Callable[[str], list[_Job]],
+def extremes_of(targets: Iterable[Target], unit: Fraction, jobs_of: Callable[[str], list[IntJob]],
                 chain_samples: Callable[[str], ChainSamples],
                 open_until: int | None = None) -> dict[Target, Extremes]:
     """The ``scenario.Extremes`` of each target from integer job records, in seconds: ``jobs_of(task
     id)`` gives a task's jobs, ``chain_samples(chain name)`` a chain's ``ChainSamples``. A job not
     finished is left out, or, with ``open_until`` (ticks), counted with ``open_until − release`` (as
     ``scenario.extremes`` with ``with_open``). Ties go to the earliest sample, as there."""
-    from .scenario import Extremes, ResponseSample
-
     values: dict[Target, Extremes] = {}
     for t in targets:
         if t.kind == "response":
-            found = [(open_until - j.release if j.finish is None else j.finish - j.release, j.index, j.release,  # type: ignore[operator]
-                      j.finish) for j in jobs_of(t.name) if j.finish is not None or open_until is not None]
+            found: list[tuple[int, int, int, int | None]] = []
+            for j in jobs_of(t.name):
+                if j.finish is not None:
+                    found.append((j.finish - j.release, j.index, j.release, j.finish))
+                elif open_until is not None:
+                    found.append((open_until - j.release, j.index, j.release, None))
             if not found:
                 values[t] = Extremes(None, None)
                 continue
@@ -779,14 +771,12 @@ def extremes_of(targets: Iterable[Target], unit: Fraction, jobs_of: Callable[[st
 
 def measure_prefix(model: SystemModel, scenario: ConcreteScenario, targets: Iterable[Target], max_events: int,
                    event_budget: int | None = None) -> Measured:
-    """``scenario.measure`` on integers: the run of ``scenario`` over ``[0, horizon)`` and the
+    """``measure.measure`` on integers: the run of ``scenario`` over ``[0, horizon)`` and the
     extremes of every target in it, jobs still open at the horizon counted with ``horizon − release``
     (a lower bound on their response). The same run, samples and extremes as the reference path
     ``scenario.measure_reference`` (tests/test_intsim.py compares the two). With ``event_budget``
     the run may end earlier (``IntSimulator.run_to``); the result then holds the scenario with that
     shorter horizon."""
-    from .scenario import Measured
-
     sim = IntSimulator.of(model, scenario, max_events, (scenario.horizon,))
     unit = sim.unit
     horizon = sim.run_to(sim.base.ticks(scenario.horizon), event_budget)

@@ -12,18 +12,13 @@ reference path (``scenario.measure_periodic_reference``) on random rigid systems
 """
 from __future__ import annotations
 
-from collections.abc import Callable, Hashable, Iterable
+from collections.abc import Hashable, Iterable
 from fractions import Fraction
-from typing import TYPE_CHECKING, TypeVar
 
 from ..model.system import SystemModel
-from .intsim import _ARRIVAL, ChainSamples, IntSimulator, _Job, extremes_of
-
-if TYPE_CHECKING:
-    from .scenario import ConcreteScenario, Measured, Target
-
-#: a time: ticks (``rigid``) or seconds (``scenario.measure_periodic_reference``)
-_T = TypeVar("_T", int, Fraction)
+from .intsim import ChainSamples, IntJob, IntSimulator, extremes_of
+from .jobs import Job
+from .scenario import ConcreteScenario, Measured, Target, repetition
 
 
 def rigid_scenario(model: SystemModel, scenario: ConcreteScenario) -> bool:
@@ -37,20 +32,6 @@ def rigid_scenario(model: SystemModel, scenario: ConcreteScenario) -> bool:
 
 
 # ------------------------------------------------------------------ one scenario, completely
-
-
-def repetition(run_to: Callable[[_T], object], timing_state: Callable[[_T], Hashable], hyper: _T,
-               max_periods: int) -> tuple[_T, _T] | tuple[None, None]:
-    """(t₀, P) of specs/proof.md §4.3: drive a run to the multiples of ``hyper`` until its timing
-    state at one equals that at an earlier one; (None, None) if none repeats within ``max_periods``."""
-    seen: dict[Hashable, int] = {}
-    for k in range(max_periods + 1):
-        run_to(k * hyper)
-        state = timing_state(k * hyper)
-        if state in seen:
-            return seen[state] * hyper, (k - seen[state]) * hyper
-        seen[state] = k
-    return None, None
 
 
 _new_job = object.__new__
@@ -71,9 +52,9 @@ class _Snapshot:
                 if j.index < self.first_pending[j.task]:
                     self.first_pending[j.task] = j.index
         in_flight = [0] * len(sim.links)
-        for _time, phase, _seq, payload in sim.heap:
-            if phase == _ARRIVAL:
-                in_flight[payload[0]] += 1  # type: ignore[index]  # (an arrival carries its message)
+        for _time, _phase, _seq, payload in sim.heap:
+            if not isinstance(payload, int):  # an arrival (it carries its message; a release its task)
+                in_flight[payload[0]] += 1
         self.arrived = [sent - flying for sent, flying in zip(sim.sent, in_flight)]
         self.events = sim.events
 
@@ -117,15 +98,16 @@ class PeriodicShift:
                 jobs[j] = done
         return shift
 
-    def _moved(self, task: int, src: _Job) -> _Job | None:
+    def _moved(self, task: int, src: IntJob) -> IntJob | None:
         """Job ``src.index + n`` of ``task``: the record of ``src`` moved by one period."""
-        if src.finish is None:
+        start, finish = src.start, src.finish
+        if start is None or finish is None:  # (a finished job has started)
             return None
         p, shift = self.period, self.shift
-        job = _new_job(_Job)
+        job: IntJob = _new_job(Job)
         job.task, job.index, job.release = task, src.index + shift[task], src.release + p
-        # (a finished job has started; a record is never ranked again)
-        job.start, job.finish, job.remaining, job.key = src.start + p, src.finish + p, 0, None  # type: ignore[operator, assignment]
+        # (a record is never ranked again: its ``key`` is left unset)
+        job.start, job.finish, job.remaining = start + p, finish + p, 0
         reads = src.reads
         if reads:
             arrived, regs = self.arrived, self.registers[task]
@@ -147,24 +129,28 @@ class PeriodicShift:
             if n > 0:
                 append = jobs.append
                 while jobs[-n].release < last_release:
-                    append(moved(i, jobs[-n]))  # type: ignore[arg-type]  # (the source has finished)
+                    job = moved(i, jobs[-n])
+                    if job is None:  # (never: the source has finished, see ``of``)
+                        break
+                    append(job)
         self.jobs = [self._cut(jobs, horizon) for jobs in self.full]
         self.events = self.events_at(horizon)
         return self
 
     @staticmethod
-    def _cut(jobs: list[_Job], horizon: int) -> list[_Job]:
+    def _cut(jobs: list[IntJob], horizon: int) -> list[IntJob]:
         k = len(jobs)
         while k and jobs[k - 1].release >= horizon:
             k -= 1
         out = jobs[:k]
         for j in range(k - 1, -1, -1):
             job = out[j]
-            if job.finish < horizon:  # type: ignore[operator]  # (every job before the horizon finishes)
+            finish, start = job.finish, job.start  # (every job before the horizon finishes)
+            if finish is not None and finish < horizon:
                 break
-            cut = _new_job(_Job)
-            cut.task, cut.index, cut.release, cut.remaining, cut.key = job.task, job.index, job.release, 0, None  # type: ignore[assignment]
-            started = job.start < horizon  # type: ignore[operator]
+            cut: IntJob = _new_job(Job)
+            cut.task, cut.index, cut.release, cut.remaining = job.task, job.index, job.release, 0
+            started = start is not None and start < horizon
             cut.start, cut.reads = (job.start, job.reads) if started else (None, None)
             cut.finish = None
             out[j] = cut
@@ -173,12 +159,10 @@ class PeriodicShift:
 
 def measure_rigid(model: SystemModel, scenario: ConcreteScenario, targets: Iterable[Target], hyper: Fraction,
                   max_periods: int, max_events: int) -> Measured:
-    """``scenario.measure_periodic`` for a rigid scenario (``rigid_scenario``): the same detection
+    """``measure.measure_periodic`` for a rigid scenario (``rigid_scenario``): the same detection
     of the periodic timing state at multiples of ``hyper``, the same coverage steps and the same
     extremes, computed on integers. Past the first repetition the run is not simulated again but
     shifted (``PeriodicShift``), which gives the same job records."""
-    from .scenario import Measured
-
     targets = tuple(targets)
     sim = IntSimulator(model, dict(scenario.phases), dict(scenario.counters), max_events, (hyper,))
     unit = sim.unit
@@ -189,14 +173,14 @@ def measure_rigid(model: SystemModel, scenario: ConcreteScenario, targets: Itera
         snapshots[at] = _Snapshot(sim)
         return sim.timing_state(at)
 
-    period: int  # (None only together with t0)
-    t0, period = repetition(sim.run_to, timing_state, big_h, max_periods)  # type: ignore[assignment]
+    found = repetition(sim.run_to, timing_state, big_h, max_periods)  # (t₀, P)
     horizon = sim.now
     complete = False
     chains = {c.name: c for c in model.chains}
     samples: dict[str, ChainSamples] = {}
     run: IntSimulator | PeriodicShift = sim
-    shift = None if t0 is None else PeriodicShift.of(sim, snapshots[t0], snapshots[t0 + period], period)
+    shift = None if found is None else PeriodicShift.of(sim, snapshots[found[0]], snapshots[found[0] + found[1]],
+                                                        found[1])
 
     def chain_samples(name: str) -> ChainSamples:
         if name not in samples:
@@ -206,9 +190,10 @@ def measure_rigid(model: SystemModel, scenario: ConcreteScenario, targets: Itera
     def covered(target: Target, mark: int, end: int) -> bool:
         if target.kind == "response":
             return all(j.finish is not None for j in run.jobs[sim.index_of[target.name]] if j.release < end)
-        return any(s >= mark for s, _k, _job in chain_samples(target.name).holders)
+        return any(h[0] >= mark for h in chain_samples(target.name).holders)
 
-    if t0 is not None:
+    if found is not None:
+        t0, period = found
         mark, end = t0 + 2 * period, t0 + period
         horizon = max(horizon, t0 + 3 * period)
         limit = big_h * (max_periods + 1) + 2 * period
@@ -227,5 +212,5 @@ def measure_rigid(model: SystemModel, scenario: ConcreteScenario, targets: Itera
             horizon += period
     values = extremes_of(targets, unit, lambda tid: run.jobs[sim.index_of[tid]], chain_samples)
     h = horizon * unit
-    return Measured(scenario.with_horizon(h), values, complete, h, None if t0 is None else t0 * unit,
-                    None if period is None else period * unit, run.events)
+    return Measured(scenario.with_horizon(h), values, complete, h, None if found is None else found[0] * unit,
+                    None if found is None else found[1] * unit, run.events)

@@ -5,31 +5,32 @@ replayed: phases, prescaler counter phases, and per task / per connection *patte
 times, delays and sporadic inter-arrival times (job or message ``i`` takes ``pattern[i % len]``).
 ``to_sim`` turns it into a ``verify.prove.sim.Scenario``: ``replay`` runs it in the reference simulator,
 which every counterexample is checked against. The searches evaluate scenarios with the integer
-simulator of ``intsim.py`` (and ``rigid.py`` on top of it), which the tests hold to the reference.
+simulator of ``intsim.py`` (and ``rigid.py`` on top of it, both through ``measure.py``), which the
+tests hold to the reference paths here.
 
 Targets name what is measured: a chain latency (``reaction_time``, ``data_age`` — reduced —,
 ``data_age_nonreduced``; the kinds of ``verify.prove.sim.KINDS``) or a task's response time
-(``response``). ``measure`` runs a scenario to a fixed horizon; ``measure_periodic`` (rigid systems
-only, §4.3 of the proof spec) runs until the timing state repeats and the samples are provably
-complete, so that its maxima are those of the infinite run.
+(``response``). ``measure_reference`` runs a scenario to a fixed horizon; ``measure_periodic_reference``
+(rigid systems only, §4.3 of the proof spec) runs until the timing state repeats and the samples are
+provably complete, so that its maxima are those of the infinite run.
 """
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Hashable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any, TypeAlias, TypeVar
 
-from ..model.system import SystemModel
+from ..model.system import SystemModel, TaskModel
 from ..core.timebase import frac_lcm
-from .sim import (
-    DEFAULT_MAX_EVENTS, Sample, Scenario, Trace, _ARRIVAL, _RELEASE, _Job, _Simulator, chain_latencies, simulate
-)
+from .sim import DEFAULT_MAX_EVENTS, Sample, Scenario, SimJob, Simulator, Trace, chain_latencies, simulate
 
 ZERO = Fraction(0)
 CHAIN_KINDS = ("reaction_time", "data_age", "data_age_nonreduced")
 
 _K = TypeVar("_K")
+#: a time: ticks (``rigid``) or seconds (``measure_periodic_reference``)
+_T = TypeVar("_T", int, Fraction)
 #: what decides the timing of a run's future (``timing_state``): six sorted tuples, compared for equality
 TimingState: TypeAlias = "tuple[tuple[object, ...], ...]"
 
@@ -255,15 +256,13 @@ def hyperperiod(model: SystemModel) -> Fraction | None:
         if act.strict_period is not None:
             eff[tid] = act.strict_period
         elif act.trigger_port is not None:
-            writers = []
-            for member in act.trigger_members:
-                lk = model.link_into(f"{t.instance}.{member}")
-                if lk is not None:
-                    writers.append(eff.get(lk.writer))
-            if any(w is None for w in writers):
+            links = [lk for member in act.trigger_members
+                     if (lk := model.link_into(f"{t.instance}.{member}")) is not None]
+            writers = [w for lk in links if (w := eff.get(lk.writer)) is not None]
+            if len(writers) < len(links):
                 eff[tid] = None
             else:
-                base = frac_lcm(writers)  # type: ignore[arg-type]  # (none is None)
+                base = frac_lcm(writers)
                 eff[tid] = None if base is None else base * act.release_every
         else:
             eff[tid] = None
@@ -298,25 +297,21 @@ class Measured:
     events: int = 0
 
 
-def _run_to(sim: _Simulator, until: Fraction) -> None:
-    """Process every event strictly before ``until`` exactly as ``_Simulator.run`` does, then let
-    time pass up to ``until`` (events at ``until`` itself are left for later)."""
-    while (t := sim._next_time()) is not None and t < until:
-        sim._advance(t)
-        sim._complete_due()
-        sim._pop_due(_ARRIVAL, sim._arrive)
-        sim._pop_due(_RELEASE, sim._timed_release)
-        sim._dispatch()
-    if sim.now < until:
-        sim._advance(until)
+def repetition(run_to: Callable[[_T], object], timing_state: Callable[[_T], Hashable], hyper: _T,
+               max_periods: int) -> tuple[_T, _T] | None:
+    """(t₀, P) of specs/proof.md §4.3: drive a run to the multiples of ``hyper`` until its timing
+    state at one equals that at an earlier one; None if none repeats within ``max_periods``."""
+    seen: dict[Hashable, int] = {}
+    for k in range(max_periods + 1):
+        run_to(k * hyper)
+        state = timing_state(k * hyper)
+        if state in seen:
+            return seen[state] * hyper, (k - seen[state]) * hyper
+        seen[state] = k
+    return None
 
 
-def _trace(sim: _Simulator, horizon: Fraction) -> Trace:
-    jobs = {tid: tuple(j.record() for j in js) for tid, js in sim.jobs.items()}
-    return Trace(horizon, jobs, tuple(sim.messages))
-
-
-def timing_state(sim: _Simulator, at: Fraction) -> TimingState:
+def timing_state(sim: Simulator, at: Fraction) -> TimingState:
     """Everything that decides the *timing* of the future after ``at`` (nothing of provenance):
     pending jobs with their remaining work, cooperative tokens, scheduled releases and arrivals in
     processing order, FIFO back-pressure, prescaler counters and AND freshness — all relative to
@@ -330,8 +325,9 @@ def timing_state(sim: _Simulator, at: Fraction) -> TimingState:
     # sort keeps the send order of messages on one connection
     entries = sorted(sim.heap, key=lambda e: (e[0], e[1], e[2]))
     # (a release carries its task, an arrival its message)
-    heap = tuple(sorted(((time - at, phase, payload.id if phase == _RELEASE else (payload.source, payload.target))  # type: ignore[attr-defined]
-                         for time, phase, _seq, payload in entries), key=lambda e: (e[0], e[1], e[2])))
+    heap = tuple(sorted(((time - at, phase, payload.id if isinstance(payload, TaskModel)
+                          else (payload.source, payload.target)) for time, phase, _seq, payload in entries),
+                        key=lambda e: (e[0], e[1], e[2])))
     back = tuple(sorted((k, v - at) for k, v in sim.last_arrival.items() if v > at))
     counters = tuple(sorted(sim.counter.items()))
     fresh = tuple(sorted((k, tuple(sorted(v))) for k, v in sim.fresh.items()))
@@ -339,7 +335,7 @@ def timing_state(sim: _Simulator, at: Fraction) -> TimingState:
     return ready, holders, heap, back, counters, fresh, snapshots
 
 
-def _executor_jobs(sim: _Simulator, core: str) -> list[_Job]:
+def _executor_jobs(sim: Simulator, core: str) -> list[SimJob]:
     """The released, uncompleted jobs of the executors of ``core`` (specs/timing.md §9)."""
     return [j for ex in sim.threads.get(core, ()) for j in ex.jobs_on(core)]
 
@@ -352,18 +348,6 @@ def _covered(trace: Trace, model: SystemModel, target: Target, mark: Fraction, p
     return any(s.begin >= mark for s in chain_latencies(trace, chain).data_age)
 
 
-def measure_periodic(model: SystemModel, scenario: ConcreteScenario, targets: Iterable[Target],
-                     hyper: Fraction, max_periods: int = 64,
-                     max_events: int = DEFAULT_MAX_EVENTS) -> Measured:
-    """``measure_periodic_reference``, by the integer evaluator of ``rigid.py`` whenever the scenario
-    is rigid (the same run, samples and extremes; tests/test_prove.py compares the two)."""
-    from .rigid import measure_rigid, rigid_scenario
-
-    if rigid_scenario(model, scenario):
-        return measure_rigid(model, scenario, targets, hyper, max_periods, max_events)
-    return measure_periodic_reference(model, scenario, targets, hyper, max_periods, max_events)
-
-
 def measure_periodic_reference(model: SystemModel, scenario: ConcreteScenario, targets: Iterable[Target],
                                hyper: Fraction, max_periods: int = 64,
                                max_events: int = DEFAULT_MAX_EVENTS) -> Measured:
@@ -374,41 +358,28 @@ def measure_periodic_reference(model: SystemModel, scenario: ConcreteScenario, t
     ``complete`` is False when no repetition (or no coverage) shows up within ``max_periods``
     hyperperiods; the extremes are then those of the simulated prefix only."""
     targets = tuple(targets)
-    sim = _Simulator(model, scenario.with_horizon(hyper * (max_periods + 2)).to_sim(model), max_events)
-    from .rigid import repetition
-
-    period: Fraction  # (None only together with t0)
-    t0, period = repetition(lambda t: _run_to(sim, t), lambda t: timing_state(sim, t), hyper, max_periods)  # type: ignore[assignment]
+    sim = Simulator(model, scenario.with_horizon(hyper * (max_periods + 2)).to_sim(model), max_events)
+    found = repetition(sim.run_to, lambda t: timing_state(sim, t), hyper, max_periods)
     horizon = sim.now
     complete = False
-    if t0 is not None:
+    if found is not None:
+        t0, period = found
         mark, end = t0 + 2 * period, t0 + period
         horizon = max(horizon, t0 + 3 * period)
         limit = hyper * (max_periods + 1) + 2 * period
         while True:
-            _run_to(sim, horizon)
-            trace = _trace(sim, horizon)
+            sim.run_to(horizon)
+            trace = sim.trace(horizon)
             if all(_covered(trace, model, t, mark, end) for t in targets):
                 complete = True
                 break
             if horizon >= limit:
                 break
             horizon += period
-    trace = _trace(sim, horizon)
+    trace = sim.trace(horizon)
     values = {t: extremes(trace, model, t) for t in targets}
-    return Measured(scenario.with_horizon(horizon), values, complete, horizon, t0, period, sim.events)
-
-
-def measure(model: SystemModel, scenario: ConcreteScenario, targets: Iterable[Target],
-            max_events: int = DEFAULT_MAX_EVENTS, event_budget: int | None = None) -> Measured:
-    """The extremes of every target in the run of ``scenario`` up to its horizon (no completeness
-    claim: what a falsifying search uses), by the integer simulator of ``intsim.py`` (the same run,
-    samples and extremes as ``measure_reference``; tests/test_intsim.py compares the two). With
-    ``event_budget`` the run ends at the first instant reached with that many events processed, if
-    that comes before the horizon (the result holds the scenario with the shorter horizon)."""
-    from .intsim import measure_prefix
-
-    return measure_prefix(model, scenario, tuple(targets), max_events, event_budget)
+    return Measured(scenario.with_horizon(horizon), values, complete, horizon, None if found is None else found[0],
+                    None if found is None else found[1], sim.events)
 
 
 def measure_reference(model: SystemModel, scenario: ConcreteScenario, targets: Iterable[Target],

@@ -49,10 +49,11 @@ import time
 from bisect import bisect_left
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Any, cast
+from typing import Any, TypeAlias, cast
 from collections.abc import Callable, Mapping
 
 from ..model.system import Activation, ChainModel, ExecutorModel, LinkModel, SystemModel, TaskModel
+from .jobs import ARRIVAL, RELEASE, Job
 
 ZERO = Fraction(0)
 GRID = 1000  # random choices lie on a grid of GRID steps across their range
@@ -206,29 +207,24 @@ class Trace:
 # ------------------------------------------------------------------ the simulator
 
 
-@dataclass(eq=False)
-class _Job:
-    task: TaskModel
-    index: int
-    order: int  # the task's position in system.tasks
-    release: Fraction
-    exec_time: Fraction
-    remaining: Fraction
-    start: Fraction | None = None
-    finish: Fraction | None = None
-    reads: dict[str, Message | None] = field(default_factory=dict)
-    core: str = ""  # a callback's worker core, once started
-
-    def key(self) -> tuple[int, Fraction, int, int]:
-        """Dispatch rank (§1): higher priority, then earlier release, then task order."""
-        return (-self.task.priority, self.release, self.order, self.index)
-
-    def record(self) -> JobRecord:
-        return JobRecord(self.task.id, self.index, self.release, self.exec_time, self.start,
-                         self.finish, tuple(self.reads.items()))
+#: a job of this simulator: its task, times in seconds, its reads by port (filled at its start), its core
+SimJob: TypeAlias = Job[TaskModel, Fraction, dict[str, Message | None], str]
 
 
-_ARRIVAL, _RELEASE = 1, 2  # heap phases: arrivals before releases at one instant
+def new_job(task: TaskModel, index: int, order: int, release: Fraction, exec_time: Fraction) -> SimJob:
+    """Job ``index`` of ``task`` (at position ``order`` in the system), ranked (§1) by higher priority,
+    then earlier release, then task order."""
+    return Job(task, index, release, exec_time, (-task.priority, release, order, index), {}, "")
+
+
+def record(job: SimJob) -> JobRecord:
+    """The ``JobRecord`` of ``job`` so far."""
+    return JobRecord(job.task.id, job.index, job.release, job.cost, job.start, job.finish, tuple(job.reads.items()))
+
+
+def rank(job: SimJob) -> tuple[int, Fraction, int, int]:
+    """The dispatch rank of ``job`` (§1): higher priority, then earlier release, then task order."""
+    return job.key
 
 
 def absorbs(task: TaskModel, executor: ExecutorModel) -> bool:
@@ -266,14 +262,14 @@ class _Executor:
 
     model: ExecutorModel
     exclusive: dict[str, str] = field(default_factory=dict)  # task id -> its mutually exclusive group
-    pending: list[_Job] = field(default_factory=list)
-    snapshot: list[_Job] = field(default_factory=list)
-    running: dict[str, _Job | None] = field(default_factory=dict)
+    pending: list[SimJob] = field(default_factory=list)
+    snapshot: list[SimJob] = field(default_factory=list)
+    running: dict[str, SimJob | None] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         self.running = dict.fromkeys(self.model.workers)
 
-    def head(self, core: str) -> _Job | None:
+    def head(self, core: str) -> SimJob | None:
         """The job the worker of ``core`` runs when it gets its core: its started one, else the first
         takeable entry of the snapshot, else the first of a new snapshot (a polling point)."""
         current = self.running[core]
@@ -284,16 +280,16 @@ class _Executor:
         return next((j for j in self.snapshot if self.takeable(j)), None) or min(
             (j for j in self.pending if self.takeable(j)), key=self._rank, default=None)
 
-    def takeable(self, job: _Job) -> bool:
+    def takeable(self, job: SimJob) -> bool:
         """Not held back by its mutually exclusive group, which has a started job (§9.4)."""
         group = self.exclusive.get(job.task.id)
         return group is None or not any(j is not None and self.exclusive.get(j.task.id) == group
                                         for j in self.running.values())
 
-    def _rank(self, job: _Job) -> tuple[int, int, int]:
+    def _rank(self, job: SimJob) -> tuple[int, int, int]:
         return snapshot_rank(job.task, self.model), job.order, job.index
 
-    def start(self, job: _Job, core: str) -> None:
+    def start(self, job: SimJob, core: str) -> None:
         if self.model.polls and job not in self.snapshot:  # the polling point
             self.snapshot = sorted((j for j in self.pending if self.takeable(j)), key=self._rank)
         if self.model.polls:
@@ -308,11 +304,11 @@ class _Executor:
         if self.snapshot and any(self.running[c] is None and self.head(c) is None for c in self.running):
             self.snapshot = []
 
-    def worker_for(self, job: _Job, choice: dict[str, _Job | None]) -> str:
+    def worker_for(self, job: SimJob, choice: dict[str, SimJob | None]) -> str:
         """The worker that starts ``job``: the first free one in the executor's core order that chose it."""
         return next(c for c in self.model.workers if self.running[c] is None and choice.get(c) is job)
 
-    def jobs_on(self, core: str) -> list[_Job]:
+    def jobs_on(self, core: str) -> list[SimJob]:
         """Its released, uncompleted jobs on ``core``: the pending ones with its first core."""
         current = self.running[core]
         return (self.pending if core == self.model.workers[0] else []) + ([current] if current is not None else [])
@@ -323,19 +319,22 @@ def _check(ok: bool, what: str) -> None:
         raise ScenarioError(what)
 
 
-class _Simulator:
+class Simulator:
+    """One run of ``system`` under ``scenario`` (``simulate``); ``run_to`` and ``trace`` let a caller
+    drive it in steps (``scenario.measure_periodic_reference``)."""
+
     def __init__(self, system: SystemModel, scenario: Scenario, max_events: int, deadline: float | None = None):
         if system.holes:
             raise ScenarioError(f"cannot simulate unresolved holes: {[t.id for t in system.holes]}")
         self.system, self.sc, self.max_events = system, scenario, max_events
         self.deadline = deadline
         self.now, self.events, self.seq = ZERO, 0, 0
-        self.heap: list[tuple[Fraction, int, int, object]] = []
+        self.heap: list[tuple[Fraction, int, int, TaskModel | Message]] = []
         self.order = {t.id: i for i, t in enumerate(system.tasks)}
-        self.jobs: dict[str, list[_Job]] = {t.id: [] for t in system.tasks}
-        self.ready: dict[str, list[_Job]] = {c: [] for c in executor_cores(system)}
-        self.running: dict[str, _Job | None] = dict.fromkeys(self.ready)
-        self.holder: dict[str, _Job] = {}  # instance -> started, uncompleted cooperative job
+        self.jobs: dict[str, list[SimJob]] = {t.id: [] for t in system.tasks}
+        self.ready: dict[str, list[SimJob]] = {c: [] for c in executor_cores(system)}
+        self.running: dict[str, SimJob | None] = dict.fromkeys(self.ready)
+        self.holder: dict[str, SimJob] = {}  # instance -> started, uncompleted cooperative job
         self.executors = {e.name: _Executor(e, exclusive_groups(system, e)) for e in system.executors}
         self.threads: dict[str, list[_Executor]] = {}
         for ex in self.executors.values():
@@ -368,7 +367,7 @@ class _Simulator:
                 phase = ZERO if phase is None else phase
                 _check(0 <= phase < act.offset_window,
                        f"{t.id}: {act.offset_name} {phase} outside [0, {act.offset_window})")
-            self._push(phase, _RELEASE, t)
+            self._push(phase, RELEASE, t)
         elif act.trigger_port is not None:
             c = self.sc.counter_phase.get(t.id, 0)
             _check(0 <= c < act.release_every, f"{t.id}: counter phase {c} outside 0..{act.release_every - 1}")
@@ -401,7 +400,7 @@ class _Simulator:
 
     # -------------------------------------------------------------- the event loop
 
-    def _push(self, time: Fraction, phase: int, payload: object) -> None:
+    def _push(self, time: Fraction, phase: int, payload: TaskModel | Message) -> None:
         self.seq += 1
         heapq.heappush(self.heap, (Fraction(time), phase, self.seq, payload))
 
@@ -420,14 +419,29 @@ class _Simulator:
         return min(times, default=None)
 
     def run(self) -> Trace:
-        while (t := self._next_time()) is not None and t < self.sc.horizon:
+        self._process_before(self.sc.horizon)
+        return self.trace(self.sc.horizon)
+
+    def run_to(self, until: Fraction) -> None:
+        """Process every event strictly before ``until`` exactly as ``run`` does, then let time pass up
+        to ``until`` (events at ``until`` itself are left for later)."""
+        self._process_before(until)
+        if self.now < until:
+            self._advance(until)
+
+    def trace(self, horizon: Fraction) -> Trace:
+        """The run so far as the ``Trace`` of a run over ``[0, horizon)``."""
+        jobs = {tid: tuple(record(j) for j in js) for tid, js in self.jobs.items()}
+        return Trace(horizon, jobs, tuple(self.messages))
+
+    def _process_before(self, until: Fraction) -> None:
+        """The rounds of every instant before ``until``: completions, arrivals, releases, dispatch."""
+        while (t := self._next_time()) is not None and t < until:
             self._advance(t)
             self._complete_due()
-            self._pop_due(_ARRIVAL, self._arrive)
-            self._pop_due(_RELEASE, self._timed_release)
+            self._pop_due(ARRIVAL, self._arrive)
+            self._pop_due(RELEASE, self._timed_release)
             self._dispatch()
-        jobs = {tid: tuple(j.record() for j in js) for tid, js in self.jobs.items()}
-        return Trace(self.sc.horizon, jobs, tuple(self.messages))
 
     def _advance(self, t: Fraction) -> None:
         for job in self.running.values():
@@ -448,7 +462,7 @@ class _Simulator:
             self._count()
             self._complete(job)
 
-    def _complete(self, job: _Job) -> None:
+    def _complete(self, job: SimJob) -> None:
         t = job.task
         job.finish = self.now
         if t.executor is not None:
@@ -463,7 +477,7 @@ class _Simulator:
             for lk in self.links_from.get(f"{t.instance}.{port}", ()):
                 self._send(job, lk)
 
-    def _send(self, job: _Job, lk: LinkModel) -> None:
+    def _send(self, job: SimJob, lk: LinkModel) -> None:
         """Schedule one message; FIFO: never before the previous message on the connection (§2)."""
         key = (lk.source, lk.target)
         index = self.sent.get(key, 0)
@@ -471,7 +485,7 @@ class _Simulator:
         arrival = self.now + self._delay(lk, index)
         arrival = max(arrival, self.last_arrival.get(key, arrival))
         self.last_arrival[key] = arrival
-        self._push(arrival, _ARRIVAL, Message(lk.source, lk.target, index, job.task.id, job.index,
+        self._push(arrival, ARRIVAL, Message(lk.source, lk.target, index, job.task.id, job.index,
                                               self.now, arrival))
 
     def _arrive(self, msg: Message) -> None:
@@ -499,7 +513,7 @@ class _Simulator:
     def _timed_release(self, t: TaskModel) -> None:
         index = self.releases[t.id]
         self._release(t)
-        self._push(self.now + self._gap(t, t.activation, index), _RELEASE, t)
+        self._push(self.now + self._gap(t, t.activation, index), RELEASE, t)
 
     def _release(self, t: TaskModel) -> None:
         self.releases[t.id] += 1
@@ -508,21 +522,21 @@ class _Simulator:
             return  # absorbed by the pending job (§9)
         index = len(self.jobs[t.id])
         c = self._exec_time(t, index)
-        job = _Job(t, index, self.order[t.id], self.now, c, c)
+        job = new_job(t, index, self.order[t.id], self.now, c)
         self.jobs[t.id].append(job)
         (self.ready[t.core] if ex is None else ex.pending).append(job)
 
     # -------------------------------------------------------------- scheduling (§1)
 
-    def _eligible(self, job: _Job) -> bool:
+    def _eligible(self, job: SimJob) -> bool:
         """A cooperative job may start only while no other cooperative job of its instance holds."""
         t = job.task
         return t.kind != "cooperative" or job.start is not None or t.instance not in self.holder
 
-    def _pick(self, core: str) -> _Job | None:
+    def _pick(self, core: str) -> SimJob | None:
         """The best eligible task job, or the job an executor thread of the core runs (§9)."""
         heads = [h for ex in self.threads.get(core, ()) if (h := ex.head(core)) is not None]
-        return min([j for j in self.ready[core] if self._eligible(j)] + heads, key=_Job.key, default=None)
+        return min([j for j in self.ready[core] if self._eligible(j)] + heads, key=rank, default=None)
 
     def _dispatch(self) -> None:
         """Every core runs its best eligible job. Jobs about to start are started one at a time in
@@ -535,9 +549,9 @@ class _Simulator:
                 for ex in self.executors.values():
                     ex.settle()
                 return
-            self._start(min(starting, key=_Job.key), choice)
+            self._start(min(starting, key=rank), choice)
 
-    def _start(self, job: _Job, choice: dict[str, _Job | None]) -> None:
+    def _start(self, job: SimJob, choice: dict[str, SimJob | None]) -> None:
         """Read all inputs at start (§2) and take the instance's cooperative token (§1)."""
         t = job.task
         job.start = self.now
@@ -555,7 +569,7 @@ def simulate(system: SystemModel, scenario: Scenario, max_events: int = DEFAULT_
              deadline: float | None = None) -> Trace:
     """Run ``system`` under ``scenario`` over ``[0, scenario.horizon)`` (specs/timing.md §1–§3); with
     ``deadline`` (a ``time.monotonic()`` instant), ``SimulationTimeout`` once it has passed."""
-    return _Simulator(system, scenario, max_events, deadline).run()
+    return Simulator(system, scenario, max_events, deadline).run()
 
 
 # ------------------------------------------------------------------ chains (§4)

@@ -89,7 +89,8 @@ class Runs:
         return self.traces[cex.scenario]
 
 
-def _t(x: Fraction | None) -> str:
+def instant(x: Fraction | None) -> str:
+    """A time of a run as text; "-" when it has not happened."""
     return "-" if x is None else fmt_time(x)
 
 
@@ -105,10 +106,10 @@ def to_text(model: SystemModel, verdict: Verdict, runs: Runs | None = None) -> s
              f"  scenario: {cex.scenario.summary(model)}; the run lasts {fmt_time(cex.scenario.horizon)}"]
     if verdict.subject == "task":
         r = cast(ResponseSample, cex.sample)
-        lines.append(f"  job {r.task}#{r.index}: released {_t(r.release)}, completes {_t(r.finish)}: "
+        lines.append(f"  job {r.task}#{r.index}: released {instant(r.release)}, completes {instant(r.finish)}: "
                      f"response {fmt_time(r.value)}")
         job = trace.job(r.task, r.index)
-        lines.append(f"  it starts at {_t(job.start)}; jobs of its core running in between:")
+        lines.append(f"  it starts at {instant(job.start)}; jobs of its core running in between:")
         core = model.task(r.task).core
         end = r.finish if r.finish is not None else trace.horizon
         for t in model.tasks_on(core):
@@ -123,7 +124,7 @@ def to_text(model: SystemModel, verdict: Verdict, runs: Runs | None = None) -> s
         nxt = s.origin + 1
         sampled = trace.job(first, nxt).start if nxt < len(trace.jobs[first]) else None
         lines.append(f"  stimulus just after the read of {first}#{s.origin} at {fmt_time(s.begin)}; it is first "
-                     f"read by {first}#{nxt} at {_t(sampled)}")
+                     f"read by {first}#{nxt} at {instant(sampled)}")
     else:
         lines.append(f"  the value read by {first}#{s.stamp} at {fmt_time(s.begin)}"
                      + (" (measured from that job's previous read)" if verdict.variant == "non-reduced" else ""))
@@ -132,11 +133,12 @@ def to_text(model: SystemModel, verdict: Verdict, runs: Runs | None = None) -> s
     width = max(len(f"{st.job.task}#{st.job.index}") for st in steps)
     for step in steps:
         j = step.job
-        lines.append(f"    {f'{j.task}#{j.index}'.ljust(width)}  released {_t(j.release):>10}  reads at "
-                     f"{_t(j.start):>10}  completes {_t(j.finish):>10}")
+        lines.append(f"    {f'{j.task}#{j.index}'.ljust(width)}  released {instant(j.release):>10}  reads at "
+                     f"{instant(j.start):>10}  completes {instant(j.finish):>10}")
         if step.message is not None:
             m = step.message
-            lines.append(f"      -> {m.source} -> {m.target}: written {_t(m.written)}, arrives {_t(m.arrival)}")
+            lines.append(f"      -> {m.source} -> {m.target}: written {instant(m.written)}, "
+                         f"arrives {instant(m.arrival)}")
     lines.append(f"  latency: {fmt_time(s.end)} − {fmt_time(s.begin)} = {fmt_time(s.value)}")
     if verdict.kind == "jitter":
         b = cast(Sample, cex.best_sample)
@@ -154,8 +156,8 @@ def _listed(task: TaskModel, jobs: list[JobRecord]) -> list[str]:
     """The lines of ``task``'s jobs in a response's interval; past ``LISTED_JOBS`` of them, the first
     and last few and a line that counts the rest (an overloaded core can hold thousands)."""
     def line(j: JobRecord) -> str:
-        return (f"    {task.id}#{j.index}  [priority {task.priority}]  released {_t(j.release)}, "
-                f"starts {_t(j.start)}, completes {_t(j.finish)}")
+        return (f"    {task.id}#{j.index}  [priority {task.priority}]  released {instant(j.release)}, "
+                f"starts {instant(j.start)}, completes {instant(j.finish)}")
 
     if len(jobs) <= LISTED_JOBS:
         return [line(j) for j in jobs]
@@ -163,7 +165,7 @@ def _listed(task: TaskModel, jobs: list[JobRecord]) -> list[str]:
     hidden = jobs[half:-half]
     return ([line(j) for j in jobs[:half]]
             + [f"    … {len(hidden)} more jobs of {task.id} (#{hidden[0].index} to #{hidden[-1].index}), released "
-               f"{_t(hidden[0].release)} to {_t(hidden[-1].release)}"]
+               f"{instant(hidden[0].release)} to {instant(hidden[-1].release)}"]
             + [line(j) for j in jobs[-half:]])
 
 

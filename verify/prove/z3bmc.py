@@ -29,7 +29,8 @@ import z3
 from ..model.system import ChainModel, SystemModel
 from .exact import Budget, Extreme, ExactResult, Grid, exact_class, grid_of, scenario_of
 from ..core.timebase import ceil_to, floor_to
-from .scenario import Measured, Target, measure_periodic
+from .measure import measure_periodic
+from .scenario import Measured, Target
 
 MAX_CELLS = 2_500  # instants × tasks: beyond, bit-blasting alone can outlast any resource limit
 MAX_PERIODS = 8  # hyperperiods tried for the start of the repetition
@@ -380,13 +381,15 @@ def z3_exact(model: SystemModel, targets: list[Target], want_best: Iterable[Targ
     for t in targets:
         if t.kind == "response":
             r = analysis.task(t.name).wcrt
-            spans.append(None if r is None else H + _ceil_units(r, grid.h))
+            if r is None:
+                return None
+            spans.append(H + _ceil_units(r, grid.h))
         else:
             rb = analysis.chain(t.name).reaction_time.worst
-            spans.append(None if rb is None else 2 * H + _ceil_units(rb, grid.h))
-    if any(x is None for x in spans):
-        return None
-    W = ts + max(spans, default=H) + 1  # type: ignore[type-var, operator]  # (none is None)
+            if rb is None:
+                return None
+            spans.append(2 * H + _ceil_units(rb, grid.h))
+    W = ts + max(spans, default=H) + 1
     if W * len(model.tasks) > MAX_CELLS:
         return None
     enc.extend(W)

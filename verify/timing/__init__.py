@@ -29,13 +29,14 @@ if TYPE_CHECKING:  # (imported when first used: `verify check` needs the rates a
     from . import fastrta
     from .chains import Bound, ChainBounds, SpecCheck, Step, Term, Timing
     from .rates import ActivationInfo, EventModel, LinkSampling, RateInterval
-    from .rta import CoreLoad, TaskResponse
-    from .rta import response_times  # noqa: F401 - the reference statement of one round, importable as before
+    from .kernel import TaskResponse
+    from .reference import response_times  # noqa: F401 - the reference statement of one round, importable as before
+    from .rta import CoreLoad
 
 #: the names this package gives from its modules, each imported at its first use (PEP 562)
 _FROM_MODULES = {**dict.fromkeys(("Bound", "ChainBounds", "SpecCheck", "Step", "Term", "Timing"), "chains"),
                  **dict.fromkeys(("ActivationInfo", "EventModel", "LinkSampling", "RateInterval"), "rates"),
-                 **dict.fromkeys(("CoreLoad", "TaskResponse", "response_times"), "rta")}
+                 "TaskResponse": "kernel", "response_times": "reference", "CoreLoad": "rta"}
 
 
 def __getattr__(name: str) -> object:
@@ -172,7 +173,8 @@ def _bounds(system: SystemModel, variant: str
                        tuple[ChainBounds, ...], int, bool]:
     """Rates, event models, response times (the CPA fixed point) and chain bounds: (infos, events,
     responses, chains, rounds, converged)."""
-    from .chains import Timing, chain_bounds
+    from .chains import Timing
+    from .endtoend import chain_bounds
     from .rates import activation_rates, trigger_order
 
     order = trigger_order(system)
@@ -214,7 +216,7 @@ def _fixed_point(system: SystemModel, infos: Mapping[str, ActivationInfo], order
                  ) -> tuple[dict[str, EventModel], dict[str, TaskResponse], int, bool]:
     """CPA global iteration: event models from response times, response times from event models,
     starting from R = bcet (zero jitter) until the WCRTs repeat (§6.5). Each round is
-    ``rta.response_times``, computed by ``fastrta``; only the last one's ``TaskResponse``s are built."""
+    ``reference.response_times``, computed by ``fastrta``; only the last one's ``TaskResponse``s are built."""
     from . import fastrta
     from .rates import event_models
 
@@ -259,7 +261,7 @@ def _give_up(system: SystemModel, infos: Mapping[str, ActivationInfo], order: tu
 
 
 def _unbounded(r: TaskResponse) -> TaskResponse:
-    from .rta import TaskResponse
+    from .kernel import TaskResponse
 
     return TaskResponse(r.task, r.core, r.priority, r.bcrt, None, None, "unbounded", r.deadline,
                         r.deadline_rule, r.blocking, r.hold, r.busy_jobs, r.critical_job, r.interferers,

@@ -29,21 +29,24 @@ Reaction time is non-reduced (from the stimulus), data age reduced by default (f
 Günzel et al. 2024); the other variants follow by adding or removing τ₁'s sampling term. Best cases
 are ``Σ bcetᵢ + Σ d⁻`` (rule "best case", one term per step). ``None`` means unbounded. Dürr et
 al. 2019 and Becker et al. 2017 give the job-chain view these terms are derived from.
+
+This module holds the results, the context the rules read and the per-step rules; ``endtoend`` sums
+the steps into a chain's bounds (``chain_bounds``) and takes the least path over the read-time ages.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from fractions import Fraction
 from functools import cached_property
 from collections.abc import Iterable, Mapping
 
 from ..core.construct import direct_constructor
 from ..model.activations import Activation, DataTriggered, Periodic, SporadicSource
-from ..model.system import ChainModel, HopModel, LinkModel, SystemModel, TaskModel
+from ..model.system import HopModel, LinkModel, SystemModel, TaskModel
 from ..model.units import fmt_time
 from .rates import ActivationInfo, EventModel, arrival_model, combine_and, exact_sum
-from .multithreaded import may_overlap
-from .rta import TaskResponse, cooperative_counts, interferer, least_fixed_point
+from .kernel import TaskResponse, interferer, least_fixed_point
+from .rta import cooperative_counts
 
 ZERO = Fraction(0)
 
@@ -194,9 +197,6 @@ class ChainBounds:
 #: the constructors of the objects above, built by the thousand (``verify.core.construct``)
 _new_term = direct_constructor(Term)
 _new_step = direct_constructor(Step)
-_new_bound = direct_constructor(Bound)
-_new_spec_check = direct_constructor(SpecCheck)
-_new_chain_bounds = direct_constructor(ChainBounds)
 
 
 # ================================================================== context
@@ -267,11 +267,16 @@ class Timing:
 
 
 def _total(parts: Iterable[tuple[str, Fraction | None]]) -> Fraction | None:
-    values = [v for _, v in parts]
-    return None if any(v is None for v in values) else exact_sum(values)  # type: ignore[arg-type]  # no None
+    values = []
+    for _, v in parts:
+        if v is None:
+            return None
+        values.append(v)
+    return exact_sum(values)
 
 
-def _term(rule: str, parts: Iterable[tuple[str, Fraction | None]], note: str = "") -> Term:
+def summed_term(rule: str, parts: Iterable[tuple[str, Fraction | None]], note: str = "") -> Term:
+    """The term of ``rule`` whose value is the sum of ``parts`` (None if a part is unbounded)."""
     return _new_term(rule, _total(parts), tuple(parts), note)
 
 
@@ -299,19 +304,19 @@ def first_step(t: Timing, task: str) -> Step:
     step adds ``A⁺₁`` (the previous read of τ₁ is at or after the previous release) and, to the best
     case, the least read gap of τ₁ (§7.5)."""
     parts = ((f"W⁺({task})", t.events[task].sampling_wait), (f"R({task})", t.R(task)))
-    best = _term(BEST, ((f"C⁻({task})", t.bcet(task)),))
-    origin = _term(ORIGIN, ((f"A⁺({task})", t.events[task].a_max),),
+    best = summed_term(BEST, ((f"C⁻({task})", t.bcet(task)),))
+    origin = summed_term(ORIGIN, ((f"A⁺({task})", t.events[task].a_max),),
                    f"from the previous read of `{task}`, at most A⁺ before the current job's release")
-    gap = _term(ORIGIN_BEST, ((f"max(C⁻, A⁻ − (R − C⁻))({task})", read_gap_min(t, task)),),
+    gap = summed_term(ORIGIN_BEST, ((f"max(C⁻, A⁻ − (R − C⁻))({task})", read_gap_min(t, task)),),
                 "jobs of one task run one after another, and a start lies in [r, r + R − C⁻]")
-    return _new_step("first", task, None, task, None, None, _term(FIRST, parts), None, best.value, best,
+    return _new_step("first", task, None, task, None, None, summed_term(FIRST, parts), None, best.value, best,
                      origin, gap)
 
 
 def last_step(t: Timing, task: str) -> Step:
     """τₙ's job completes within Rₙ of the read it starts with: data age ``Rₙ`` (§7.4)."""
-    best = _term(BEST, (), "counted on the hop that reaches the last task")
-    return _new_step("last", task, None, task, None, None, None, _term(LAST, ((f"R({task})", t.R(task)),)),
+    best = summed_term(BEST, (), "counted on the hop that reaches the last task")
+    return _new_step("last", task, None, task, None, None, None, summed_term(LAST, ((f"R({task})", t.R(task)),)),
                      ZERO, best, None, None)
 
 
@@ -319,7 +324,7 @@ def register_reaction(t: Timing, hop: HopModel) -> Term:
     """``d⁺ + W⁺ᵢ + Rᵢ``: the value arrives within d⁺, the next activation of i within W⁺ᵢ, and that
     job (which starts after the arrival, so reads the value or a newer one) completes within Rᵢ."""
     i = hop.reader
-    return _term(REGISTER, (("d⁺", hop.link.delay_max), (f"W⁺({i})", t.events[i].sampling_wait),
+    return summed_term(REGISTER, (("d⁺", hop.link.delay_max), (f"W⁺({i})", t.events[i].sampling_wait),
                             (f"R({i})", t.R(i))))
 
 
@@ -327,20 +332,20 @@ def register_age(t: Timing, hop: HopModel) -> Term:
     """``d⁺ + A⁺ₚ + Rₚ``: a read of i at time s sees at least the output of the last job of p
     released by ``s − Rₚ − d⁺``, and that job was released after ``s − Rₚ − d⁺ − A⁺ₚ``."""
     p = hop.writer
-    return _term(REGISTER, (("d⁺", hop.link.delay_max), (f"A⁺({p})", t.events[p].a_max), (f"R({p})", t.R(p))))
+    return summed_term(REGISTER, (("d⁺", hop.link.delay_max), (f"A⁺({p})", t.events[p].a_max), (f"R({p})", t.R(p))))
 
 
 def trigger_reaction(t: Timing, hop: HopModel, k: int, rule: str) -> Term:
     """``d⁺ + δ⁺ₚ(k) + Rᵢ``: i is released at one of the k arrivals counted from this value's."""
     p, i = hop.writer, hop.reader
-    return _term(rule, (("d⁺", hop.link.delay_max), (f"δ⁺({p}, {k})", delta_plus(t, p, k)), (f"R({i})", t.R(i))))
+    return summed_term(rule, (("d⁺", hop.link.delay_max), (f"δ⁺({p}, {k})", delta_plus(t, p, k)), (f"R({i})", t.R(i))))
 
 
 def trigger_age(t: Timing, hop: HopModel, k: int) -> Term:
     """``d⁺ + Rₚ``: every job of i is released by an arrival on this port and reads that value or a
     newer one, whatever the prescaler."""
     p = hop.writer
-    return _term(trigger_rule(k), (("d⁺", hop.link.delay_max), (f"R({p})", t.R(p))))
+    return summed_term(trigger_rule(k), (("d⁺", hop.link.delay_max), (f"R({p})", t.R(p))))
 
 
 def cascade_links(system: SystemModel, hop: HopModel, act: Activation, pact: Activation
@@ -406,10 +411,12 @@ def _and_waits(t: Timing, hop: HopModel, k: int) -> tuple[Fraction | None, Fract
         if src.member != member:
             waits.append(model.sampling_wait)
     # (no None in waits or arrivals where they are used: checked)
-    wait = None if any(w is None for w in waits) else max(waits, default=ZERO)  # type: ignore[type-var]
+    known = [w for w in waits if w is not None]
+    wait = None if len(known) < len(waits) else max(known, default=ZERO)
     if wait is not None and cascade_fresh(t, hop):
         wait = ZERO
-    join = None if any(a is None for a in arrivals) else combine_and(arrivals).delta_plus(k)  # type: ignore[arg-type]
+    streams = [a for a in arrivals if a is not None]
+    join = None if len(streams) < len(arrivals) else combine_and(streams).delta_plus(k)
     return wait, join
 
 
@@ -418,7 +425,7 @@ def and_reaction(t: Timing, hop: HopModel, k: int) -> Term:
     member has a new arrival (each within its arrival stream's W⁺), then k − 1 further joins."""
     wait, join = _and_waits(t, hop, k)
     i = hop.reader
-    return _term(AND_JOIN, (("d⁺", hop.link.delay_max), ("wait for the other members", wait),
+    return summed_term(AND_JOIN, (("d⁺", hop.link.delay_max), ("wait for the other members", wait),
                             (f"δ⁺_AND({k})", join), (f"R({i})", t.R(i))))
 
 
@@ -435,21 +442,21 @@ def and_age(t: Timing, hop: HopModel, k: int, origin: str) -> Term:
     rule = {"release": AND_AGE, "start": AND_AGE + ", " + READ_AGE, "finish": AND_AGE}[origin]
     if origin == "finish":
         note += f"; `{p}`'s completion is counted in the hop before ({PAIR})"
-    return _term(rule, (("d⁺", hop.link.delay_max),) + writer + (("wait for the other members", wait),), note)
+    return summed_term(rule, (("d⁺", hop.link.delay_max),) + writer + (("wait for the other members", wait),), note)
 
 
 def trigger_age_from_start(t: Timing, hop: HopModel, k: int) -> Term:
     """``d⁺ + Eₚ`` (specs/timing.md §7.7, (7.7b)): when p's age is counted from its job's start, the
     job that triggers i completes within Eₚ of that start."""
     p = hop.writer
-    return _term(READ_AGE, (("d⁺", hop.link.delay_max), (f"E({p})", t.E(p))),
+    return summed_term(READ_AGE, (("d⁺", hop.link.delay_max), (f"E({p})", t.E(p))),
                  f"`{hop.reader}` is released by `{p}`'s output, which completes within E of its job's read "
                  f"(its {trigger_rule(k)} term with E for R)")
 
 
 def trigger_age_from_finish(t: Timing, hop: HopModel, k: int) -> Term:
     """``d⁺``: p's age is counted at its job's completion (after a same-core trigger pair, (7.7d))."""
-    return _term(trigger_rule(k), (("d⁺", hop.link.delay_max),),
+    return summed_term(trigger_rule(k), (("d⁺", hop.link.delay_max),),
                  f"`{hop.writer}`'s completion is counted in the hop before ({PAIR})")
 
 
@@ -501,20 +508,20 @@ def pair_age(t: Timing, hop: HopModel) -> Term | None:
     if span is None:
         return None
     p, i = hop.writer, hop.reader
-    return _term(PAIR, ((f"J({p}, {i})", span),),
+    return summed_term(PAIR, ((f"J({p}, {i})", span),),
                  f"from the read of `{p}`'s job to the completion of the `{i}` job its output releases: "
                  f"`{i}` outranks `{p}` on their core, so the core is busy with both and what outranks `{p}`")
 
 
 def last_from_finish(task: str) -> Term:
     """0: τₙ's age is counted at its job's completion (after a same-core trigger pair)."""
-    return _term(LAST, (), f"`{task}`'s completion is counted in the hop before ({PAIR})")
+    return summed_term(LAST, (), f"`{task}`'s completion is counted in the hop before ({PAIR})")
 
 
 def last_from_start(t: Timing, task: str) -> Term:
     """``Eₙ`` (specs/timing.md §7.7, (7.7a)): when τₙ's age is counted at its read, its job completes
     within Eₙ of that read."""
-    return _term(READ_AGE, ((f"E({task})", t.E(task)),),
+    return summed_term(READ_AGE, ((f"E({task})", t.E(task)),),
                  "counted from the last task's read (its start), not its release")
 
 
@@ -595,7 +602,7 @@ def priority_age(t: Timing, hop: HopModel) -> Term:
     released before it; job m + 1 is released at or after s, within A⁺ₚ of m, so
     ``rᵢ − rₘ ≤ s − rₘ ≤ A⁺ₚ``: the release age grows by at most A⁺ₚ over this hop (§7.1)."""
     p = hop.writer
-    return _term(SAME_CORE, ((f"A⁺({p})", t.events[p].a_max),),
+    return summed_term(SAME_CORE, ((f"A⁺({p})", t.events[p].a_max),),
                  f"d⁺ = 0 and `{p}` has the higher priority on the core: every job of it released "
                  "before the reader's start has completed")
 
@@ -609,13 +616,13 @@ def priority_reaction(t: Timing, hop: HopModel) -> Term:
     Rᵢ: this step adds ``W⁺ᵢ + Rᵢ`` to ρₚ, i.e. ``W⁺ᵢ + Rᵢ − Rₚ`` to the previous steps' sum."""
     p, i = hop.writer, hop.reader
     r = t.R(p)
-    return _term(SAME_CORE, ((f"W⁺({i})", t.events[i].sampling_wait), (f"R({i})", t.R(i)),
+    return summed_term(SAME_CORE, ((f"W⁺({i})", t.events[i].sampling_wait), (f"R({i})", t.R(i)),
                              (f"R({p})", None if r is None else -r)),
                  f"counted from the release of `{p}`'s job, not its completion: `{i}`'s next job "
                  "released after it starts only once that job has completed (d⁺ = 0)")
 
 
-def _tighter(a: Term, b: Term) -> bool:
+def tighter(a: Term, b: Term) -> bool:
     """a is strictly tighter than b."""
     return a.value is not None and (b.value is None or a.value < b.value)
 
@@ -648,142 +655,14 @@ def hop_step(t: Timing, hop: HopModel) -> Step:
                              f"`{hop.reader}` is triggered by `{act.port}`, not by this port")
     if same_core_priority(t, hop) is None:
         refined_r, refined_a = priority_reaction(t, hop), priority_age(t, hop)
-        if _tighter(refined_r, reaction):
+        if tighter(refined_r, reaction):
             reaction = refined_r
-        if _tighter(refined_a, age):
+        if tighter(refined_a, age):
             age = refined_a
     label = f"{hop.writer} → {hop.reader}"
-    best = _term(BEST, (("d⁻", hop.link.delay_min), (f"C⁻({hop.reader})", t.bcet(hop.reader))))
+    best = summed_term(BEST, (("d⁻", hop.link.delay_min), (f"C⁻({hop.reader})", t.bcet(hop.reader))))
     return _new_step("hop", label, hop.writer, hop.reader, hop.link.source, hop.link.target, reaction, age,
                      best.value, best, None, None)
-
-
-@dataclass(frozen=True)
-class HopAges:
-    """The data-age terms of one hop p → i by the ages they connect (specs/timing.md §7.7), each None
-    where it does not apply: ``read`` bounds i's age at its read (start) given p's release age (register,
-    same-core priority; valid from every age of p, all of which bound its release age);
-    ``release_from_*`` i's release age given p's age at its release, read or completion (data trigger,
-    AND join age); ``pair`` i's age at its completion given p's age at its read (same-core trigger pair)."""
-
-    read: Term
-    release_from_release: Term | None
-    release_from_start: Term | None
-    release_from_finish: Term | None
-    pair: Term | None
-
-
-def hop_ages(t: Timing, hop: HopModel, step: Step) -> HopAges:
-    """The terms of one hop for ``read_time_ages``; ``step`` is the hop's step of §7.3/§7.6, whose
-    data-age term is reused (with its note) where it is a bound at the read."""
-    act = t.system.task(hop.reader).activation
-    member = hop.link.target.split(".", 1)[1]
-    if step.data_age is not None and step.data_age.rule in (REGISTER, SAME_CORE):
-        read = step.data_age
-    else:
-        read = register_age(t, hop)
-        if same_core_priority(t, hop) is None:
-            refined = priority_age(t, hop)
-            if _tighter(refined, read):
-                read = refined
-    from_release = from_start = from_finish = None
-    if isinstance(act, DataTriggered) and member in act.members:
-        k = act.prescaler
-        if act.mode == "single":
-            from_release, from_start = trigger_age(t, hop, k), trigger_age_from_start(t, hop, k)
-            from_finish = trigger_age_from_finish(t, hop, k)
-        elif act.mode == "and":
-            from_release, from_start, from_finish = (and_age(t, hop, k, "release"), and_age(t, hop, k, "start"),
-                                                     and_age(t, hop, k, "finish"))
-    return HopAges(read, from_release, from_start, from_finish, pair_age(t, hop))
-
-
-_Path = tuple[Fraction | None, tuple[Term, ...]]
-
-
-def _extend(path: _Path | None, term: Term | None) -> _Path | None:
-    if path is None or term is None:
-        return None
-    value = None if path[0] is None or term.value is None else path[0] + term.value
-    return value, path[1] + (term,)
-
-
-def _lt(a: _Path | None, b: _Path | None) -> bool:
-    """a is strictly tighter than b (a missing path is the loosest, then an unbounded one)."""
-    if a is None or a[0] is None:
-        return False
-    return b is None or b[0] is None or a[0] < b[0]
-
-
-def _least(*paths: _Path | None) -> _Path | None:
-    """The tightest path; the first among equals."""
-    best: _Path | None = None
-    for path in paths:
-        if path is not None and (best is None or _lt(path, best)):
-            best = path
-    return best
-
-
-def read_time_ages(t: Timing, chain: ChainModel, hops: list[HopAges], from_read: bool) -> _Path | None:
-    """The reduced data age by the three ages of §7.7 — of each task's job at its release, at its read
-    (start) and at its completion — starting from τ₁'s age at its release (``from_read`` False) or at its
-    read (True), both 0 for the reduced data age (τ₁'s stamp is its read): (bound, the data-age terms of
-    the hops and of the last step) along the least sum of terms; None if that start reaches no bound."""
-    empty: _Path = (ZERO, ())
-    release: _Path | None = None if from_read else empty
-    start: _Path | None = empty if from_read else None
-    finish: _Path | None = None
-    for ages in hops:
-        new_start = _extend(_least(release, start, finish), ages.read)
-        new_finish = _extend(start, ages.pair)
-        release = _least(_extend(release, ages.release_from_release), new_start,
-                         _extend(start, ages.release_from_start), _extend(finish, ages.release_from_finish))
-        start, finish = new_start, new_finish
-    last = chain.tasks[-1]
-    return _least(_extend(release, _term(LAST, ((f"R({last})", t.R(last)),))),
-                  _extend(start, last_from_start(t, last)), _extend(finish, last_from_finish(last)))
-
-
-# ================================================================== chain totals
-
-
-def _sum_terms(terms: list[Term]) -> Fraction | None:
-    values = [x.value for x in terms]
-    return None if any(v is None for v in values) else exact_sum(values)  # type: ignore[arg-type]  # no None
-
-
-def reaction_time(steps: tuple[Step, ...]) -> Fraction | None:
-    """Non-reduced reaction time: ``W⁺₁ + R₁ + Σ_hops reaction terms`` (§7.5)."""
-    return _sum_terms([s.reaction for s in steps if s.reaction is not None])
-
-
-def data_age(steps: tuple[Step, ...]) -> Fraction | None:
-    """Reduced data age: ``Σ_hops data-age terms + Rₙ`` (§7.5)."""
-    return _sum_terms([s.data_age for s in steps if s.data_age is not None])
-
-
-def _minus(a: Fraction | None, b: Fraction | None) -> Fraction | None:
-    return None if a is None or b is None else a - b
-
-
-def _dominating(steps: tuple[Step, ...], *attrs: str) -> int | None:
-    """The step whose term (the sum of its ``attrs`` terms) is largest; an unbounded one dominates."""
-    best, index = None, None
-    for n, step in enumerate(steps):
-        terms = [getattr(step, attr) for attr in attrs if getattr(step, attr) is not None]
-        if not terms:
-            continue
-        if any(term.value is None for term in terms):
-            return n
-        value = exact_sum(term.value for term in terms)
-        if best is None or value > best:
-            best, index = value, n
-    return index
-
-
-def data_age_non_reduced(steps: tuple[Step, ...]) -> Fraction | None:
-    """Non-reduced data age: the reduced one plus τ₁'s ``A⁺₁`` (§7.5)."""
-    return _sum_terms([x for s in steps for x in (s.data_age, s.data_age_non_reduced) if x is not None])
 
 
 def read_gap_min(t: Timing, task: str) -> Fraction:
@@ -794,93 +673,3 @@ def read_gap_min(t: Timing, task: str) -> Fraction:
     if a_min is None or r is None:
         return bcet
     return max(bcet, a_min - (r - bcet))
-
-
-def chain_bounds(t: Timing, chain: ChainModel, variant: str = "reduced") -> ChainBounds:
-    """Every bound of ``chain`` with its per-step breakdown and its margins (§7)."""
-    missing = [x for x in chain.tasks if x not in t.responses]
-    if missing or not chain.tasks or len(chain.hops) != len(chain.tasks) - 1:
-        return _broken(chain, variant, f"the chain refers to unknown tasks {missing}" if missing
-                       else "the chain's hops do not match its tasks")
-    overlapping = [x for x in chain.tasks if may_overlap(t.system, t.system.task(x), t.R(x), t.events[x])]
-    if overlapping:
-        return _broken(chain, variant, f"`{overlapping[0]}` may run two jobs at once and complete them out of "
-                       "order (a reentrant callback group of a multi-threaded executor, specs/timing.md §9.4)")
-    first, last = chain.tasks[0], chain.tasks[-1]
-    steps = (first_step(t, first),) + tuple(hop_step(t, h) for h in chain.hops) + (last_step(t, last),)
-    steps = _with_read_time_ages(t, chain, steps)
-    best = exact_sum(s.best for s in steps)
-    wait = t.events[first].sampling_wait
-    reaction = reaction_time(steps)
-    bounds = dict(
-        reaction_time=_new_bound(reaction, best, "§7.5 W⁺₁ + R₁ + Σ hop reaction terms"),
-        reaction_time_reduced=_new_bound(_minus(reaction, wait), best, "§7.5 R₁ + Σ hop reaction terms"),
-        data_age_reduced=_new_bound(data_age(steps), best, "§7.5 Σ hop data-age terms + Rₙ"),
-        # τ₁'s step has best_non_reduced, with a value (``first_step``, ``read_gap_min``)
-        data_age_non_reduced=_new_bound(data_age_non_reduced(steps),
-                                        best + steps[0].best_non_reduced.value,  # type: ignore[union-attr, operator]
-                                        "§7.5 A⁺₁ + Σ hop data-age terms + Rₙ"),
-    )
-    specs = _spec_checks(chain, bounds, variant)
-    return _new_chain_bounds(chain.name, chain.tasks, steps, data_age_variant=variant, specs=specs,
-                             dominating_reaction=_dominating(steps, "reaction"),
-                             dominating_data_age=_dominating(steps, "data_age"),
-                             dominating_data_age_non_reduced=_dominating(steps, "data_age",
-                                                                         "data_age_non_reduced"), **bounds)
-
-
-def _with_read_time_ages(t: Timing, chain: ChainModel, steps: tuple[Step, ...]) -> tuple[Step, ...]:
-    """``steps`` with the data-age terms of ``read_time_ages`` where their sum is strictly smaller than
-    that of the terms of §7.3–§7.4 (so the report changes only where the bound does).
-
-    The non-reduced data age counts from τ₁'s previous read, at most ``A⁺₁`` before τ₁'s release and
-    at most ``A⁺₁ + R₁ − C⁻₁`` before its read (§7.7): when the terms counted from τ₁'s read are the
-    tighter reduced bound, τ₁'s non-reduced term adds the least of ``R₁ − C⁻₁`` and the excess of the
-    terms counted from its release."""
-    hops = [hop_ages(t, hop, step) for hop, step in zip(chain.hops, steps[1:])]
-    from_release, from_read = read_time_ages(t, chain, hops, False), read_time_ages(t, chain, hops, True)
-    best = from_read if _lt(from_read, from_release) else from_release
-    current = data_age(steps)
-    if best is None or best[0] is None or (current is not None and best[0] >= current):
-        return steps
-    first, value = steps[0], best[0]
-    if best is from_read:
-        task = first.reader
-        r = t.R(task)
-        gap = None if r is None else r - t.bcet(task)
-        excess = None if from_release is None or from_release[0] is None else from_release[0] - value
-        extra: tuple[str, Fraction | None]
-        if excess is not None and (gap is None or excess < gap):
-            extra = ("terms counted from its release − these terms", excess)
-            note = (f"from the previous read of `{task}`, at most A⁺ before the current job's release: the "
-                    "terms counted from the release exceed these (counted from its read) by the second part")
-        else:
-            extra = (f"R({task}) − C⁻({task})", gap)
-            note = f"from the previous read of `{task}`, at most A⁺ + R − C⁻ before the current job's read"
-        origin = _term(ORIGIN, ((f"A⁺({task})", t.events[task].a_max), extra), note)
-        first = replace(first, data_age_non_reduced=origin)
-    ages = iter(best[1])
-    return (first,) + tuple(replace(step, data_age=next(ages)) for step in steps[1:])
-
-
-def _spec_checks(chain: ChainModel, bounds: dict[str, Bound], variant: str) -> tuple[SpecCheck, ...]:
-    age = bounds["data_age_reduced" if variant == "reduced" else "data_age_non_reduced"]
-    checks = []
-    if chain.reaction_time is not None:
-        checks.append(_new_spec_check("reaction_time", chain.reaction_time, bounds["reaction_time"].worst,
-                                      "non-reduced"))
-    if chain.data_age is not None:
-        checks.append(_new_spec_check("data_age", chain.data_age, age.worst, variant))
-    if chain.jitter is not None:
-        checks.append(_new_spec_check("jitter", chain.jitter, age.jitter, f"data age ({variant})"))
-    return tuple(checks)
-
-
-def _broken(chain: ChainModel, variant: str, problem: str) -> ChainBounds:
-    unknown = _new_bound(None, ZERO, "not analysed")
-    bounds = dict(reaction_time=unknown, reaction_time_reduced=unknown, data_age_reduced=unknown,
-                  data_age_non_reduced=unknown)
-    return _new_chain_bounds(chain.name, chain.tasks, (), data_age_variant=variant,
-                             specs=_spec_checks(chain, bounds, variant), dominating_reaction=None,
-                             dominating_data_age=None, dominating_data_age_non_reduced=None, problem=problem,
-                             **bounds)

@@ -37,7 +37,8 @@ from ..model.system import ExecutorModel, SystemModel, TaskModel
 from .multithreaded import Workers, multi_threaded_response
 from .rates import EventModel
 from ..core.timebase import TimeBase
-from .rta import MAX_JOBS, MAX_STEPS, Interferer, TaskResponse, bcrt, deadline_of, interferer, least_fixed_point, ratio
+from .kernel import (MAX_JOBS, MAX_STEPS, Interferer, TaskResponse, bcrt, deadline_of, interferer, least_fixed_point,
+                     ratio)
 
 ZERO = Fraction(0)
 
@@ -106,35 +107,27 @@ class _Level:
         flows: dict[str, Interferer] = {t.id: interferer(system, t, events[t.id], estimates.get(t.id), t.wcet)
                                         for t in self.members}
         flows.update(zip((h.id for h in self.hp), self.above_flows))
-        self.failure = self._failure(flows)
+        costs: dict[str, Fraction] = {t.id: t.wcet for t in (*self.members, *self.hp)}
+        activated = _activated(flows)
+        self.failure = activated if isinstance(activated, str) else None
         self.holds: dict[Fraction, Fraction | None] = {}
         self.children = _local_children(system, self.members)
         self.position = {m.id: k for k, m in enumerate(self.members)}
         self.names = tuple(m.id for m in self.members), tuple(h.id for h in self.hp)
-        if self.failure is not None:
+        if isinstance(activated, str):
             return
-        times = [v for f in flows.values() if not f.silent for v in (f.cost, f.period, f.jitter)]
+        times = [v for triple in activated.values() for v in triple]
         caps = [c for c in self.rounds.values() if c is not None]
-        self.base = TimeBase.gcd_of(times + caps)  # type: ignore[arg-type]  # (bounded: no failure)
+        self.base = TimeBase.gcd_of(times + caps)
         ticks = self.base.ticks
-        self.streams = {tid: _Stream(ticks(f.cost), 1, 0, True) if f.silent else  # type: ignore[arg-type]
-                        _Stream(ticks(f.cost), ticks(f.period), ticks(f.jitter), False)  # type: ignore[arg-type]
-                        for tid, f in flows.items()}
+        self.streams = {tid: _Stream(ticks(costs[tid]), 1, 0, True) if tid not in activated else
+                        _Stream(ticks(activated[tid][0]), ticks(activated[tid][1]), ticks(activated[tid][2]), False)
+                        for tid in flows}
         self.work = _costs(self.streams[m.id] for m in self.members)  # (per period and jitter, below)
         self.above = _listed(_costs(self.streams[h.id] for h in self.hp))
         everyone = list(self.streams.values())
         self.length = _fixed(lambda w: sum(s.open(w) * s.cost for s in everyone),
                              sum(self.streams[m.id].cost for m in self.members))
-
-    @staticmethod
-    def _failure(flows: Mapping[str, Interferer]) -> str | None:
-        unbounded = [tid for tid, f in flows.items() if not f.silent and (f.period is None or f.jitter is None)]
-        if unbounded:
-            return f"the activations of `{unbounded[0]}` are not bounded"
-        load = sum((f.cost / f.period for f in flows.values() if not f.silent), ZERO)  # type: ignore[operator]
-        if load >= 1:
-            return f"the utilisation of its executor's level is {ratio(load)} (at least 1)"
-        return None
 
     def _hold(self, wcet: Fraction) -> Fraction | None:
         """``E = C + Σ_{hp(π)} η⁺ₕ(E)·Cₕ`` for a callback of execution time ``wcet`` (one per distinct one)."""
@@ -209,6 +202,22 @@ class _Level:
                 best = (finish - offset, n)
         assert best is not None  # (offset 0 is always searched)
         return self.base.seconds(best[0]), len(offsets), best[1], None
+
+
+def _activated(flows: Mapping[str, Interferer]) -> dict[str, tuple[Fraction, Fraction, Fraction]] | str:
+    """(C, P, J) of each stream of a level that is ever activated, or why the level has no bound: a stream
+    whose activations are not bounded (the first), or a utilisation of at least 1."""
+    activated: dict[str, tuple[Fraction, Fraction, Fraction]] = {}
+    for tid, f in flows.items():
+        if f.silent:
+            continue
+        if f.cost is None or f.period is None or f.jitter is None:
+            return f"the activations of `{tid}` are not bounded"
+        activated[tid] = (f.cost, f.period, f.jitter)
+    load = sum((c / p for c, p, _j in activated.values()), ZERO)
+    if load >= 1:
+        return f"the utilisation of its executor's level is {ratio(load)} (at least 1)"
+    return activated
 
 
 def _costs(streams: Iterable[_Stream]) -> dict[tuple[int, int], int]:

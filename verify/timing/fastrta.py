@@ -1,4 +1,4 @@
-"""One CPA round of response-time analysis for every task at once: exactly ``rta.response_times``,
+"""One CPA round of response-time analysis for every task at once: exactly ``reference.response_times``,
 without its quadratic cost.
 
 ``rta`` states the analysis task by task: hp(i) is found by scanning the core, and every fixed-point
@@ -26,7 +26,7 @@ iterations (so with the same step budget, the same failures and the same message
 Tasks with cooperative siblings need the siblings' hold times, so their WCRTs are computed in a second
 sweep of their core, once every hold time is known.
 
-``tests/test_perf_equivalence.py`` checks the results against ``rta.response_times`` on random
+``tests/test_perf_equivalence.py`` checks the results against ``reference.response_times`` on random
 systems and against digests recorded before this module existed.
 """
 from __future__ import annotations
@@ -47,7 +47,7 @@ from .pipeline import cases, upstream
 from .rates import EventModel
 from .executors import executor_responses
 from .interferers import CoreOrder, Interferers
-from .rta import (MAX_JOBS, MAX_STEPS, ZERO, TaskResponse, bcrt, causes, deadline_of, ratio)
+from .kernel import MAX_JOBS, MAX_STEPS, ZERO, TaskResponse, bcrt, causes, deadline_of, ratio
 
 _new_response = direct_constructor(TaskResponse)  # (``verify.core.construct``: one per task)
 
@@ -87,11 +87,11 @@ class Static:
         for n, t in enumerate(tasks):
             if t.kind == "cooperative":
                 cooperative.setdefault(t.instance, []).append(n)
-        #: ``rta.siblings``: the other cooperative tasks of a cooperative task's instance
+        #: ``kernel.siblings``: the other cooperative tasks of a cooperative task's instance
         self.siblings: list[tuple[int, ...]] = [
             tuple(m for m in cooperative[t.instance] if m != n) if t.kind == "cooperative" else ()
             for n, t in enumerate(tasks)]
-        #: ``rta.causes`` of each task: (prescaler, events without a new arrival, d⁺ of the link, writer)
+        #: ``kernel.causes`` of each task: (prescaler, events without a new arrival, d⁺ of the link, writer)
         self.causes: list[list[tuple[int, int, Fraction, int]]] = [
             [(k, extra, link.delay_max, self.index[link.writer]) for k, extra, link in causes(system, t)]
             for t in tasks]
@@ -106,7 +106,7 @@ class Static:
 
 @dataclass
 class _Stream:
-    """A stream of demand in ticks (``rta.Interferer``): None fields are unbounded."""
+    """A stream of demand in ticks (``kernel.Interferer``): None fields are unbounded."""
 
     task: int
     cost: int
@@ -178,7 +178,7 @@ class _Core:
 
 
 class Round:
-    """``rta.response_times(system, events, estimates)`` computed in one sweep per core."""
+    """``reference.response_times(system, events, estimates)`` computed in one sweep per core."""
 
     def __init__(self, static: Static, events: Mapping[str, EventModel], estimates: Mapping[str, Fraction | None],
                  previous: Round | None = None):
@@ -259,7 +259,7 @@ class Round:
         return None if ticks is None else Fraction(ticks, self.scale)
 
     def _stream(self, n: int) -> _Stream:
-        """Task n as an interferer (``rta.interferer``): its jitter grows by ``R − C`` if it is
+        """Task n as an interferer (``kernel.interferer``): its jitter grows by ``R − C`` if it is
         cooperative with siblings (it may wait for the token)."""
         task, events = self.tasks[n], self.events[n]
         jitter = events.jitter_min
@@ -467,7 +467,7 @@ class Round:
 
     def _lfp(self, base: int, start: int, groups: list[_Period], extra: Callable[[int], int] | None,
              first_bad: int | None, load: int | None, left: int) -> _Run:
-        """``rta.least_fixed_point`` in ticks (``load`` in units of 1/U) for the streams that
+        """``kernel.least_fixed_point`` in ticks (``load`` in units of 1/U) for the streams that
         ``_interference`` describes; ``left`` is the step budget, returned as used."""
         if load is None:
             return None, "the interference is not bounded", left
@@ -739,11 +739,11 @@ def _reduced_extra(extra: Callable[[int], int] | None, reduced: list[tuple[int, 
 
 
 def _cap(product: int, carry: int, q: int) -> int:
-    """``rta.Interferer.causal_cap``, with the product of the path's prescalers."""
+    """``kernel.Interferer.causal_cap``, with the product of the path's prescalers."""
     return -((-(q - 1 + carry)) // product)
 
 
 def response_times(system: SystemModel, events: Mapping[str, EventModel],
                    estimates: Mapping[str, Fraction | None], static: Static | None = None) -> dict[str, TaskResponse]:
-    """The same as ``rta.response_times``."""
+    """The same as ``reference.response_times``."""
     return Round(static or Static(system), events, estimates).responses()

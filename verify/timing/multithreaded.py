@@ -37,9 +37,9 @@ from __future__ import annotations
 from collections.abc import Mapping
 from fractions import Fraction
 
-from ..model.system import ExecutorModel, SystemModel, TaskModel
+from ..model.system import ExecutorModel, GroupModel, SystemModel, TaskModel
 from .rates import EventModel
-from .rta import MAX_STEPS, Interferer, TaskResponse, bcrt, deadline_of, interferer, ratio
+from .kernel import MAX_STEPS, Interferer, TaskResponse, bcrt, deadline_of, interferer, ratio
 
 ZERO = Fraction(0)
 
@@ -70,7 +70,7 @@ class Workers:
     def response(self, task: TaskModel) -> TaskResponse:
         """WCRT (§9.4) and BCRT of callback ``task`` (one of the members)."""
         deadline, deadline_rule = deadline_of(task, self.events[task.id])
-        group = self.system.group(task.group)  # type: ignore[arg-type]  # (a callback has a group)
+        group = callback_group(self.system, task)
         computed, failure = self._window(task)
         if computed is not None:
             computed += task.wcet
@@ -102,18 +102,27 @@ def held_window(live: list[Interferer], blocking: Fraction, carry: Fraction, wor
                 ) -> tuple[Fraction | None, str | None]:
     """The least ``w = B + (carry + Σ nⱼ(w)·Cⱼ)/m`` of §9.4 over the activated other callbacks ``live``
     when other members of the group hold the job back (the counts follow the activations)."""
-    if any(f.period is None or f.jitter is None for f in live):
-        unbounded = next(f for f in live if f.period is None or f.jitter is None)
-        return None, f"the activations of `{unbounded.task}` are not bounded"
-    if (load := sum((f.cost / f.period for f in live), ZERO)) >= workers:  # type: ignore[operator]
+    streams: list[tuple[Fraction, Fraction, Fraction]] = []  # (C, P, J) of each
+    for f in live:
+        if f.cost is None or f.period is None or f.jitter is None:
+            return None, f"the activations of `{f.task}` are not bounded"
+        streams.append((f.cost, f.period, f.jitter))
+    if (load := sum((c / p for c, p, _j in streams), ZERO)) >= workers:
         return None, f"the other callbacks' utilisation is {ratio(load)}, not below its {workers} workers"
-    w = blocking + (carry + sum((_jobs(f, ZERO) * f.cost for f in live), ZERO)) / workers  # type: ignore[operator]
+    w = blocking + (carry + sum((_jobs(p, j, ZERO) * c for c, p, j in streams), ZERO)) / workers
     for _ in range(MAX_STEPS):
-        new = blocking + (carry + sum((_jobs(f, w) * f.cost for f in live), ZERO)) / workers  # type: ignore[operator]
+        new = blocking + (carry + sum((_jobs(p, j, w) * c for c, p, j in streams), ZERO)) / workers
         if new == w:
             return w, None
         w = new
     return None, f"no fixed point within {MAX_STEPS} iteration steps"
+
+
+def callback_group(system: SystemModel, task: TaskModel) -> GroupModel:
+    """The callback group of callback ``task`` (every callback has one: the model gives it)."""
+    if task.group is None:
+        raise ValueError(f"`{task.id}` is not a callback of an executor")
+    return system.group(task.group)
 
 
 def may_overlap(system: SystemModel, task: TaskModel, wcrt: Fraction | None, events: EventModel) -> bool:
@@ -131,7 +140,7 @@ def group_blocking(system: SystemModel, task: TaskModel, executor: ExecutorModel
     """``B`` of §9.4, and "siblings" when other members of a mutually exclusive group hold the job back
     (then the counts ``nⱼ`` follow the activations); None, with the reason, when a member before
     ``task`` can starve it."""
-    group = system.group(task.group)  # type: ignore[arg-type]  # (a callback has a group)
+    group = callback_group(system, task)
     if not group.exclusive:
         return ZERO, ""
     siblings = [m for m in system.callbacks(executor.name) if m.group == task.group and m.id != task.id]
@@ -145,9 +154,10 @@ def group_blocking(system: SystemModel, task: TaskModel, executor: ExecutorModel
     return max(m.wcet for m in (task, *siblings)) + sum((m.wcet for m in siblings), ZERO), "siblings"
 
 
-def _jobs(flow: Interferer, window: Fraction) -> int:
-    """``nⱼ ≤ 1 + η̄ⱼ(window)``: the jobs of a callback (of bounded activations) started in a window (§9.4)."""
-    return int(1 + (window + flow.jitter) // flow.period + 1)  # type: ignore[operator]
+def _jobs(period: Fraction, jitter: Fraction, window: Fraction) -> int:
+    """``nⱼ ≤ 1 + η̄ⱼ(window)``: the jobs of a callback of least period ``period`` and jitter ``jitter`` started
+    in a window (§9.4)."""
+    return int(1 + (window + jitter) // period + 1)
 
 
 def carry_in(system: SystemModel, members: tuple[TaskModel, ...], workers: int) -> Fraction:
@@ -155,6 +165,6 @@ def carry_in(system: SystemModel, members: tuple[TaskModel, ...], workers: int) 
     execution times, a reentrant callback's up to ``m`` times (it may run on several workers)."""
     costs: list[Fraction] = []
     for m in members:
-        copies = 1 if system.group(m.group).exclusive else workers  # type: ignore[arg-type]
+        copies = 1 if callback_group(system, m).exclusive else workers
         costs += [m.wcet] * copies
     return sum(sorted(costs, reverse=True)[:workers], ZERO)

@@ -35,12 +35,11 @@ def exact(value: Fraction | int | None) -> dict[str, str | None] | None:
     """``{"exact": "p/q", "decimal": "0.25" | null}``, or None (unbounded)."""
     if value is None:
         return None
-    if not isinstance(value, (int, Fraction)):
+    if not isinstance(value, Fraction):
         value = Fraction(value)
     num, den = value.numerator, value.denominator  # (a Fraction is in lowest terms)
     text = str(num) if den == 1 else f"{num}/{den}"
-    # (fmt_number renders an int as well; verify/model/units.py declares only Fraction)
-    decimal = fmt_number(value)  # type: ignore[arg-type]
+    decimal = fmt_number(value)
     return {"exact": text, "decimal": None if "/" in decimal else decimal}
 
 

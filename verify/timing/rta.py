@@ -14,25 +14,27 @@ siblings may take the token while i's core is busy, and a sibling waiting for th
 itself, which its lower-priority neighbours see as extra release jitter ``Rₛ − Cₛ`` (suspension as
 jitter: Bletsas et al. 2018; Chen et al., *Many suspensions, many problems*, 2019). The best case
 is ``bcet`` (§6.4).
+
+This is the reference statement, task by task; it builds on ``kernel`` alone (the demand streams, the
+fixed point, ``TaskResponse``) and imports neither the fast path (``fastrta``) nor the executor
+analyses. One round over every task, callbacks included, is ``reference.response_times``.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
 from fractions import Fraction
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 
 from ..core.diagnostics import DiagnosticSink, Label, name_list
-from ..model.system import LinkModel, SystemModel, TaskModel
+from ..model.system import SystemModel, TaskModel
 from ..model.units import fmt_number, fmt_time
+from .kernel import (MAX_JOBS, ZERO, Budget, Interferer, TaskResponse, bcrt, causes, deadline_of, interferer,
+                     least_fixed_point, load_of, ratio, siblings, suspension_jitter)
 from .pipeline import Case, cases, upstream
 from .rates import ActivationInfo, EventModel, ratio_sum
 
-ZERO = Fraction(0)
-MAX_JOBS = 1000  # jobs per busy window before giving up
-MAX_STEPS = 100_000  # fixed-point steps per task
 
-
-# ================================================================== results
+# ================================================================== utilisation
 
 
 @dataclass(frozen=True)
@@ -49,41 +51,6 @@ class CoreLoad:
         return self.utilisation is not None and self.utilisation > 1
 
 
-@dataclass(frozen=True)
-class TaskResponse:
-    """Response-time bounds of one task, measured from its release (§6).
-
-    ``wcrt`` is the bound every later step uses: the user's ``wcrt`` bound if given (rule "user
-    bound"), else ``wcrt_computed``; None when no bound was found (``failure``
-    says why). ``blocking`` is the per-job cooperative blocking ``βᵢ``; ``busy_jobs`` the number of
-    jobs Q in the longest busy window; ``critical_job`` the q that gave the maximum.
-    """
-
-    task: str
-    core: str
-    priority: int
-    bcrt: Fraction
-    wcrt: Fraction | None
-    wcrt_computed: Fraction | None
-    rule: str
-    deadline: Fraction | None
-    deadline_rule: str
-    blocking: Fraction | None
-    hold: Fraction | None  # Eᵢ: start to completion, what a sibling waits for
-    busy_jobs: int | None
-    critical_job: int | None
-    #: hp(i) in declaration order, then the remote siblings (a view of the core's tasks: ``interferers``)
-    interferers: Sequence[str]
-    failure: str | None = None
-
-    @property
-    def schedulable(self) -> bool:
-        return self.wcrt is not None and (self.deadline is None or self.wcrt <= self.deadline)
-
-
-# ================================================================== utilisation
-
-
 def core_loads(system: SystemModel, infos: Mapping[str, ActivationInfo]) -> tuple[CoreLoad, ...]:
     """Per core: ``U = Σ Cᵢ · fᵢ⁺`` with fᵢ⁺ the upper end of the task's rate interval (§6.1); the
     cores of a multi-threaded executor share its callbacks' load evenly (§9.4)."""
@@ -92,12 +59,11 @@ def core_loads(system: SystemModel, infos: Mapping[str, ActivationInfo]) -> tupl
     for core in _cores(system):
         owner = shared.get(core)
         tasks = system.tasks_on(core) if owner is None else system.callbacks(owner.name)
-        rates = [infos[t.id].rate for t in tasks]
-        if any(r is None for r in rates):
+        rates = [r for t in tasks if (r := infos[t.id].rate) is not None]
+        if len(rates) < len(tasks):
             total = None
         else:  # Σ wcet·high as exact integer ratios, normalised once
-            total = ratio_sum(_times(t.wcet.as_integer_ratio(),
-                                     r.high.as_integer_ratio())  # type: ignore[union-attr]  # no None (checked)
+            total = ratio_sum(_times(t.wcet.as_integer_ratio(), r.high.as_integer_ratio())
                               for t, r in zip(tasks, rates))
             if owner is not None:
                 total /= len(owner.workers)
@@ -122,11 +88,6 @@ def percent(value: Fraction) -> str:
     return f"{'' if shown == exact else '≈'}{fmt_number(Fraction(shown))} %"
 
 
-def ratio(value: Fraction) -> str:
-    """An exact fraction as ``p/q`` (or an integer)."""
-    return str(value.numerator) if value.denominator == 1 else f"{value.numerator}/{value.denominator}"
-
-
 def check_utilisation(system: SystemModel, loads: tuple[CoreLoad, ...], infos: Mapping[str, ActivationInfo],
                       sink: DiagnosticSink) -> None:
     """E311: a core whose utilisation exceeds 1."""
@@ -135,8 +96,8 @@ def check_utilisation(system: SystemModel, loads: tuple[CoreLoad, ...], infos: M
         if not load.overloaded or load.utilisation is None:  # (an overloaded core has a utilisation)
             continue
         # an overloaded core's tasks have bounded rates (else it has no utilisation)
-        shares = [f"`{t}` {fmt_number(system.task(t).wcet * infos[t].rate.high)}"  # type: ignore[union-attr]
-                  for t in load.tasks]
+        shares = [f"`{t}` {fmt_number(system.task(t).wcet * rate.high)}"
+                  for t in load.tasks if (rate := infos[t].rate) is not None]
         secondary = tuple(Label(system.task(t).span, f"`{t}` on `{load.core}`") for t in load.tasks)
         sink.emit("E311", f"core `{load.core}` is utilised {ratio(load.utilisation)} "
                   f"({percent(load.utilisation)}) by " + name_list(load.tasks),
@@ -146,59 +107,6 @@ def check_utilisation(system: SystemModel, loads: tuple[CoreLoad, ...], infos: M
 
 
 # ================================================================== one core
-
-
-@dataclass(frozen=True)
-class Interferer:
-    """A stream of demand: ``η⁺(Δ) · cost`` with ``η⁺(Δ) = ⌈(Δ + jitter)/period⌉``, capped for the
-    q-th job's window by ``causal_cap(q)`` when every activation of the stream descends from the
-    analysed task's own completions (§6.2)."""
-
-    task: str
-    cost: Fraction | None
-    period: Fraction | None
-    jitter: Fraction | None
-    silent: bool = False
-    prescalers: tuple[int, ...] | None = None  # causal path back to the analysed task, nearest last
-    carry: int | None = None
-    extras: tuple[int, ...] = ()  # per hop of the path: events without a new arrival (AND: 1)
-    local: tuple[int, tuple[int, ...]] | None = None  # a local path's (carry for L⁺ = 0, extras)
-    before: Fraction | None = None  # a job of it was released at most this long before the window (pipeline)
-
-    def demand(self, window: Fraction, q: int = 1) -> Fraction | None:
-        if self.silent or window <= 0:
-            return ZERO
-        cap = self.causal_cap(q)
-        if self.cost is None or self.period is None or self.jitter is None:
-            # a capped stream (``causally_capped``) costs the task's wcet: never None
-            return None if cap is None else cap * self.cost  # type: ignore[operator, return-value]
-        count = -((-(window + self.jitter)) // self.period)
-        if self.before is not None:  # that job is not in the window (verify.timing.pipeline)
-            count = min(count, -((-(window + self.before + self.jitter)) // self.period) - 1)
-        return (count if cap is None else min(count, cap)) * self.cost
-
-    def causal_cap(self, q: int) -> int | None:
-        """At most ``q − 1 + carry`` completions of the analysed task can cause releases in its
-        q-job busy window; at each hop an AND compound adds the one event a value waiting since
-        before the window may complete, and the prescaler divides (rounded up)."""
-        if self.prescalers is None or self.carry is None:
-            return None
-        cap = self._nested(q - 1 + self.carry, self.extras or (0,) * len(self.prescalers))
-        if self.local is not None:
-            cap = min(cap, self._nested(q - 1 + self.local[0], self.local[1]))
-        return cap
-
-    def _nested(self, n: int, extras: tuple[int, ...]) -> int:
-        for k, extra in zip(reversed(self.prescalers or ()), reversed(extras)):
-            n = -((-(n + extra)) // k)
-        return n
-
-    def rate(self) -> Fraction | None:
-        if self.silent:
-            return ZERO
-        if self.cost is None or self.period is None:
-            return None
-        return self.cost / self.period
 
 
 def causal_path(system: SystemModel, source: TaskModel, target: TaskModel,
@@ -241,21 +149,6 @@ def causal_path(system: SystemModel, source: TaskModel, target: TaskModel,
     return None
 
 
-def causes(system: SystemModel, task: TaskModel) -> list[tuple[int, int, LinkModel]]:
-    """The connections whose arrivals cause ``task``'s releases, each with (prescaler, events without
-    a new arrival on it, connection): the one of a single-port trigger (0), or one per connected member
-    of an AND compound (1: a fresh value may be waiting when the window opens). None for a timer, a
-    sporadic source or an OR compound (any member alone may cause an event)."""
-    act = task.activation
-    if act.single_port is not None:
-        link = system.link_into(f"{task.instance}.{act.single_port}")
-        return [] if link is None else [(act.release_every, 0, link)]
-    if act.all_members:
-        links = [system.link_into(f"{task.instance}.{m}") for m in act.trigger_members]
-        return [(act.release_every, 1, link) for link in links if link is not None]
-    return []
-
-
 def carry_in(task: TaskModel, events: EventModel, response: Fraction | None, latency: Fraction) -> int | None:
     """Completions of ``task`` in a closed interval of length L⁺ before its busy window, the least of
     ``⌊(L⁺ + J⁻ + R − B)/P⁻⌋ + 1`` (completions lie in ``[r + B, r + R]``) and, where ``C⁻ > 0``,
@@ -279,75 +172,9 @@ def cooperative_counts(system: SystemModel) -> dict[str, int]:
     return count
 
 
-def siblings(system: SystemModel, task: TaskModel) -> tuple[TaskModel, ...]:
-    """The other cooperative tasks of ``task``'s instance (empty unless ``task`` is cooperative)."""
-    if task.kind != "cooperative":
-        return ()
-    return tuple(t for t in system.tasks if t.instance == task.instance and t.kind == "cooperative"
-                 and t.id != task.id)
-
-
 def higher_priority(system: SystemModel, task: TaskModel) -> tuple[TaskModel, ...]:
     """hp(i): the other tasks of i's core with priority ≥ i's (equal priorities interfere)."""
     return tuple(t for t in system.tasks_on(task.core) if t.id != task.id and t.priority >= task.priority)
-
-
-def suspension_jitter(system: SystemModel, task: TaskModel, response: Fraction | None) -> Fraction | None:
-    """A cooperative task with siblings may wait for the token: extra jitter ``R − C`` (§6.3)."""
-    if not siblings(system, task):
-        return ZERO
-    if response is None:
-        return None
-    return max(ZERO, response - task.wcet)
-
-
-def interferer(system: SystemModel, task: TaskModel, events: EventModel, response: Fraction | None,
-               cost: Fraction | None) -> Interferer:
-    jitter = events.jitter_min
-    if jitter is not None:
-        extra = suspension_jitter(system, task, response)
-        jitter = None if extra is None else jitter + extra
-    return Interferer(task.id, cost, events.period_min, jitter, events.silent)
-
-
-class Budget:
-    """The fixed-point steps left for one task (all its busy-window jobs together)."""
-
-    def __init__(self, steps: int = MAX_STEPS):
-        self.left = steps
-
-    def take(self) -> bool:
-        self.left -= 1
-        return self.left >= 0
-
-
-def least_fixed_point(base: Fraction, start: Fraction, streams: list[Interferer], q: int = 1,
-                      budget: Budget | None = None) -> tuple[Fraction | None, str | None]:
-    """The least w ≥ start with ``w = base + Σ demand(w)`` (iterated from ``start``, which must not
-    exceed it), or None with a reason: the demand is unbounded, the streams' utilisation is at least 1
-    (no fixed point), or the step budget runs out."""
-    load = _load([s for s in streams if s.prescalers is None or s.carry is None])
-    if load is None:
-        return None, "the interference is not bounded"
-    if load is not None and load >= 1 and base > 0:
-        # w ↦ base + Σ⌈(w + J)/P⌉·C ≥ base + U·w > w: no fixed point exists
-        return None, f"the interfering utilisation is {ratio(load)} (at least 1)"
-    w, budget = start, budget or Budget()
-    while budget.take():
-        demand = [s.demand(w, q) for s in streams]
-        if any(d is None for d in demand):
-            bad = next(s.task for s, d in zip(streams, demand) if d is None)
-            return None, f"the activations of `{bad}` are not bounded"
-        new = base + sum(demand, ZERO)  # type: ignore[type-var, operator]  # no None (checked above)
-        if new == w:
-            return w, None
-        w = new
-    return None, f"no fixed point within {MAX_STEPS} iteration steps"
-
-
-def _load(streams: list[Interferer]) -> Fraction | None:
-    rates = [s.rate() for s in streams]
-    return None if any(r is None for r in rates) else sum(rates, ZERO)  # type: ignore[type-var]  # no None
 
 
 def hold_time(system: SystemModel, task: TaskModel, events: Mapping[str, EventModel],
@@ -379,14 +206,13 @@ def wcrt(d: Demand) -> tuple[Fraction | None, int | None, int | None, str | None
                                   "its activation jitter is not bounded (a writer upstream has no WCRT bound)")
     # the load without the blocking, which may come once per busy window: at 1 or more the window never
     # closes; below 1 it does (the per-job blocking term is only a bound, and the job budget guards it)
-    load = _load(d.streams + [Interferer("", d.cost, d.own.period_min, ZERO, d.own.silent)])
+    load = load_of(d.streams + [Interferer("", d.cost, d.own.period_min, ZERO, d.own.silent)])
     if load is not None and load >= 1:
         return None, None, None, "the utilisation of its level is 1 or more"
     best: tuple[Fraction, int] | None = None
     w, budget = ZERO, Budget()
     for q in range(1, MAX_JOBS + 1):
-        # δ⁻(q) is None only for a silent task and q > 1, and a silent task's window closes at q = 1
-        offset: Fraction = d.own.delta_min(q)  # type: ignore[assignment]
+        offset = least_distance(d.own, q)
         found, why = least_fixed_point(q * (d.cost + d.blocking) + d.once, w + d.cost + d.blocking, d.streams, q,
                                        budget)
         if found is None:
@@ -401,6 +227,13 @@ def wcrt(d: Demand) -> tuple[Fraction | None, int | None, int | None, str | None
                 best = offsets
             return best[0], q, best[1], None
     return None, MAX_JOBS, None, f"the busy window does not close within {MAX_JOBS} jobs"
+
+
+def least_distance(own: EventModel, q: int) -> Fraction:
+    """``δ⁻ᵢ(q)`` in a busy window of q jobs. It is None only for a silent task and q > 1, which no busy
+    window reaches (a silent task's closes at q = 1); 0 then."""
+    distance = own.delta_min(q)
+    return ZERO if distance is None else distance
 
 
 def pipeline_response(d: Demand, jobs: int) -> tuple[Fraction, int] | None:
@@ -419,19 +252,11 @@ def pipeline_response(d: Demand, jobs: int) -> tuple[Fraction, int] | None:
             if found is None:
                 return None
             w = found
-            low: Fraction = d.own.delta_min(q)  # type: ignore[assignment]  # (as in ``wcrt``)
+            low = least_distance(d.own, q)
             value = w - case.gone(q, low)
             if best is None or value > best[0]:
                 best = (value, q)
     return best
-
-
-def deadline_of(task: TaskModel, events: EventModel) -> tuple[Fraction | None, str]:
-    if task.deadline is not None:
-        return task.deadline, "given"
-    if events.a_max is not None:
-        return events.a_max, "A⁺ (max inter-activation)"
-    return None, "none (A⁺ not bounded)"
 
 
 def response_time(system: SystemModel, task: TaskModel, events: Mapping[str, EventModel],
@@ -498,8 +323,8 @@ def cooperative_blocking(system: SystemModel, task: TaskModel, events: Mapping[s
     holds = {s.id: hold_time(system, s, events, estimates) for s in sibs}
 
     def most(blockers: list[TaskModel]) -> Fraction | None:
-        values = [holds[s.id] for s in blockers]
-        return None if any(v is None for v in values) else max(values, default=ZERO)  # type: ignore[type-var]
+        values = [v for s in blockers if (v := holds[s.id]) is not None]
+        return None if len(values) < len(blockers) else max(values, default=ZERO)
 
     per_job = most([s for s in sibs if s.core != task.core])
     once = most([s for s in sibs if s.core == task.core and s.priority < task.priority])
@@ -513,21 +338,6 @@ def token_stream(sibling: TaskModel, events: EventModel, response: Fraction | No
     jobs released up to R before a window can still hold it in the window: jitter ``J⁻ + R``."""
     jitter = None if events.jitter_min is None or response is None else events.jitter_min + response
     return Interferer(sibling.id, hold, events.period_min, jitter, events.silent)
-
-
-def bcrt(task: TaskModel) -> Fraction:
-    """The best-case response time: ``bcet`` — a job completes no earlier than its release plus its
-    execution time, which is at least ``bcet`` (§6.4)."""
-    return task.bcet
-
-
-def response_times(system: SystemModel, events: Mapping[str, EventModel],
-                   estimates: Mapping[str, Fraction | None]) -> dict[str, TaskResponse]:
-    """One round of RTA for every task (the façade iterates to the CPA fixed point); the callbacks of
-    ROS 2 executors by ``executors.callback_response`` (§9.3)."""
-    from .executors import callback_response  # (it builds on this module)
-    return {t.id: (callback_response(system, t, events, estimates) if t.executor is not None
-                   else response_time(system, t, events, estimates)) for t in system.tasks}
 
 
 # ================================================================== diagnostics
