@@ -33,7 +33,7 @@ from ..core.diagnostics import Diagnostic, DiagnosticSink
 from ..model.activations import DataTriggered, Hole, Periodic
 from ..model.system import SystemModel, TaskModel
 from ..frontend.resolve import SystemScope
-from ..model.units import fmt_number, fmt_time
+from ..model.units import fmt_time
 from .statements import Statement, statement_index
 
 MS = Fraction(1, 1000)
@@ -308,7 +308,3 @@ def describe_hole(choice: Choice) -> str:
     """What the user wrote for a hole, e.g. ``timer ? in 25 ms .. 200 ms step 25 ms``."""
     return choice.hole.text if choice.hole is not None else "(fixed binding)"
 
-
-def value_text(c: Candidate) -> str:
-    return (c.text() if c.kind == "timer" or c.prescaler == 1
-            else f"trigger {c.port} every {fmt_number(Fraction(c.prescaler))}")

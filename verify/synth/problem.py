@@ -10,7 +10,6 @@ whose response times are valid lower bounds wherever the decisions are at least 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from fractions import Fraction
 from typing import TYPE_CHECKING
 from collections.abc import Mapping
 
@@ -188,8 +187,3 @@ def _atoms(model: SystemModel, choices: Mapping[str, Choice], statements: tuple[
         bits[t.id] = value
     return atoms, bits
 
-
-def seconds_to_ticks(value: Fraction, tick: Fraction) -> int:
-    ticks = value / tick
-    assert ticks.denominator == 1
-    return int(ticks)

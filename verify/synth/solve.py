@@ -137,7 +137,7 @@ def failing_checks(problem: Problem, ev: Evaluation) -> set[str] | None:
     """The statements whose checks reject ``ev`` (spec bounds, activation-constraint ends, sampling
     tolerances); an empty set when some failure needs no statement (E311, E312, E316); None when a failure
     cannot be attributed (then the whole configuration is blocked)."""
-    from ..timing.rates import _tolerance_violation
+    from ..timing.rates import tolerance_violation
 
     slots = statement_index(problem.statements)
     checks: set[str | None]  # (None: a failure no statement asks for)
@@ -162,7 +162,7 @@ def failing_checks(problem: Problem, ev: Evaluation) -> set[str] | None:
             continue
         for direction, tol, flagged, factor in (("over", read.oversampling, s.oversampled, s.oversampling),
                                                 ("under", read.undersampling, s.undersampled, s.undersampling)):
-            if _tolerance_violation(tol, flagged, factor) is not None:
+            if tolerance_violation(tol, flagged, factor) is not None:
                 checks.add(slots.get(s.reader, {}).get(f"tolerance:{read.port}:{direction}"))
     if None in checks or not checks:
         return None

@@ -607,7 +607,7 @@ def _factor_text(value: Fraction | None) -> str:
     return "an unbounded factor" if value is None else f"a factor of {fmt_number(value)}"
 
 
-def _tolerance_violation(tol: Tolerance | None, flagged: bool, factor: Fraction | None) -> str | None:
+def tolerance_violation(tol: Tolerance | None, flagged: bool, factor: Fraction | None) -> str | None:
     """The tolerance's wording if a flagged factor violates it, else None."""
     if tol is None or not flagged or tol.kind == "ok":
         return None
@@ -647,7 +647,7 @@ def check_sampling(system: SystemModel, samplings: tuple[LinkSampling, ...], sin
             continue
         for direction, tol, flagged, factor in (("over", read.oversampling, s.oversampled, s.oversampling),
                                                 ("under", read.undersampling, s.undersampled, s.undersampling)):
-            allowed = _tolerance_violation(tol, flagged, factor)
+            allowed = tolerance_violation(tol, flagged, factor)
             if allowed is None:
                 continue
             assert tol is not None  # a violated tolerance exists
