@@ -115,7 +115,8 @@ def lex_better(objectives: Sequence[Objective], a: Sequence[int | None], b: Sequ
     for obj, x, y in zip(objectives, a, b):
         # ``Objective.real`` says None for unbounded; the configurations compared here are accepted ones,
         # whose objective values are bounded (``better`` compares ints)
-        if obj.better(x, y):  # type: ignore[arg-type]
+        assert x is not None and y is not None
+        if obj.better(x, y):
             return True
         if x != y:
             return False
@@ -149,7 +150,7 @@ def failing_checks(problem: Problem, ev: Evaluation) -> set[str] | None:
         checks |= {f"spec:{chain.name}:{s.kind}" for s in chain.specs if not s.ok}
     for info in result.tasks:
         task, rate = problem.model.task(info.id), info.rate
-        if info.activation.kind != "trigger" or rate is None:
+        if info.activation.trigger_port is None or rate is None:
             continue
         mine = slots.get(info.id, {})
         if task.min_rate is not None and rate.low < task.min_rate:

@@ -52,6 +52,9 @@ class Hole(Activation):
     def describe(self) -> str:
         return "synthesis hole"
 
+    def as_written(self) -> str:
+        return self.text
+
     @property
     def unknown(self) -> bool:
         return True
