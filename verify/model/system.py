@@ -285,7 +285,7 @@ class ExecutorModel:
     def kind_rank(self, task: TaskModel) -> int:
         """The position of a callback's kind in a wait-set executor's processing order (§9.2): timers
         before subscriptions, except on the static executor, which processes subscriptions first."""
-        timer = task.activation.kind == "timer"
+        timer = task.activation.timer_callback
         return int(timer) if self.kind == "static_single_threaded" else int(not timer)
 
     @property
