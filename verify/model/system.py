@@ -21,6 +21,7 @@ from typing import Literal, TypedDict, cast
 from . import syntax as s
 from .activations import KINDS as KINDS
 from .activations import Activation as Activation
+from .activations import ActivationModel as ActivationModel
 from .activations import DataTriggered, Hole, Periodic, SporadicSource
 from .activations import HoleWhat as HoleWhat
 from ..core.construct import direct_constructor
@@ -31,11 +32,6 @@ from ..core.source import NO_SPAN, Span
 
 def _span() -> Span:
     return field(default=NO_SPAN, compare=False, repr=False)
-
-
-# ------------------------------------------------------------------ activations (verify.model.activations)
-
-ActivationModel = Periodic | SporadicSource | DataTriggered | Hole
 
 
 # ------------------------------------------------------------------ system

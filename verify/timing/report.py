@@ -19,6 +19,7 @@ from collections.abc import Iterable
 from fractions import Fraction
 from typing import Any
 
+from ..model.activations import KINDS
 from ..model.units import fmt_number, fmt_time
 from . import AnalysisResult, TaskTiming
 from .chains import SPEC_WORDS, Bound, ChainBounds, Step, Term
@@ -198,7 +199,7 @@ JSON_SCHEMA: dict[str, Any] = _obj({
     "tasks": {"type": "array", "items": _obj({
         "id": {"type": "string"}, "core": {"type": "string"}, "priority": {"type": "integer"},
         "kind": {"enum": ["preemptive", "cooperative"]}, "bcet": _NUM, "wcet": _NUM,
-        "activation": _obj({"kind": {"enum": ["timer", "sporadic", "trigger", "hole"]}, "period": _NUM,
+        "activation": _obj({"kind": {"enum": list(KINDS)}, "period": _NUM,
                             "phase": _NUM, "rate": _INTERVAL, "rate_derivation": {"type": "string"},
                             "trigger_port": _STR, "mode": _STR,
                             "prescaler": {"type": ["integer", "null"]},
