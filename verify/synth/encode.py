@@ -30,7 +30,7 @@ from collections.abc import Mapping
 import z3
 
 from ..model import syntax as s
-from ..model.activations import Activation, DataTriggered
+from ..model.activations import Activation
 from ..model.system import ChainModel, HopModel, LinkModel, SystemModel, TaskModel
 from ..core.timebase import TimeBase
 from ..timing.chains import cascade_in_time, cascade_links, pair_shape, same_core_reason
@@ -231,14 +231,15 @@ class Encoding:
         if gaps is not None and latest is not None:  # released by time: (a⁺, 0, first release at the latest)
             lo, hi = self.ticks(gaps[0]), self.ticks(gaps[1])
             return (hi, 0, self.ticks(latest)), (self.M // hi, self.M // lo)
-        assert isinstance(act, DataTriggered)  # the rest releases by data
+        mode = act.trigger_mode
+        assert mode is not None  # the rest releases by data
         arrivals = [(self.arrival(link), self.rates[link.writer])
                     for _, link in member_links(self.model, task, act) if link is not None]
-        stream = self._stream([a for a, _ in arrivals], act.mode)
-        k, t = act.prescaler, self.t
+        stream = self._stream([a for a, _ in arrivals], mode)
+        k, t = act.release_every, self.t
         P, J, F = stream
         if k > 1:
-            if act.mode == "or" and len(arrivals) > 1:
+            if mode == "or" and len(arrivals) > 1:
                 first = None
                 for (aP, aJ, aF), _ in arrivals:
                     cand = t.add(aF, t.mul(k - 1, aP), aJ)
@@ -248,10 +249,10 @@ class Encoding:
                 F = t.add(F, t.mul(k - 1, P), J)
         rates = [r for _, r in arrivals]
         fl, fh = rates[0]
-        if act.mode == "and":
+        if mode == "and":
             for rl, rh in rates[1:]:
                 fl, fh = t.min(fl, rl), t.min(fh, rh)
-        elif act.mode == "or":
+        elif mode == "or":
             fl, fh = t.add(*(r[0] for r in rates)), t.add(*(r[1] for r in rates))
         if not self._varflags.get(task.id) and isinstance(fl, int) and isinstance(fh, int):
             return (t.mul(k, P), J, F), (fl // k, fh // k)
@@ -437,12 +438,13 @@ class Encoding:
         """The least ``fh`` of ``task`` under ``act`` given lower bounds ``low`` of its writers' ``fh``."""
         if act.gaps is not None:
             return self.M // self.ticks(act.gaps[0])
-        if not isinstance(act, DataTriggered):
+        mode = act.trigger_mode
+        if mode is None:
             return 0
         rates = [low[link.writer] for _, link in member_links(self.model, task, act) if link is not None]
         if not rates:
             return 0
-        combined = min(rates) if act.mode == "and" else sum(rates) if act.mode == "or" else rates[0]
+        combined = min(rates) if mode == "and" else sum(rates) if mode == "or" else rates[0]
         return combined // act.release_every
 
     def _demand(self, task: TaskModel) -> Term:
@@ -586,16 +588,15 @@ class Encoding:
         if not act.listens_to(member):
             reaction = self._same_core(hop, register_r)
         else:
-            assert isinstance(act, DataTriggered)  # (it listens to a member)
-            k = act.prescaler
-            if act.mode == "and":
+            k = act.release_every  # (it listens to a member: a data trigger)
+            if act.all_members:
                 wait = self._and_wait(hop, act)
                 trig = t.add(d, wait, self._and_join(hop, act, k), self.R[i])
             else:
                 wait = 0
                 trig = t.add(d, self._delta_plus(p, k), self.R[i])
             reaction = self._same_core(hop, self.least(trig, register_r))
-            if act.mode != "or":  # the data trigger (7.7b) and the AND join age (7.7c)
+            if act.trigger_mode != "or":  # the data trigger (7.7b) and the AND join age (7.7c)
                 new_release = self.least(new_release, *(t.add(age, d, writer, wait) for age, writer in (
                     (release, self.R[p]), (read, self.span(p)), (completion, 0))))
         pair = []
@@ -620,11 +621,11 @@ class Encoding:
         B = self.ticks(self.model.task(writer).bcet) if self.model.task(writer).bcet else 0
         return self.t.add(self.t.mul(k - 1, P), J, self.R[writer], -B)
 
-    def _and_arrivals(self, hop: HopModel, act: DataTriggered) -> list[tuple[str, tuple[Term, Term, Term]]]:
+    def _and_arrivals(self, hop: HopModel, act: Activation) -> list[tuple[str, tuple[Term, Term, Term]]]:
         reader = self.model.task(hop.reader)
         return [(m, self.arrival(link)) for m, link in member_links(self.model, reader, act) if link is not None]
 
-    def _and_wait(self, hop: HopModel, act: DataTriggered) -> Term:
+    def _and_wait(self, hop: HopModel, act: Activation) -> Term:
         """``maxₘ W⁺ₘ`` of the other members, 0 where they are fresh by (7.3e) (``_cascade``)."""
         t = self.t
         member = hop.link.target.split(".", 1)[1]
@@ -644,7 +645,7 @@ class Encoding:
             self.add(z3.Or(cascade, self.t.ge(var, x)))
         return var
 
-    def _cascade(self, hop: HopModel, act: DataTriggered) -> Cond:
+    def _cascade(self, hop: HopModel, act: Activation) -> Cond:
         """Whether the AND join ``act`` is one of a cascade whose other members are fresh when this hop's
         value arrives (specs/timing.md §7.3, (7.3e)), as the analysis decides it (``cascade_fresh``) for
         each activation the writer ``p`` and the task ``w`` triggering it may take: the shape and the
@@ -670,7 +671,7 @@ class Encoding:
                 out.append(conjunction(conds))
         return disjunction(out)
 
-    def _and_join(self, hop: HopModel, act: DataTriggered, k: int) -> Term:
+    def _and_join(self, hop: HopModel, act: Activation, k: int) -> Term:
         if k == 1:
             return 0
         t = self.t

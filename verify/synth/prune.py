@@ -24,7 +24,7 @@ from fractions import Fraction
 from typing import TypeAlias
 from collections.abc import Callable, Mapping
 
-from ..model.activations import Activation, DataTriggered
+from ..model.activations import Activation
 from ..model.system import ChainModel, HopModel, SystemModel, TaskModel
 from ..timing.chains import same_core_reason
 from ..timing.rates import exact_sum, tolerance_limit
@@ -80,17 +80,18 @@ def activation_bounds(model: SystemModel, task: TaskModel, act: Activation, know
     gaps = act.gaps
     if gaps is not None:  # released by time
         return _timed_bounds(gaps)
-    if not isinstance(act, DataTriggered):
+    mode = act.trigger_mode
+    if mode is None:
         return UNKNOWN
     members = [known.get(link.writer, UNKNOWN) for _, link in member_links(model, task, act) if link is not None]
     if not members:
         return UNKNOWN
-    k = act.prescaler
-    if act.mode == "and":
+    k = act.release_every
+    if mode == "and":
         fl = _combine([m.fl for m in members], min)
         fh = _combine([m.fh for m in members], min)
         p_min = max(m.p_min for m in members)
-    elif act.mode == "or":
+    elif mode == "or":
         fl = _combine([m.fl for m in members], sum)
         fh = _combine([m.fh for m in members], sum)
         p_min = min(m.p_min for m in members)
@@ -395,7 +396,7 @@ class ChainLowerBound:
                     waits.append(ZERO if triggered else pm)
                 same_core_waits.append(ZERO if act.trigger_port is not None else pm)
             else:  # a data trigger (7.7b) waits for nothing; an AND join (7.7c) may not (7.3e)
-                joins_or = isinstance(act, DataTriggered) and act.mode == "or"
+                joins_or = act.trigger_mode == "or"
                 waits.append(ZERO if triggered and not joins_or else p_min(hop.writer))
         if self.kind == "reaction":
             lower = hop.link.delay_max + _r_min(model.task(hop.reader)) + min(waits)

@@ -19,7 +19,7 @@ from typing import TypedDict, TypeGuard
 from collections.abc import Mapping
 
 from ..model import syntax as s
-from ..model.activations import DataTriggered, Hole, Periodic
+from ..model.activations import Hole
 from ..model.system import ActivationModel, ChainModel, CoreModel, ReadModel, SystemModel, TaskModel
 from ..frontend.resolve import SystemScope
 from ..core.source import NO_SPAN, Span
@@ -143,25 +143,26 @@ def _rate_statement(task: TaskModel, node: s.Task | None, binding: s.TaskBinding
                     comp_key: str) -> Statement | None:
     """A fixed rate: a component's ``fixed`` constraint, else a timer binding or an explicit prescaler."""
     act = task.activation
-    if not task.changeable and isinstance(act, (Periodic, DataTriggered)):
+    period, port = act.strict_period, act.trigger_port
+    if not task.changeable and (period is not None or port is not None):
         span = node.constraint.span if node is not None and node.constraint is not None else NO_SPAN
         text = _constraint_text(task)
         return Statement(f"fixed:{comp_key}", "rate", span, f"fixed at {text}", f"activation {text} fixed",
                          (task.id,))
     written = binding.activation if binding is not None else None
-    if isinstance(act, Periodic):
+    if period is not None:
         span = written.span if isinstance(written, s.Timer) else NO_SPAN
         shown = fmt_quantity(written.period) if isinstance(written, s.Timer) and isinstance(
-            written.period, s.Quantity) else fmt_time(act.period)
+            written.period, s.Quantity) else fmt_time(period)
         return Statement(f"binding:{task.id}", "rate", span, f"set to {shown}", f"timer {shown}", (task.id,))
-    if isinstance(act, DataTriggered):
+    if port is not None:
+        k = act.release_every
         number = written.prescaler if isinstance(written, s.Trigger) else None
-        explicit = _real(number.span) if isinstance(number, s.Number) else act.prescaler != 1
+        explicit = _real(number.span) if isinstance(number, s.Number) else k != 1
         if not explicit:
             return None
         span = number.span if isinstance(number, s.Number) and _real(number.span) else NO_SPAN
-        return Statement(f"binding:{task.id}", "rate", span, f"every {act.prescaler}",
-                         f"trigger {act.port} every {act.prescaler}", (task.id,))
+        return Statement(f"binding:{task.id}", "rate", span, f"every {k}", f"trigger {port} every {k}", (task.id,))
     return None
 
 
