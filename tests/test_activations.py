@@ -30,6 +30,8 @@ def test_a_timer_releases_strictly_periodically_from_its_phase():
     assert free.trigger_port is None and free.trigger_members == () and free.release_every == 1
     assert not free.listens_to("scan") and not free.unknown
     assert free.describe() == "timer 10 ms" and free.offset_name == "phase"
+    assert free.as_written() == "timer 10 ms" and fixed.as_written() == "timer 10 ms phase 3 ms"
+    assert free.timer_callback and free.trigger_mode is None
 
 
 def test_a_sporadic_source_has_a_gap_range_and_no_hyperperiod():
@@ -37,6 +39,7 @@ def test_a_sporadic_source_has_a_gap_range_and_no_hyperperiod():
     assert act.gaps == (5 * MS, 20 * MS) and act.strict_period is None and act.irregular
     assert act.offset_window == 20 * MS and act.first_release_latest == 20 * MS
     assert act.describe() == "sporadic 5 ms .. 20 ms" and act.offset_name == "first release"
+    assert act.as_written() == act.describe() and not act.timer_callback and act.trigger_mode is None
 
 
 @pytest.mark.parametrize("mode, single, every_member", [("single", "scan", False), ("and", None, True),
@@ -48,11 +51,15 @@ def test_a_data_trigger_listens_to_its_members(mode, single, every_member):
     assert act.trigger_members == members and act.release_every == 4 and act.all_members == every_member
     assert act.single_port == single and act.trigger_port == ("scan" if mode == "single" else "both")
     assert act.listens_to("scan") and not act.listens_to("goal")
+    assert act.trigger_mode == mode and not act.timer_callback
+    assert act.as_written() == act.describe() == f"trigger {act.trigger_port} every 4"
 
 
 def test_a_hole_is_unknown_and_releases_nothing():
     hole = Hole()
     assert hole.unknown and hole.kind == "hole" and hole.gaps is None and hole.trigger_port is None
+    assert hole.trigger_mode is None and not hole.timer_callback
+    assert hole.as_written() == "activation ?" and hole.describe() == "synthesis hole"
 
 
 def test_time_bases_are_exact():

@@ -166,14 +166,13 @@ def export_diagnostics(model):
 def synth_diagnostics(section: Section, result, model) -> list:
     """What `synth` reports for the example (its budget from the block's ``rlimit=N``)."""
     from verify.synth import TooManyCandidates, synthesize
-    from verify.synth.command import too_many
     from verify.synth.driver import DEFAULT_RLIMIT
 
     rlimit = next((int(b.rlimit) for b in section.blocks if b.rlimit), DEFAULT_RLIMIT)
     try:
         return list(synthesize(result, model.name, rlimit=rlimit).diagnostics)
     except TooManyCandidates as err:
-        return [too_many(err)]
+        return [err.diagnostic()]
 
 
 # ------------------------------------------------------------------ the registry and the spec agree

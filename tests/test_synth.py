@@ -114,7 +114,7 @@ def test_removing_any_core_member_makes_the_conflict_satisfiable(conflict):
     for member in keys:
         witness = expl.witnesses[member]
         assert not (witness.off & (keys - {member})), "the rest of the core stays in force"
-        model = configured_model(expl.problem.model, expl.problem.candidates(witness), expl.problem.statements,
+        model = configured_model(expl.problem.model, expl.problem.activations(witness), expl.problem.statements,
                                  witness.off)
         assert accepted(model), member
 
@@ -178,7 +178,7 @@ def test_core_seeded_from_the_blamed_chain_is_unsat_and_minimal(seed):
     for member in keys:
         witness = expl.witnesses[member]
         assert not (witness.off & (keys - {member}))
-        assert accepted(configured_model(problem.model, problem.candidates(witness), problem.statements, witness.off))
+        assert accepted(configured_model(problem.model, problem.activations(witness), problem.statements, witness.off))
 
 
 def test_spec_hint_with_other_conflicts_names_a_reached_latency_and_a_lower_bound():
@@ -340,12 +340,12 @@ def test_a_rate_hint_whose_budget_runs_out_is_left_out(write, capsys):
 
 
 def test_terms_built_through_the_c_api_equal_z3py_operators():
-    """``encode.Terms`` builds through Z3's C API the very terms z3py's operators build (same
+    """``terms.Terms`` builds through Z3's C API the very terms z3py's operators build (same
     argument order, also where Python dispatches to the numeral's reflected operator), so the
     solver — and every answer — is unchanged by it."""
     import z3
 
-    from verify.synth.encode import Terms
+    from verify.synth.terms import Terms
 
     ctx = z3.Context()
     t = Terms(ctx)

@@ -196,7 +196,7 @@ def test_an_and_cascade_with_specs_at_its_bound_is_satisfiable():
     join of one cascade does not (timing.md (7.3e)): it declared the problem infeasible (E401)."""
     result = synthesize(verify.load_text(CASCADE, "cascade.vfy"))
     assert (result.status, result.optimal) == ("sat", True)
-    assert {t: c.prescaler for t, c in result.choices.items()} == {"t1.T": 1, "t3.T": 1}
+    assert {t: c.activation.release_every for t, c in result.choices.items()} == {"t1.T": 1, "t3.T": 1}
     chain = result.analysis.chain("c")
     assert (chain.bound("reaction_time").worst, chain.bound("data_age").worst) == (F(18, 1000), F(8, 1000))
 

@@ -320,7 +320,7 @@ def test_unsat_cores_are_minimal(system):
     for member in keys:
         witness = expl.witnesses[member]
         assert not (witness.off & (keys - {member}))
-        model = configured_model(problem.model, problem.candidates(witness), problem.statements, witness.off)
+        model = configured_model(problem.model, problem.activations(witness), problem.statements, witness.off)
         assert accepted(model), (member, render(system))
 
 
@@ -378,7 +378,8 @@ def test_a_trial_with_fewer_statements_is_never_less_satisfiable():
 
 
 def _periods(result) -> dict:
-    return {t: (c.kind, c.period, c.port, c.prescaler) for t, c in result.choices.items()}
+    return {t: (c.activation.kind, c.activation.strict_period, c.activation.trigger_port, c.activation.release_every)
+            for t, c in result.choices.items()}
 
 
 @pytest.mark.slow

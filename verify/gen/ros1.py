@@ -22,7 +22,6 @@ from collections.abc import Callable
 from fractions import Fraction
 from importlib import resources
 
-from ..model.activations import DataTriggered, Periodic, SporadicSource
 from ..model.system import ComponentModel, MessageModel, SystemModel, TaskDecl, TaskModel
 from ..core.sanitize import c_string, comment, yaml_string
 from ..core.source import Span
@@ -480,17 +479,20 @@ def chain_roles(model: SystemModel) -> dict[str, list[dict[str, object]]]:
 
 
 def _activation(task: TaskModel) -> list[str]:
+    # (the glue's activation kinds: a timer, a data trigger, or a source released between two gaps)
     act = task.activation
-    if isinstance(act, Periodic):
-        lines = ['activation: "timer"', f"period_ns: {yaml_string(nanoseconds(act.period))}  # {human(act.period)}"]
-        if act.phase is not None:
-            lines.append(f"phase_ns: {yaml_string(nanoseconds(act.phase))}")
+    period, port, gaps = act.strict_period, act.trigger_port, act.gaps
+    if period is not None:
+        lines = ['activation: "timer"', f"period_ns: {yaml_string(nanoseconds(period))}  # {human(period)}"]
+        phase = act.fixed_phase
+        if phase is not None:
+            lines.append(f"phase_ns: {yaml_string(nanoseconds(phase))}")
         return lines
-    if isinstance(act, DataTriggered):
-        return ['activation: "trigger"', f"trigger: {yaml_string(act.port)}", f"prescaler: {act.prescaler}"]
-    assert isinstance(act, SporadicSource)
-    return ['activation: "sporadic"', f"min_ns: {yaml_string(nanoseconds(act.min_interarrival))}",
-            f"max_ns: {yaml_string(nanoseconds(act.max_interarrival))}"]
+    if port is not None:
+        return ['activation: "trigger"', f"trigger: {yaml_string(port)}", f"prescaler: {act.release_every}"]
+    assert gaps is not None  # (a hole never reaches code generation)
+    return ['activation: "sporadic"', f"min_ns: {yaml_string(nanoseconds(gaps[0]))}",
+            f"max_ns: {yaml_string(nanoseconds(gaps[1]))}"]
 
 
 def _yaml_scalar(value: object) -> str:

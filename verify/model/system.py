@@ -20,6 +20,7 @@ from typing import Literal, TypedDict
 from . import syntax as s
 from .activations import KINDS as KINDS
 from .activations import Activation as Activation
+from .activations import ActivationModel as ActivationModel
 from .activations import DataTriggered, Hole, Periodic, SporadicSource
 from .activations import HoleWhat as HoleWhat
 from ..core.ids import PortId, TaskId
@@ -28,11 +29,6 @@ from ..core.source import NO_SPAN, Span
 
 def _span() -> Span:
     return field(default=NO_SPAN, compare=False, repr=False)
-
-
-# ------------------------------------------------------------------ activations (verify.model.activations)
-
-ActivationModel = Periodic | SporadicSource | DataTriggered | Hole
 
 
 # ------------------------------------------------------------------ system
@@ -282,7 +278,7 @@ class ExecutorModel:
     def kind_rank(self, task: TaskModel) -> int:
         """The position of a callback's kind in a wait-set executor's processing order (§9.2): timers
         before subscriptions, except on the static executor, which processes subscriptions first."""
-        timer = task.activation.kind == "timer"
+        timer = task.activation.timer_callback
         return int(timer) if self.kind == "static_single_threaded" else int(not timer)
 
     @property

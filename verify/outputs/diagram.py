@@ -16,7 +16,6 @@ import subprocess
 from collections.abc import Iterable
 from fractions import Fraction
 
-from ..model.activations import DataTriggered
 from ..model.system import CompoundDecl, SystemModel, TaskModel
 from ..timing import AnalysisResult
 from ..timing.rates import LinkSampling
@@ -122,9 +121,9 @@ def _edges(model: SystemModel, analysis: AnalysisResult | None) -> list[str]:
         labels, warn = [], False
         for reader in link.readers:
             act = model.task(reader).activation
-            if isinstance(act, DataTriggered) and dst_port in act.members:
-                via = "" if act.port == dst_port else f" via {act.port}"
-                every = f" every {act.prescaler}" if act.prescaler != 1 else ""
+            if act.listens_to(dst_port):
+                via = "" if act.trigger_port == dst_port else f" via {act.trigger_port}"
+                every = f" every {act.release_every}" if act.release_every != 1 else ""
                 labels.append(f"triggers {reader.split('.', 1)[1]}{via}{every}")
         for s in sampling.get(link.target, ()):
             text = _sampling_text(s)

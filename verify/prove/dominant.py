@@ -21,7 +21,6 @@ from __future__ import annotations
 from collections.abc import Iterable
 from dataclasses import dataclass, replace
 
-from ..model.activations.sporadic import SporadicSource
 from ..model.activations.timer import Periodic
 from ..model.system import LinkModel, SystemModel, TaskModel
 from ..model.units import fmt_time
@@ -54,11 +53,10 @@ def dominant(model: SystemModel, targets: Iterable[Target]) -> Dominant | None:
         links = tuple(_constant_delay(lk) for lk in model.links)
         what = ("on the dominating rigid system (proof spec §4.7): every job at its wcet"
                 + "".join(f", `{t.id}` a timer of {_period_text(t)}" for t in model.tasks
-                          if isinstance(t.activation, SporadicSource)))
+                          if t.activation.irregular))
         return Dominant(replace(model, tasks=tasks, links=links), what)
-    fixed = [t for t in model.tasks if isinstance(t.activation, SporadicSource)
-             and t.activation.min_interarrival == t.activation.max_interarrival
-             and t.executor is None]  # (on an executor a sporadic source is a subscription, not a timer: §9)
+    # (on an executor a sporadic source is a subscription, not a timer: §9)
+    fixed = [t for t in model.tasks if _regular_in_fact(t) and t.executor is None]
     if not fixed:
         return None
     tasks = tuple(_as_timer(t) if t in fixed else t for t in model.tasks)
@@ -74,15 +72,23 @@ def sustainable_deadlines(model: SystemModel, targets: Iterable[Target]) -> bool
                     for t in model.tasks))
 
 
+def _regular_in_fact(t: TaskModel) -> bool:
+    """Released by time, not strictly periodically, with its least and greatest gap equal."""
+    gaps = t.activation.gaps
+    return t.activation.irregular and gaps is not None and gaps[0] == gaps[1]
+
+
 def _as_timer(t: TaskModel) -> TaskModel:
+    """An irregular source as a timer of its least gap."""
     act = t.activation
-    assert isinstance(act, SporadicSource)
-    return replace(t, activation=Periodic(act.min_interarrival, None, act.span))
+    gaps = act.gaps
+    assert gaps is not None and act.irregular
+    return replace(t, activation=Periodic(gaps[0], None, act.span))
 
 
 def _worst_task(t: TaskModel) -> TaskModel:
     worst = replace(t, bcet=t.wcet)
-    return _as_timer(worst) if isinstance(t.activation, SporadicSource) else worst
+    return _as_timer(worst) if t.activation.irregular else worst
 
 
 def _constant_delay(lk: LinkModel) -> LinkModel:
@@ -92,6 +98,6 @@ def _constant_delay(lk: LinkModel) -> LinkModel:
 
 
 def _period_text(t: TaskModel) -> str:
-    act = t.activation
-    assert isinstance(act, SporadicSource)
-    return fmt_time(act.min_interarrival)
+    gaps = t.activation.gaps
+    assert gaps is not None  # (an irregular source)
+    return fmt_time(gaps[0])

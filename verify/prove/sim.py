@@ -231,7 +231,7 @@ def absorbs(task: TaskModel, executor: ExecutorModel) -> bool:
     """A callback with a pending job releases no job for a further activation (§9): rcl's timer
     skips missed periods, a subscription's history of depth 1 keeps only the newest message; the
     events executor queues one event per timer expiry."""
-    return executor.polls or task.activation.kind != "timer"
+    return executor.polls or not task.activation.timer_callback
 
 
 def executor_cores(system: SystemModel) -> list[str]:

@@ -33,7 +33,6 @@ from ..core.diagnostics import Diagnostic, DiagnosticSink
 from ..model.activations import DataTriggered, Hole, Periodic
 from ..model.system import SystemModel, TaskModel
 from ..frontend.resolve import SystemScope
-from ..model.units import fmt_number, fmt_time
 from .statements import Statement, statement_index
 
 MS = Fraction(1, 1000)
@@ -49,49 +48,34 @@ TriggerMode = Literal["single", "and", "or"]
 
 @dataclass(frozen=True)
 class Candidate:
-    """One way to activate a task: a timer with ``period`` (and the binding's ``phase``), or a data
-    trigger on ``port`` (members, mode) with ``prescaler``."""
+    """One way to activate a task: a timer (``Periodic``, with the binding's phase) or a data trigger
+    (``DataTriggered``: port, members, mode, prescaler). Everything else is asked of the activation."""
 
-    kind: str  # "timer" | "trigger"
-    period: Fraction | None = None
-    phase: Fraction | None = None
-    port: str | None = None
-    members: tuple[str, ...] = ()
-    mode: TriggerMode = "single"
-    prescaler: int = 1
+    activation: Periodic | DataTriggered
 
     @property
     def group(self) -> str:
         """Candidates of one group differ only in speed (period or prescaler)."""
-        return "timer" if self.kind == "timer" else f"trigger {self.port}"
+        port = self.activation.trigger_port
+        return self.activation.kind if port is None else f"{self.activation.kind} {port}"
 
     @property
     def speed(self) -> Fraction:
         """Smaller is faster: the period of a timer, the prescaler of a trigger."""
-        return self.period if self.kind == "timer" else Fraction(self.prescaler)  # type: ignore[return-value]  # a timer has one
+        period = self.activation.strict_period
+        return period if period is not None else Fraction(self.activation.release_every)
 
     def sort_key(self) -> tuple[bool, str, Fraction]:
-        return (self.kind != "timer", self.port or "", self.speed)
-
-    def activation(self) -> Periodic | DataTriggered:
-        return self._activation
-
-    @functools.cached_property
-    def _activation(self) -> Periodic | DataTriggered:  # (built once: pruning asks for it a million times)
-        if self.kind == "timer":
-            return Periodic(self.period, self.phase)  # type: ignore[arg-type]  # a timer has its period
-        return DataTriggered(self.port, self.members, self.mode, self.prescaler)  # type: ignore[arg-type]  # and a trigger its port
+        return (self.activation.strict_period is None, self.activation.trigger_port or "", self.speed)
 
     @property
     def rate(self) -> Fraction | None:
         """The activation rate of a timer candidate (a trigger's depends on its writers)."""
-        return 1 / self.period if self.kind == "timer" else None  # type: ignore[operator, return-value]  # a timer has one
+        period = self.activation.strict_period
+        return 1 / period if period is not None else None
 
     def text(self) -> str:
-        if self.kind == "timer":
-            phase = f" phase {fmt_time(self.phase)}" if self.phase is not None else ""
-            return f"timer {fmt_time(self.period)}{phase}"
-        return f"trigger {self.port}" + (f" every {self.prescaler}" if self.prescaler != 1 else "")
+        return self.activation.as_written()
 
 
 @dataclass(frozen=True)
@@ -108,7 +92,7 @@ class Choice:
     @functools.cached_property
     def activations(self) -> tuple[Periodic | DataTriggered, ...]:
         """The activation of every candidate, in order."""
-        return tuple(c.activation() for c in self.candidates)
+        return tuple(c.activation for c in self.candidates)
 
     def allowed(self, off: frozenset[str] = frozenset()) -> tuple[int, ...]:
         """Indices of the candidates no statement (other than those in ``off``) forbids."""
@@ -202,13 +186,14 @@ class _Builder:
         self.task, self.slots = task, slots
         self.items: dict[Candidate, set[str]] = {}
 
-    def add(self, cand: Candidate, *excluders: str | None) -> None:
-        if cand.kind == "timer" and cand.phase is not None and cand.period <= cand.phase:  # type: ignore[operator]
+    def add(self, act: Periodic | DataTriggered, *excluders: str | None) -> None:
+        period, phase = act.strict_period, act.fixed_phase
+        if period is not None and phase is not None and period <= phase:
             return  # a phase lies in [0, period)
-        keys = self.items.setdefault(cand, set())
+        keys = self.items.setdefault(Candidate(act), set())
         keys.update(k for k in excluders if k)
-        if cand.kind == "timer":
-            keys.update(self._constraint_excluders(cand.rate))  # type: ignore[arg-type]  # a timer's rate
+        if period is not None:
+            keys.update(self._constraint_excluders(1 / period))
 
     def _constraint_excluders(self, rate: Fraction) -> list[str]:
         t, out = self.task, []
@@ -232,7 +217,7 @@ def make_choice(task: str, cands: tuple[Candidate, ...], excluded: tuple[tuple[s
                 hole: Hole | None) -> Choice:
     """A choice; ``slowest`` is the slowest allowed timer candidate (else the slowest allowed one)."""
     allowed = [i for i, ex in enumerate(excluded) if not ex] or list(range(len(cands)))
-    slowest = max(allowed, key=lambda i: (cands[i].kind == "timer", cands[i].speed), default=0)
+    slowest = max(allowed, key=lambda i: (cands[i].activation.strict_period is not None, cands[i].speed), default=0)
     return Choice(task, cands, excluded, hole, slowest)
 
 
@@ -248,16 +233,15 @@ def task_choice(model: SystemModel, task: TaskModel, scope: SystemScope | None, 
         _hole_candidates(b, model, task, act, scope, slots, tracked)
         hole: Hole | None = act
     elif tracked and isinstance(act, Periodic) and "rate" in slots:
-        bound = Candidate("timer", act.period, act.phase)
+        bound = Periodic(act.period, act.phase)
         b.add(bound)
         for p in _timer_defaults(task):  # a relaxed binding leaves the phase unknown too
-            cand = Candidate("timer", p)
+            cand = Periodic(p)
             b.add(cand, slots["rate"] if cand != bound else None)
         hole = None
     elif tracked and isinstance(act, DataTriggered) and "rate" in slots:
         for k in sorted({act.prescaler, *DEFAULT_PRESCALERS}):
-            b.add(Candidate("trigger", port=act.port, members=act.members, mode=act.mode, prescaler=k),
-                  slots["rate"] if k != act.prescaler else None)
+            b.add(DataTriggered(act.port, act.members, act.mode, k), slots["rate"] if k != act.prescaler else None)
         hole = None
     else:
         return None
@@ -274,23 +258,22 @@ def _hole_candidates(b: _Builder, model: SystemModel, task: TaskModel, hole: Hol
     if hole.what == "period":
         own, values = period_values(hole, task)
         for p in values:
-            b.add(Candidate("timer", p, hole.phase))
+            b.add(Periodic(p, hole.phase))
         if tracked and own is not None:
             for p in _timer_defaults(task):
-                b.add(Candidate("timer", p, hole.phase), rng if p not in own else None)
+                b.add(Periodic(p, hole.phase), rng if p not in own else None)
     elif hole.what == "prescaler" and hole.port is not None:
         mode, members = trigger_ports(model, task, scope).get(hole.port, ("single", (hole.port,)))
         own_k, ks = prescaler_values(hole, task)
         extra = DEFAULT_PRESCALERS if tracked and own_k is not None else ()
         for k in sorted(set(ks) | set(extra)):
-            b.add(Candidate("trigger", port=hole.port, members=members, mode=mode, prescaler=k),
-                  rng if own_k is not None and k not in own_k else None)
+            b.add(DataTriggered(hole.port, members, mode, k), rng if own_k is not None and k not in own_k else None)
     else:  # activation ?
         for p in _timer_defaults(task):
-            b.add(Candidate("timer", p))
+            b.add(Periodic(p))
         for port, (mode, members) in trigger_ports(model, task, scope).items():
             for k in DEFAULT_PRESCALERS:
-                b.add(Candidate("trigger", port=port, members=members, mode=mode, prescaler=k))
+                b.add(DataTriggered(port, members, mode, k))
 
 
 def build_choices(model: SystemModel, scope: SystemScope | None, statements: tuple[Statement, ...],
@@ -308,7 +291,3 @@ def describe_hole(choice: Choice) -> str:
     """What the user wrote for a hole, e.g. ``timer ? in 25 ms .. 200 ms step 25 ms``."""
     return choice.hole.text if choice.hole is not None else "(fixed binding)"
 
-
-def value_text(c: Candidate) -> str:
-    return (c.text() if c.kind == "timer" or c.prescaler == 1
-            else f"trigger {c.port} every {fmt_number(Fraction(c.prescaler))}")

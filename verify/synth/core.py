@@ -312,7 +312,7 @@ def _range_hint(st: Statement, problem: Problem, budget: Budget) -> str:
         cands = enc.choices[tid].candidates
 
         def scale(c: Candidate) -> int:
-            return int(distance(c) / enc.tick) if c.kind == "timer" else int(distance(c))
+            return int(distance(c) / enc.tick) if c.activation.strict_period is not None else int(distance(c))
 
         term = enc.t.add(*(enc.t.ite(enc.sel[tid][i], scale(c), 0) for i, c in enumerate(cands) if c in outside))
         return Objective(f"hint {st.key}", "min", term, lambda config, ev: scale(cands[config.index(tid)]))

@@ -106,8 +106,9 @@ def objectives_for(goals: list[Goal], enc: Encoding) -> list[Objective]:
             chain = cast(str, g.chain)  # (a latency or age goal names its chain)
 
             def latency(c: Config, ev: Evaluation, ch: str = chain, k: str = kind) -> int:
-                # an unbounded latency (None) of an accepted configuration would fail in ``ticks``
-                return enc.ticks(_latency(ev.result, ch, k))  # type: ignore[arg-type]
+                value = _latency(ev.result, ch, k)
+                assert value is not None  # (an accepted configuration's latency is bounded)
+                return enc.ticks(value)
             out.append(Objective(g.name, "min", enc.latency[(chain, kind)], latency))
     return out
 

@@ -25,128 +25,26 @@ from __future__ import annotations
 import math
 from fractions import Fraction
 from typing import TypeAlias, cast
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 
 import z3
 
 from ..model import syntax as s
-from ..model.activations import Activation, DataTriggered
+from ..model.activations import Activation
 from ..model.system import ChainModel, HopModel, LinkModel, SystemModel, TaskModel
 from ..core.timebase import TimeBase
 from ..timing.chains import cascade_in_time, cascade_links, pair_shape, same_core_reason
+from ..timing.rates import tolerance_limit
 from ..timing.rta import cooperative_counts
 from .candidates import Choice
 from .floors import first_job_bounds
 from .scale import rate_scale, tick_of
 from .statements import Statement, statement_index
 from .structure import Structure, activation_options, member_links
+from .terms import Cond, Term, Terms, conjunction, disjunction, lt_pair
 
-#: a linear term: a Python int, or a Z3 integer expression once a variable is involved
-Term: TypeAlias = "int | z3.ArithRef"
-#: a constraint: a Python bool when decided without Z3, else a Z3 Boolean expression
-Cond: TypeAlias = "bool | z3.BoolRef"
 #: a job's data ages at its release, its read (start) and its completion (specs/timing.md §7.7)
 Ages: TypeAlias = "tuple[Term, Term, Term]"
-
-
-# ================================================================== term helpers
-
-
-class Terms:
-    """Linear terms in one context; Python ints are folded and only lifted into Z3 when mixed.
-
-    Terms are built through Z3's C API directly: the same terms z3py's operators build (binary
-    ``+`` nested to the left, ``k * x``, ``If``), without its per-operation coercion, which made up
-    half the time of building a 1,000-task encoding."""
-
-    def __init__(self, ctx: z3.Context):
-        self.ctx = ctx
-        self._ref = ctx.ref()
-        self._int = z3.IntSort(ctx)  # (kept alive: its AST is used for every numeral)
-
-    def _num(self, x: int) -> z3.IntNumRef:  # (as z3.IntVal: operators dispatch on the subclass)
-        return z3.IntNumRef(z3.Z3_mk_numeral(self._ref, str(x), self._int.ast), self.ctx)
-
-    def _bin(self, make: Callable[..., z3.Ast], a: z3.ExprRef, b: z3.ExprRef) -> z3.Ast:
-        args = (z3.Ast * 2)(a.ast, b.ast)
-        return make(self._ref, 2, args)
-
-    def _rel(self, make: Callable[..., z3.Ast], reflected: Callable[..., z3.Ast], a: Term, b: Term) -> z3.BoolRef:
-        """``a OP b`` as z3py's operator builds it: Python tries the reflected operator of the right
-        operand first when its class is a subclass of the left's (a numeral on the right)."""
-        x, y = self.lift(a), self.lift(b)
-        if type(y) is not type(x) and isinstance(y, type(x)):
-            return z3.BoolRef(reflected(self._ref, y.ast, x.ast), self.ctx)
-        return z3.BoolRef(make(self._ref, x.ast, y.ast), self.ctx)
-
-    def implies(self, pre: list[z3.BoolRef], then: z3.BoolRef) -> z3.BoolRef:
-        """``Implies(pre[0], then)``, or ``Implies(And(*pre), then)`` for several, as z3py builds them."""
-        if len(pre) == 1:
-            left = pre[0].ast
-        else:
-            left = z3.Z3_mk_and(self._ref, len(pre), (z3.Ast * len(pre))(*(x.ast for x in pre)))
-        return z3.BoolRef(z3.Z3_mk_implies(self._ref, left, then.ast), self.ctx)
-
-    def any_of(self, conds: list[z3.BoolRef]) -> z3.BoolRef:
-        """``Or(*conds)`` (two or more), as z3py builds it."""
-        args = (z3.Ast * len(conds))(*(c.ast for c in conds))
-        return z3.BoolRef(z3.Z3_mk_or(self._ref, len(conds), args), self.ctx)
-
-    def at_least(self, x: z3.ArithRef, k: int) -> z3.BoolRef:
-        """``x >= k`` for a Python int ``k``, as z3py builds it."""
-        return z3.BoolRef(z3.Z3_mk_ge(self._ref, x.ast, self._num(k).ast), self.ctx)
-
-    def lift(self, x: Term) -> z3.ArithRef:
-        return self._num(x) if isinstance(x, int) else x
-
-    def add(self, *xs: Term) -> Term:
-        const = sum(x for x in xs if isinstance(x, int))
-        rest = [x for x in xs if not isinstance(x, int)]
-        if not rest:
-            return const
-        total = rest[0]
-        for x in rest[1:]:
-            total = z3.ArithRef(self._bin(z3.Z3_mk_add, total, x), self.ctx)
-        return z3.ArithRef(self._bin(z3.Z3_mk_add, total, self._num(const)), self.ctx) if const else total
-
-    def mul(self, k: int, x: Term) -> Term:
-        if isinstance(x, int):
-            return k * x
-        return x if k == 1 else z3.ArithRef(self._bin(z3.Z3_mk_mul, self._num(k), x), self.ctx)
-
-    def _ite(self, cond: z3.BoolRef, a: Term, b: Term) -> z3.ArithRef:
-        x, y = self.lift(a), self.lift(b)
-        return z3.ArithRef(z3.Z3_mk_ite(self._ref, cond.ast, x.ast, y.ast), self.ctx)
-
-    def max(self, a: Term, b: Term) -> Term:
-        if isinstance(a, int) and isinstance(b, int):
-            return max(a, b)
-        return self._ite(self._rel(z3.Z3_mk_ge, z3.Z3_mk_le, a, b), a, b)
-
-    def min(self, a: Term, b: Term) -> Term:
-        if isinstance(a, int) and isinstance(b, int):
-            return min(a, b)
-        return self._ite(self._rel(z3.Z3_mk_le, z3.Z3_mk_ge, a, b), a, b)
-
-    def ite(self, cond: Cond, a: Term, b: Term) -> Term:
-        if isinstance(cond, bool):
-            return a if cond else b
-        return self._ite(cond, a, b)
-
-    def le(self, a: Term, b: Term) -> Cond:
-        if isinstance(a, int) and isinstance(b, int):
-            return a <= b
-        return self._rel(z3.Z3_mk_le, z3.Z3_mk_ge, a, b)
-
-    def ge(self, a: Term, b: Term) -> Cond:
-        if isinstance(a, int) and isinstance(b, int):
-            return a >= b
-        return self._rel(z3.Z3_mk_ge, z3.Z3_mk_le, a, b)
-
-    def eq(self, a: Term, b: Term) -> Cond:
-        if isinstance(a, int) and isinstance(b, int):
-            return a == b
-        return self._rel(z3.Z3_mk_eq, z3.Z3_mk_eq, a, b)
 
 
 # ================================================================== the encoding
@@ -329,17 +227,19 @@ class Encoding:
 
     def _source(self, task: TaskModel, act: Activation) -> tuple[tuple[Term, Term, Term], tuple[Term, Term]]:
         """(P⁺, J⁺, F) in ticks and (k·fl, k·fh) in rate units for one activation (§5.2)."""
-        if act.gaps is not None:  # released by time: (a⁺, 0, first release at the latest)
-            lo, hi = self.ticks(act.gaps[0]), self.ticks(act.gaps[1])
-            return (hi, 0, self.ticks(act.first_release_latest)), (self.M // hi, self.M // lo)  # type: ignore[arg-type]
-        assert isinstance(act, DataTriggered)  # the rest releases by data
+        gaps, latest = act.gaps, act.first_release_latest
+        if gaps is not None and latest is not None:  # released by time: (a⁺, 0, first release at the latest)
+            lo, hi = self.ticks(gaps[0]), self.ticks(gaps[1])
+            return (hi, 0, self.ticks(latest)), (self.M // hi, self.M // lo)
+        mode = act.trigger_mode
+        assert mode is not None  # the rest releases by data
         arrivals = [(self.arrival(link), self.rates[link.writer])
                     for _, link in member_links(self.model, task, act) if link is not None]
-        stream = self._stream([a for a, _ in arrivals], act.mode)
-        k, t = act.prescaler, self.t
+        stream = self._stream([a for a, _ in arrivals], mode)
+        k, t = act.release_every, self.t
         P, J, F = stream
         if k > 1:
-            if act.mode == "or" and len(arrivals) > 1:
+            if mode == "or" and len(arrivals) > 1:
                 first = None
                 for (aP, aJ, aF), _ in arrivals:
                     cand = t.add(aF, t.mul(k - 1, aP), aJ)
@@ -348,17 +248,14 @@ class Encoding:
             else:
                 F = t.add(F, t.mul(k - 1, P), J)
         rates = [r for _, r in arrivals]
-        if act.mode == "and":
-            fl = fh = None
-            for rl, rh in rates:
-                fl = rl if fl is None else t.min(fl, rl)
-                fh = rh if fh is None else t.min(fh, rh)
-        elif act.mode == "or":
+        fl, fh = rates[0]
+        if mode == "and":
+            for rl, rh in rates[1:]:
+                fl, fh = t.min(fl, rl), t.min(fh, rh)
+        elif mode == "or":
             fl, fh = t.add(*(r[0] for r in rates)), t.add(*(r[1] for r in rates))
-        else:
-            fl, fh = rates[0]
-        if not self._varflags.get(task.id) and isinstance(fl, int):
-            return (t.mul(k, P), J, F), (fl // k, fh // k)  # type: ignore[operator]  # (set with fl)
+        if not self._varflags.get(task.id) and isinstance(fl, int) and isinstance(fh, int):
+            return (t.mul(k, P), J, F), (fl // k, fh // k)
         return (t.mul(k, P), J, F), (fl, fh)
 
     def arrival(self, link: LinkModel) -> tuple[Term, Term, Term]:
@@ -382,16 +279,13 @@ class Encoding:
                 F = aF if F is None else t.max(F, aF)
             return P, 0, F
         if mode == "or" and len(arrivals) > 1:
-            best: tuple[Term, ...] | None = None
-            for aP, aJ, aF in arrivals:
+            bP, bJ, bF = arrivals[0]
+            bW = t.max(t.add(bP, bJ), bF)
+            for aP, aJ, aF in arrivals[1:]:
                 wait = t.max(t.add(aP, aJ), aF)
-                if best is None:
-                    best = (aP, aJ, aF, wait)
-                    continue
-                bP, bJ, bF, bW = best
-                better = _lt_pair(t, (wait, aP), (bW, bP))
-                best = tuple(t.ite(better, x, y) for x, y in zip((aP, aJ, aF, wait), best))
-            bP, bJ, bF, _ = best  # type: ignore[misc]  # set: there are several arrivals
+                better = lt_pair(t, (wait, aP), (bW, bP))
+                bP, bJ, bF, bW = (t.ite(better, aP, bP), t.ite(better, aJ, bJ), t.ite(better, aF, bF),
+                                  t.ite(better, wait, bW))
             first = None
             for _, _, aF in arrivals:
                 first = aF if first is None else t.min(first, aF)
@@ -464,7 +358,7 @@ class Encoding:
                         self._tolerance(link, reader, port, direction, tol)
 
     def _tolerance(self, link: LinkModel, reader: TaskModel, port: str, direction: str, tol: s.Tolerance) -> None:
-        limit = Fraction(1) if tol.kind == "forbidden" else max(Fraction(1), Fraction(tol.factor.value))  # type: ignore[union-attr]
+        limit = tolerance_limit(tol)
         key = self.slot(reader.id, f"tolerance:{port}:{direction}")
         general = []
         for index, act in activation_options(reader, self.choices.get(reader.id)):
@@ -544,12 +438,13 @@ class Encoding:
         """The least ``fh`` of ``task`` under ``act`` given lower bounds ``low`` of its writers' ``fh``."""
         if act.gaps is not None:
             return self.M // self.ticks(act.gaps[0])
-        if not isinstance(act, DataTriggered):
+        mode = act.trigger_mode
+        if mode is None:
             return 0
         rates = [low[link.writer] for _, link in member_links(self.model, task, act) if link is not None]
         if not rates:
             return 0
-        combined = min(rates) if act.mode == "and" else sum(rates) if act.mode == "or" else rates[0]
+        combined = min(rates) if mode == "and" else sum(rates) if mode == "or" else rates[0]
         return combined // act.release_every
 
     def _demand(self, task: TaskModel) -> Term:
@@ -579,12 +474,14 @@ class Encoding:
         self.latency[(chain.name, "reaction_time")] = totals["reaction_time"]
         self.latency[(chain.name, "data_age")] = totals["data_age"]
         self.latency[(chain.name, "jitter")] = totals["jitter"]
+        specs = {"reaction_time": chain.reaction_time, "data_age": chain.data_age, "jitter": chain.jitter}
         for st in self._spec_statements.get(chain.name, ()):
-            # (a spec statement names its ``spec_kind``)
-            if getattr(chain, st.spec_kind) is not None:  # type: ignore[arg-type]
-                bound = self.ticks(getattr(chain, st.spec_kind))  # type: ignore[arg-type]
-                self.specs.append((st, totals[st.spec_kind], bound))  # type: ignore[index]
-                self.guard(st.key, t.le(totals[st.spec_kind], bound))  # type: ignore[index]
+            kind = st.spec_kind  # (a spec statement names its ``spec_kind``)
+            spec = specs.get(kind) if kind is not None else None
+            if kind is not None and spec is not None:
+                bound = self.ticks(spec)
+                self.specs.append((st, totals[kind], bound))
+                self.guard(st.key, t.le(totals[kind], bound))
 
     def _named(self, name: str, term: Term) -> Term:
         """A variable at least ``term`` (a latency: only its least value matters, §3)."""
@@ -667,7 +564,8 @@ class Encoding:
         names = ("release", "read", "completion")
         new = tuple(z3.Int(f"age|{chain}|{n}|{x}", self.ctx) for x in names)
         for index, (r, out) in terms:  # (several options: the candidates of a choice, each with its index)
-            sel = self.sel[reader.id][index]  # type: ignore[index]
+            assert index is not None  # several options: the candidates of a choice
+            sel = self.sel[reader.id][index]
             self.guard(None, self.t.ge(hr, r), sel)
             for var, value in zip(new, out):
                 self.guard(None, self.t.ge(var, value), sel)
@@ -690,16 +588,15 @@ class Encoding:
         if not act.listens_to(member):
             reaction = self._same_core(hop, register_r)
         else:
-            assert isinstance(act, DataTriggered)  # (it listens to a member)
-            k = act.prescaler
-            if act.mode == "and":
+            k = act.release_every  # (it listens to a member: a data trigger)
+            if act.all_members:
                 wait = self._and_wait(hop, act)
                 trig = t.add(d, wait, self._and_join(hop, act, k), self.R[i])
             else:
                 wait = 0
                 trig = t.add(d, self._delta_plus(p, k), self.R[i])
             reaction = self._same_core(hop, self.least(trig, register_r))
-            if act.mode != "or":  # the data trigger (7.7b) and the AND join age (7.7c)
+            if act.trigger_mode != "or":  # the data trigger (7.7b) and the AND join age (7.7c)
                 new_release = self.least(new_release, *(t.add(age, d, writer, wait) for age, writer in (
                     (release, self.R[p]), (read, self.span(p)), (completion, 0))))
         pair = []
@@ -724,11 +621,11 @@ class Encoding:
         B = self.ticks(self.model.task(writer).bcet) if self.model.task(writer).bcet else 0
         return self.t.add(self.t.mul(k - 1, P), J, self.R[writer], -B)
 
-    def _and_arrivals(self, hop: HopModel, act: DataTriggered) -> list[tuple[str, tuple[Term, Term, Term]]]:
+    def _and_arrivals(self, hop: HopModel, act: Activation) -> list[tuple[str, tuple[Term, Term, Term]]]:
         reader = self.model.task(hop.reader)
         return [(m, self.arrival(link)) for m, link in member_links(self.model, reader, act) if link is not None]
 
-    def _and_wait(self, hop: HopModel, act: DataTriggered) -> Term:
+    def _and_wait(self, hop: HopModel, act: Activation) -> Term:
         """``maxₘ W⁺ₘ`` of the other members, 0 where they are fresh by (7.3e) (``_cascade``)."""
         t = self.t
         member = hop.link.target.split(".", 1)[1]
@@ -748,7 +645,7 @@ class Encoding:
             self.add(z3.Or(cascade, self.t.ge(var, x)))
         return var
 
-    def _cascade(self, hop: HopModel, act: DataTriggered) -> Cond:
+    def _cascade(self, hop: HopModel, act: Activation) -> Cond:
         """Whether the AND join ``act`` is one of a cascade whose other members are fresh when this hop's
         value arrives (specs/timing.md §7.3, (7.3e)), as the analysis decides it (``cascade_fresh``) for
         each activation the writer ``p`` and the task ``w`` triggering it may take: the shape and the
@@ -771,36 +668,12 @@ class Encoding:
                 spacing = t.max(bcet, t.add(self.ticks(wact.gaps[0]), t.mul(-1, self.R[w.id]), bcet))
                 conds = [t.le(late, t.add(spacing, self.ticks(lk.delay_min))) for lk in others]
                 conds += [self.sel[x.id][i] for x, i in ((p, pidx), (w, widx)) if i is not None]
-                out.append(_all(conds))
-        return _any(out)
+                out.append(conjunction(conds))
+        return disjunction(out)
 
-    def _and_join(self, hop: HopModel, act: DataTriggered, k: int) -> Term:
+    def _and_join(self, hop: HopModel, act: Activation, k: int) -> Term:
         if k == 1:
             return 0
         t = self.t
         gap = self.greatest(*(t.add(aP, aJ) for _, (aP, aJ, _) in self._and_arrivals(hop, act)))
         return t.mul(k - 1, gap)
-
-
-def _all(conds: list[Cond]) -> Cond:
-    """The conjunction of ``conds``, decided without Z3 where it can be."""
-    if any(c is False for c in conds):
-        return False
-    rest = [c for c in conds if c is not True]
-    return True if not rest else rest[0] if len(rest) == 1 else z3.And(*rest)
-
-
-def _any(conds: list[Cond]) -> Cond:
-    """The disjunction of ``conds``, decided without Z3 where it can be."""
-    if any(c is True for c in conds):
-        return True
-    rest = [c for c in conds if c is not False]
-    return False if not rest else rest[0] if len(rest) == 1 else z3.Or(*rest)
-
-
-def _lt_pair(t: Terms, a: tuple[Term, Term], b: tuple[Term, Term]) -> Cond:
-    """(a0, a1) < (b0, b1) lexicographically."""
-    if all(isinstance(x, int) for x in (*a, *b)):
-        return a < b
-    a0, a1, b0, b1 = (t.lift(x) for x in (*a, *b))
-    return z3.Or(a0 < b0, z3.And(a0 == b0, a1 < b1))

@@ -37,8 +37,9 @@ def first_job_bounds(model: SystemModel, choices: Mapping[str, Choice], *,
         periods = []
         for t in tasks:
             acts = [a for _, a in activation_options(t, choices.get(t.id))]
-            periods.append(max(a.strict_period for a in acts)  # type: ignore[type-var]  # (none is None)
-                           if all(a.strict_period is not None for a in acts) else None)
+            strict = [a.strict_period for a in acts]
+            known = [p for p in strict if p is not None]
+            periods.append(max(known) if len(known) == len(strict) else None)
         scale = 1
         for x in cost + [p for p in periods if p is not None]:
             scale = math.lcm(scale, x.denominator)
@@ -59,12 +60,17 @@ def first_job_bounds(model: SystemModel, choices: Mapping[str, Choice], *,
             hp = [m for m, o in enumerate(tasks) if m != n and o.priority >= t.priority and o.id not in ahead]
             w = c[n] + sum(c[m] for m in hp)
             for _ in range(1000):
-                new = c[n] + sum(c[m] * (-(-w // per[m]) if per[m] else 1) for m in hp)  # type: ignore[operator, misc]  # per[m] is set
+                new = c[n] + sum(c[m] * _jobs(w, per[m]) for m in hp)
                 if new == w or new > limit:
                     break
                 w = new
             out[t.id] = Fraction(max(w, c[n]), scale)
     return out
+
+
+def _jobs(window: int, period: int | None) -> int:
+    """The jobs of a task of ``period`` ticks in a window of ``window`` ticks (one without a period)."""
+    return -(-window // period) if period else 1
 
 
 def multi_threaded_floor(model: SystemModel, task: TaskModel) -> Fraction:
@@ -73,7 +79,9 @@ def multi_threaded_floor(model: SystemModel, task: TaskModel) -> Fraction:
     certain: a callback may be silent)."""
     from ..timing.multithreaded import carry_in, group_blocking
 
-    executor = model.executor(task.executor)  # type: ignore[arg-type]  # (a callback)
+    name = task.executor
+    assert name is not None  # (a callback)
+    executor = model.executor(name)
     blocking, _ = group_blocking(model, task, executor)
     workers = len(executor.workers)
     return task.wcet + (blocking or Fraction(0)) + carry_in(model, model.callbacks(executor.name), workers) / workers

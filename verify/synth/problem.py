@@ -10,12 +10,11 @@ whose response times are valid lower bounds wherever the decisions are at least 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from fractions import Fraction
 from typing import TYPE_CHECKING
 from collections.abc import Mapping
 
 from ..core.diagnostics import Diagnostic
-from ..model.system import SystemModel
+from ..model.system import ActivationModel, SystemModel
 from ..frontend.resolve import SystemScope
 from ..timing import AnalysisResult, analyze
 from .candidates import Candidate, Choice, build_choices, make_choice
@@ -77,8 +76,12 @@ class Problem:
     def candidates(self, config: Config) -> dict[str, Candidate]:
         return {tid: self.choices[tid].candidates[i] for tid, i in config.choice}
 
+    def activations(self, config: Config) -> dict[str, ActivationModel]:
+        """The activation ``config`` chooses per task id."""
+        return {tid: self.choices[tid].candidates[i].activation for tid, i in config.choice}
+
     def configured(self, config: Config) -> SystemModel:
-        return configured_model(self.model, self.candidates(config), self.statements, config.off)
+        return configured_model(self.model, self.activations(config), self.statements, config.off)
 
     def evaluate(self, config: Config) -> Evaluation:
         """Analyse a configuration (specs/timing.md §5–§7): accepted when the analysis reports no
@@ -188,8 +191,3 @@ def _atoms(model: SystemModel, choices: Mapping[str, Choice], statements: tuple[
         bits[t.id] = value
     return atoms, bits
 
-
-def seconds_to_ticks(value: Fraction, tick: Fraction) -> int:
-    ticks = value / tick
-    assert ticks.denominator == 1
-    return int(ticks)

@@ -24,11 +24,11 @@ from fractions import Fraction
 from typing import TypeAlias
 from collections.abc import Callable, Mapping
 
-from ..model.activations import Activation, DataTriggered
+from ..model.activations import Activation
 from ..model.system import ChainModel, HopModel, SystemModel, TaskModel
 from ..timing.chains import same_core_reason
-from ..timing.rates import exact_sum
-from .candidates import Candidate, Choice, make_choice
+from ..timing.rates import exact_sum, tolerance_limit
+from .candidates import Choice, make_choice
 from .structure import activation_options, member_links
 
 ZERO = Fraction(0)
@@ -50,22 +50,23 @@ class Bounds:
 UNKNOWN = Bounds(None, None, ZERO)
 
 
-class _Trigger:
-    kind = "trigger"
-
-
-_FIXED_TRIGGER = _Trigger()
-
-
 def _hull(items: list[Bounds]) -> Bounds:
     if not items:
         return UNKNOWN
     if len(items) == 1:
         return items[0]
-    # (the ranges are indexed once none is None)
-    fl = None if any(b.fl is None for b in items) else (min(b.fl[0] for b in items), max(b.fl[1] for b in items))  # type: ignore[index]
-    fh = None if any(b.fh is None for b in items) else (min(b.fh[0] for b in items), max(b.fh[1] for b in items))  # type: ignore[index]
-    return Bounds(fl, fh, min(b.p_min for b in items))
+    return Bounds(_range_hull([b.fl for b in items]), _range_hull([b.fh for b in items]), min(b.p_min for b in items))
+
+
+def _known(ranges: list[Range | None]) -> list[Range] | None:
+    """``ranges`` when none is unknown, else None."""
+    known = [r for r in ranges if r is not None]
+    return known if len(known) == len(ranges) else None
+
+
+def _range_hull(ranges: list[Range | None]) -> Range | None:
+    known = _known(ranges)
+    return None if known is None else (min(r[0] for r in known), max(r[1] for r in known))
 
 
 @functools.lru_cache(maxsize=4096)
@@ -79,17 +80,18 @@ def activation_bounds(model: SystemModel, task: TaskModel, act: Activation, know
     gaps = act.gaps
     if gaps is not None:  # released by time
         return _timed_bounds(gaps)
-    if not isinstance(act, DataTriggered):
+    mode = act.trigger_mode
+    if mode is None:
         return UNKNOWN
     members = [known.get(link.writer, UNKNOWN) for _, link in member_links(model, task, act) if link is not None]
     if not members:
         return UNKNOWN
-    k = act.prescaler
-    if act.mode == "and":
+    k = act.release_every
+    if mode == "and":
         fl = _combine([m.fl for m in members], min)
         fh = _combine([m.fh for m in members], min)
         p_min = max(m.p_min for m in members)
-    elif act.mode == "or":
+    elif mode == "or":
         fl = _combine([m.fl for m in members], sum)
         fh = _combine([m.fh for m in members], sum)
         p_min = min(m.p_min for m in members)
@@ -103,11 +105,12 @@ def activation_bounds(model: SystemModel, task: TaskModel, act: Activation, know
 
 
 def _combine(ranges: list[Range | None], how: Callable[..., object]) -> Range | None:
-    if any(r is None for r in ranges):
+    known = _known(ranges)
+    if known is None:
         return None
     if how is sum:
-        return (sum((r[0] for r in ranges), ZERO), sum((r[1] for r in ranges), ZERO))  # type: ignore[index]
-    return (min(r[0] for r in ranges), min(r[1] for r in ranges))  # type: ignore[index]  # (none is None)
+        return (sum((r[0] for r in known), ZERO), sum((r[1] for r in known), ZERO))
+    return (min(r[0] for r in known), min(r[1] for r in known))
 
 
 class Pruner:
@@ -171,11 +174,11 @@ class Pruner:
     def _dead(self, tasks: dict[str, Bounds], per: dict[tuple[str, int], Bounds]) -> set[tuple[str, int]]:
         dead: set[tuple[str, int]] = set()
         for (tid, i), b in per.items():
-            if not self._rate_ok(self.model.task(tid), self.choices[tid].candidates[i], b):
+            if not self._rate_ok(self.model.task(tid), self.choices[tid].candidates[i].activation, b):
                 dead.add((tid, i))
         for t in sorted(self.model.tasks, key=lambda t: t.id):  # (by name: the blame must not depend on order)
             if t.id not in self.choices and t.activation.trigger_port is not None and not self._rate_ok(
-                    t, _FIXED_TRIGGER, tasks.get(t.id, UNKNOWN)):
+                    t, t.activation, tasks.get(t.id, UNKNOWN)):
                 self._blame(f"`{t.id}` is activated outside its activation constraint in every configuration",
                             ((), (t.id,)))
         dead |= self._schedulability()
@@ -201,13 +204,14 @@ class Pruner:
                 continue
             choice = self.choices.get(task.id)
             for i, c in enumerate(choice.candidates if choice else ()):
-                if c.kind == "timer" and floor > c.period:  # type: ignore[operator]  # a timer has its period
+                period = c.activation.strict_period
+                if period is not None and floor > period:
                     dead.add((task.id, i))
         return dead
 
     @staticmethod
-    def _rate_ok(task: TaskModel, cand: Candidate | _Trigger, b: Bounds) -> bool:
-        if cand.kind != "trigger":
+    def _rate_ok(task: TaskModel, act: Activation, b: Bounds) -> bool:
+        if act.trigger_port is None:
             return True  # timer candidates outside the constraint were excluded already
         if task.min_rate is not None and b.fl is not None and b.fl[1] < task.min_rate:
             return False
@@ -225,7 +229,7 @@ class Pruner:
                 for direction, tol in (("over", read.oversampling), ("under", read.undersampling)):
                     if tol is None or tol.kind == "ok":
                         continue
-                    limit = Fraction(1) if tol.kind == "forbidden" else max(Fraction(1), tol.factor.value)  # type: ignore[union-attr]
+                    limit = tolerance_limit(tol)
                     dead |= self._tolerance(link.writer, reader, port, direction, limit, tasks, per)
         return dead
 
@@ -278,7 +282,8 @@ class Pruner:
                 choice = self.choices.get(t.id)
                 if choice is None:
                     continue
-                own = tasks[t.id].fh[0] if tasks[t.id].fh is not None else ZERO  # type: ignore[index]
+                fh = tasks[t.id].fh
+                own = fh[0] if fh is not None else ZERO
                 for i in range(len(choice.candidates)):
                     b = per.get((t.id, i), UNKNOWN)
                     if b.fh is not None and t.wcet * (b.fh[0] - own) > slack:
@@ -350,12 +355,11 @@ class ChainLowerBound:
     def options(self, tid: str, fixed: tuple[str, int] | None) -> list[tuple[Activation, Fraction]]:
         p = self.p
         choice = p.choices.get(tid)
-        if fixed is not None and fixed[0] == tid:
-            return [(choice.candidates[fixed[1]].activation(),  # type: ignore[union-attr]  # a pinned task's choice
-                     self.per.get(fixed, UNKNOWN).p_min)]
         if choice is None:
             return [(p.model.task(tid).activation, self.tasks.get(tid, UNKNOWN).p_min)]
-        return [(c.activation(), self.per.get((tid, i), UNKNOWN).p_min) for i, c in enumerate(choice.candidates)]
+        if fixed is not None and fixed[0] == tid:  # (a pinned task has a choice)
+            return [(choice.candidates[fixed[1]].activation, self.per.get(fixed, UNKNOWN).p_min)]
+        return [(c.activation, self.per.get((tid, i), UNKNOWN).p_min) for i, c in enumerate(choice.candidates)]
 
     def involves(self, n: int) -> tuple[str, ...]:
         """The tasks whose choice term ``n`` depends on (0: the first task; n ≥ 1: hop n − 1)."""
@@ -392,7 +396,7 @@ class ChainLowerBound:
                     waits.append(ZERO if triggered else pm)
                 same_core_waits.append(ZERO if act.trigger_port is not None else pm)
             else:  # a data trigger (7.7b) waits for nothing; an AND join (7.7c) may not (7.3e)
-                joins_or = isinstance(act, DataTriggered) and act.mode == "or"
+                joins_or = act.trigger_mode == "or"
                 waits.append(ZERO if triggered and not joins_or else p_min(hop.writer))
         if self.kind == "reaction":
             lower = hop.link.delay_max + _r_min(model.task(hop.reader)) + min(waits)

@@ -42,13 +42,15 @@ def fitted_prescaler(problem: Problem, ev: Evaluation, tid: str, index: int) -> 
     within its activation constraint at its writers' current rate; None if there is none."""
     choice, task = problem.choices[tid], problem.model.task(tid)
     current, rate = choice.candidates[index], ev.result.task(tid).rate
-    if current.kind != "trigger" or rate is None:
+    if current.activation.trigger_port is None or rate is None:
         return None
-    low, high = rate.low * current.prescaler, rate.high * current.prescaler  # the writers' rate
+    k = current.activation.release_every
+    low, high = rate.low * k, rate.high * k  # the writers' rate
+    every = [c.activation.release_every for c in choice.candidates]
     fitting = [i for i, c in enumerate(choice.candidates) if c.group == current.group
-               and (task.min_rate is None or low / c.prescaler >= task.min_rate)
-               and (task.max_rate is None or high / c.prescaler <= task.max_rate)]
-    return max(fitting, key=lambda i: choice.candidates[i].prescaler) if fitting else None
+               and (task.min_rate is None or low / every[i] >= task.min_rate)
+               and (task.max_rate is None or high / every[i] <= task.max_rate)]
+    return max(fitting, key=lambda i: every[i]) if fitting else None
 
 
 def upstream(model: SystemModel, tasks: Iterable[str]) -> set[str]:

@@ -106,9 +106,11 @@ def to_json(result: SynthResult, file: str, *, dsl: str | None = None, diff: str
     problem = result.problem
     choices = []
     for task, hole, _ in _choice_rows(result):
-        c = result.choices[task]
-        choices.append({"task": task, "hole": hole, "value": c.text(), "kind": c.kind, "period": exact(c.period),
-                        "port": c.port, "prescaler": c.prescaler if c.kind == "trigger" else None})
+        act = result.choices[task].activation
+        port = act.trigger_port
+        choices.append({"task": task, "hole": hole, "value": act.as_written(), "kind": act.kind,
+                        "period": exact(act.strict_period), "port": port,
+                        "prescaler": act.release_every if port is not None else None})
     specs, cores = [], []
     if result.analysis is not None:
         specs = [{"chain": ch.name, "kind": sp.kind, "spec": exact(sp.spec), "bound": exact(sp.bound),

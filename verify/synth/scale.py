@@ -33,7 +33,7 @@ def problem_times(model: SystemModel, choices: Mapping[str, Choice]) -> list[Fra
             times += [c / len(ex.workers) for t in model.callbacks(ex.name) for c in (t.wcet, t.bcet)]
     for choice in choices.values():
         for c in choice.candidates:
-            times += [c.period, c.phase]
+            times += [c.activation.strict_period, c.activation.fixed_phase]
     return [x for x in times if x]
 
 

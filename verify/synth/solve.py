@@ -115,7 +115,8 @@ def lex_better(objectives: Sequence[Objective], a: Sequence[int | None], b: Sequ
     for obj, x, y in zip(objectives, a, b):
         # ``Objective.real`` says None for unbounded; the configurations compared here are accepted ones,
         # whose objective values are bounded (``better`` compares ints)
-        if obj.better(x, y):  # type: ignore[arg-type]
+        assert x is not None and y is not None
+        if obj.better(x, y):
             return True
         if x != y:
             return False
@@ -137,7 +138,7 @@ def failing_checks(problem: Problem, ev: Evaluation) -> set[str] | None:
     """The statements whose checks reject ``ev`` (spec bounds, activation-constraint ends, sampling
     tolerances); an empty set when some failure needs no statement (E311, E312, E316); None when a failure
     cannot be attributed (then the whole configuration is blocked)."""
-    from ..timing.rates import _tolerance_violation
+    from ..timing.rates import tolerance_violation
 
     slots = statement_index(problem.statements)
     checks: set[str | None]  # (None: a failure no statement asks for)
@@ -149,7 +150,7 @@ def failing_checks(problem: Problem, ev: Evaluation) -> set[str] | None:
         checks |= {f"spec:{chain.name}:{s.kind}" for s in chain.specs if not s.ok}
     for info in result.tasks:
         task, rate = problem.model.task(info.id), info.rate
-        if info.activation.kind != "trigger" or rate is None:
+        if info.activation.trigger_port is None or rate is None:
             continue
         mine = slots.get(info.id, {})
         if task.min_rate is not None and rate.low < task.min_rate:
@@ -162,7 +163,7 @@ def failing_checks(problem: Problem, ev: Evaluation) -> set[str] | None:
             continue
         for direction, tol, flagged, factor in (("over", read.oversampling, s.oversampled, s.oversampling),
                                                 ("under", read.undersampling, s.undersampled, s.undersampling)):
-            if _tolerance_violation(tol, flagged, factor) is not None:
+            if tolerance_violation(tol, flagged, factor) is not None:
                 checks.add(slots.get(s.reader, {}).get(f"tolerance:{read.port}:{direction}"))
     if None in checks or not checks:
         return None

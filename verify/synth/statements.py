@@ -19,7 +19,7 @@ from typing import TypedDict, TypeGuard
 from collections.abc import Mapping
 
 from ..model import syntax as s
-from ..model.activations import DataTriggered, Hole, Periodic
+from ..model.activations import Hole
 from ..model.system import ActivationModel, ChainModel, CoreModel, ReadModel, SystemModel, TaskModel
 from ..frontend.resolve import SystemScope
 from ..core.source import NO_SPAN, Span
@@ -126,8 +126,9 @@ def _task_statements(model: SystemModel, task: TaskModel, scope: SystemScope | N
         for direction, tol in (("over", read.oversampling), ("under", read.undersampling)):
             if tol is None or tol.kind == "ok":
                 continue
-            what = f"{direction}sampling " + ("forbidden" if tol.kind == "forbidden"
-                                              else f"at most {fmt_number(tol.factor.value)}")  # type: ignore[union-attr]  # "max" has one
+            factor = tol.factor  # ("max" has one)
+            what = f"{direction}sampling " + ("forbidden" if tol.kind == "forbidden" or factor is None
+                                              else f"at most {fmt_number(factor.value)}")
             out.append(Statement(f"tolerance:{comp_key}.{read.port}.{direction}", "tolerance", _span(tol.span),
                                  f"{what} on `{read.port}`", f"reads {read.port} {what}", (task.id,),
                                  port=read.port, direction=direction))
@@ -142,25 +143,26 @@ def _rate_statement(task: TaskModel, node: s.Task | None, binding: s.TaskBinding
                     comp_key: str) -> Statement | None:
     """A fixed rate: a component's ``fixed`` constraint, else a timer binding or an explicit prescaler."""
     act = task.activation
-    if not task.changeable and isinstance(act, (Periodic, DataTriggered)):
+    period, port = act.strict_period, act.trigger_port
+    if not task.changeable and (period is not None or port is not None):
         span = node.constraint.span if node is not None and node.constraint is not None else NO_SPAN
         text = _constraint_text(task)
         return Statement(f"fixed:{comp_key}", "rate", span, f"fixed at {text}", f"activation {text} fixed",
                          (task.id,))
     written = binding.activation if binding is not None else None
-    if isinstance(act, Periodic):
+    if period is not None:
         span = written.span if isinstance(written, s.Timer) else NO_SPAN
         shown = fmt_quantity(written.period) if isinstance(written, s.Timer) and isinstance(
-            written.period, s.Quantity) else fmt_time(act.period)
+            written.period, s.Quantity) else fmt_time(period)
         return Statement(f"binding:{task.id}", "rate", span, f"set to {shown}", f"timer {shown}", (task.id,))
-    if isinstance(act, DataTriggered):
+    if port is not None:
+        k = act.release_every
         number = written.prescaler if isinstance(written, s.Trigger) else None
-        explicit = _real(number.span) if isinstance(number, s.Number) else act.prescaler != 1
+        explicit = _real(number.span) if isinstance(number, s.Number) else k != 1
         if not explicit:
             return None
         span = number.span if isinstance(number, s.Number) and _real(number.span) else NO_SPAN
-        return Statement(f"binding:{task.id}", "rate", span, f"every {act.prescaler}",
-                         f"trigger {act.port} every {act.prescaler}", (task.id,))
+        return Statement(f"binding:{task.id}", "rate", span, f"every {k}", f"trigger {port} every {k}", (task.id,))
     return None
 
 
@@ -227,10 +229,9 @@ def private_core(task_id: str) -> str:
     return f"{task_id}~own"
 
 
-def configured_model(model: SystemModel, activations: Mapping[str, object],
+def configured_model(model: SystemModel, activations: Mapping[str, ActivationModel],
                      statements: tuple[Statement, ...] = (), off: frozenset[str] = frozenset()) -> SystemModel:
-    """``model`` with the given activation per task id (a ``Candidate`` or an activation model) and the
-    statements in ``off`` relaxed."""
+    """``model`` with the given activation per task id and the statements in ``off`` relaxed."""
     index = statement_index(statements) if off else {}
     tasks = tuple(_configured_task(t, activations.get(t.id), index.get(t.id, {}), off) for t in model.tasks)
     cores = list(model.cores)
@@ -256,11 +257,11 @@ class _TaskChanges(TypedDict, total=False):
     reads: tuple[ReadModel, ...]
 
 
-def _configured_task(task: TaskModel, choice: object, slots: dict[str, str], off: frozenset[str]) -> TaskModel:
+def _configured_task(task: TaskModel, activation: ActivationModel | None, slots: dict[str, str],
+                     off: frozenset[str]) -> TaskModel:
     changes: _TaskChanges = {}
-    if choice is not None:
-        changes["activation"] = choice.activation() if hasattr(choice, "activation") and callable(
-            choice.activation) else choice  # type: ignore[typeddict-item]  # an activation model or a Candidate
+    if activation is not None:
+        changes["activation"] = activation
     if off:
         if slots.get("wcet") in off:
             changes["wcet"] = task.bcet
@@ -288,5 +289,9 @@ def _configured_read(read: ReadModel, slots: dict[str, str], off: frozenset[str]
 
 
 def _configured_chain(chain: ChainModel, off: frozenset[str]) -> ChainModel:
-    dropped = {k: None for k in SPEC_KINDS if f"spec:{chain.name}:{k}" in off}
-    return replace(chain, **dropped) if dropped else chain  # type: ignore[arg-type]  # keys: the spec fields (Fraction | None)
+    dropped = {k for k in SPEC_KINDS if f"spec:{chain.name}:{k}" in off}
+    if not dropped:
+        return chain
+    return replace(chain, reaction_time=None if "reaction_time" in dropped else chain.reaction_time,
+                   data_age=None if "data_age" in dropped else chain.data_age,
+                   jitter=None if "jitter" in dropped else chain.jitter)

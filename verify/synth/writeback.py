@@ -51,13 +51,17 @@ def _timer_period(period: Fraction, hole: s.Activation) -> s.Quantity:
 
 def filled_activation(hole: s.Activation, cand: Candidate) -> s.Activation:
     """The syntax of ``cand`` in place of the hole ``hole`` (same span)."""
-    if cand.kind == "timer":
+    act = cand.activation
+    period = act.strict_period
+    if period is not None:
         phase = hole.phase if isinstance(hole, s.Timer) else None
-        return s.Timer(_timer_period(cand.period, hole), phase, hole.span)  # type: ignore[arg-type]  # a timer's period
-    prescaler = s.Number(Fraction(cand.prescaler))
+        return s.Timer(_timer_period(period, hole), phase, hole.span)
+    prescaler = s.Number(Fraction(act.release_every))
     if isinstance(hole, s.Trigger):
         return replace(hole, prescaler=prescaler)
-    return s.Trigger(s.Name(cand.port), prescaler, hole.span)  # type: ignore[arg-type]  # a trigger's port
+    port = act.trigger_port
+    assert port is not None  # a candidate that is not a timer is a data trigger
+    return s.Trigger(s.Name(port), prescaler, hole.span)
 
 
 def filled_module(module: s.Module, system: str, choices: Mapping[str, Candidate]) -> s.Module:
@@ -172,10 +176,12 @@ def hole_edits(source: SourceFile, module: s.Module, system: str, choices: Mappi
 def _replaced(hole: s.Activation, filled: s.Activation) -> tuple[Span, str]:
     """(the part of ``hole`` that is replaced, its new text): the period hole and its range, the
     prescaler hole and its range, or the whole ``activation ?``."""
-    if isinstance(hole, s.Timer) and isinstance(hole.period, s.PeriodHole) and isinstance(filled, s.Timer):
-        return hole.period.span, format_quantity(filled.period)  # type: ignore[arg-type]  # filled: a period
-    if isinstance(hole, s.Trigger) and isinstance(hole.prescaler, s.PrescalerHole) and isinstance(filled, s.Trigger):
-        return hole.prescaler.span, format_number(filled.prescaler.value)  # type: ignore[union-attr]  # a number
+    if (isinstance(hole, s.Timer) and isinstance(hole.period, s.PeriodHole) and isinstance(filled, s.Timer)
+            and isinstance(filled.period, s.Quantity)):
+        return hole.period.span, format_quantity(filled.period)
+    if (isinstance(hole, s.Trigger) and isinstance(hole.prescaler, s.PrescalerHole) and isinstance(filled, s.Trigger)
+            and isinstance(filled.prescaler, s.Number)):
+        return hole.prescaler.span, format_number(filled.prescaler.value)
     return hole.span, format_activation(filled)
 
 

@@ -29,7 +29,6 @@ from typing import Any
 from ..core.construct import direct_constructor
 from ..core.diagnostics import DiagnosticSink, Label, name_list
 from ..model.syntax import Tolerance
-from ..model.activations import DataTriggered
 from ..core.ids import TaskId
 from ..model.system import CompoundModel, LinkModel, SystemModel, TaskModel
 from ..model.units import fmt_number, fmt_rate
@@ -110,6 +109,11 @@ class ActivationInfo:
     prescaler: int | None = None
     sources: tuple[Source, ...] = ()
     in_cycle: bool = False
+
+    @property
+    def timed(self) -> bool:
+        """Released by time (a period or an interarrival range), not by data."""
+        return self.period is not None or self.interarrival is not None
 
 
 #: the constructors of the objects above, built by the thousand (``verify.core.construct``)
@@ -252,25 +256,26 @@ def _activation_info(system: SystemModel, task: TaskModel, known: Mapping[str, A
         low, high = act.gaps
         return _new_activation_info(task.id, act.kind, _new_rate_interval(1 / high, 1 / low), act.describe(),
                                     interarrival=act.gaps)
-    if isinstance(act, DataTriggered):
+    port, mode = act.trigger_port, act.trigger_mode
+    if port is not None and mode is not None:
         sources = trigger_sources(system, task)
-        rate, text = _trigger_rate(act, sources, known, in_cycle)
-        return _new_activation_info(task.id, "trigger", rate, text, trigger_port=act.port, mode=act.mode,
-                                    prescaler=act.prescaler, sources=sources, in_cycle=in_cycle)
+        rate, text = _trigger_rate(mode, act.release_every, sources, known, in_cycle)
+        return _new_activation_info(task.id, act.kind, rate, text, trigger_port=port, mode=mode,
+                                    prescaler=act.release_every, sources=sources, in_cycle=in_cycle)
     return _new_activation_info(task.id, act.kind, None, "not bounded: unresolved synthesis hole")
 
 
-def _trigger_rate(act: DataTriggered, sources: tuple[Source, ...], known: Mapping[str, ActivationInfo],
+def _trigger_rate(mode: str, prescaler: int, sources: tuple[Source, ...], known: Mapping[str, ActivationInfo],
                   in_cycle: bool) -> tuple[RateInterval | None, str]:
     """Writer rate / k (single), min of members (AND), sum of members (OR), then / prescaler."""
     if in_cycle:
         return None, "not bounded: the trigger depends on its own output (trigger cycle)"
-    combined, text = _event_rate(act.mode, sources, known)
+    combined, text = _event_rate(mode, sources, known)
     if combined is None:
         return None, text
-    if act.prescaler != 1:
-        text = f"({text}) / {act.prescaler}" if act.mode == "or" else f"{text} / {act.prescaler}"
-    return combined.divided(act.prescaler), text
+    if prescaler != 1:
+        text = f"({text}) / {prescaler}" if mode == "or" else f"{text} / {prescaler}"
+    return combined.divided(prescaler), text
 
 
 def _event_rate(mode: str, sources: tuple[Source, ...], known: Mapping[str, ActivationInfo]
@@ -285,10 +290,10 @@ def _event_rate(mode: str, sources: tuple[Source, ...], known: Mapping[str, Acti
             rates.append(known[src.writer].rate)
     parts = [("0 Hz (unconnected)" if s.writer is None else str(r) if r is not None else "unbounded")
              for s, r in zip(sources, rates)]
-    if any(r is None for r in rates):
+    bounded = [r for r in rates if r is not None]
+    if len(bounded) < len(rates):
         return None, "not bounded: a writer's rate is not bounded"
-    bounded: list[RateInterval] = rates  # type: ignore[assignment]  # no None (checked above)
-    combined: RateInterval | None
+    combined: RateInterval
     if mode == "and":
         combined = _new_rate_interval(min(r.low for r in bounded), min(r.high for r in bounded))
         text = f"min({', '.join(parts)})"
@@ -296,7 +301,7 @@ def _event_rate(mode: str, sources: tuple[Source, ...], known: Mapping[str, Acti
         combined = _new_rate_interval(sum((r.low for r in bounded), ZERO), sum((r.high for r in bounded), ZERO))
         text = " + ".join(parts)
     else:
-        combined, text = rates[0], parts[0]
+        combined, text = bounded[0], parts[0]
     return combined, text
 
 
@@ -414,19 +419,20 @@ def combine_or(members: list[EventModel]) -> EventModel:
         return SILENT
     if len(live) == 1:
         return live[0]
-    if any(m.period_min is None or m.jitter_min is None for m in live):
-        period = jitter = None
-    else:
-        # every live member has period_min and jitter_min (checked above)
-        period = 1 / sum((1 / m.period_min for m in live), ZERO)  # type: ignore[operator]
-        jitter = period * (sum((m.jitter_min / m.period_min for m in live), ZERO)  # type: ignore[operator]
-                           + len(live) - 1)
+    known = [(p, j) for p, j in ((m.period_min, m.jitter_min) for m in live) if p is not None and j is not None]
+    period: Fraction | None = None
+    jitter: Fraction | None = None
+    if len(known) == len(live):
+        period = 1 / sum((1 / p for p, _ in known), ZERO)
+        jitter = period * (sum((j / p for p, j in known), ZERO) + len(live) - 1)
     bounded = [m for m in live if m.sampling_wait is not None]
     best = min(bounded, key=lambda m: (m.sampling_wait, m.period_max)) if bounded else None
     firsts = [m.first_max for m in live if m.first_max is not None]
-    # best has a sampling wait, so a first release and a maximum period and jitter (``delta_plus``)
-    jitter_max = (None if best is None
-                  else best.jitter_max + max(ZERO, best.first_max - best.period_max))  # type: ignore[operator]
+    jitter_max: Fraction | None = None
+    if best is not None:  # (it has a sampling wait, so a first release and a maximum period and jitter)
+        best_jitter, best_first, best_period = best.jitter_max, best.first_max, best.period_max
+        if best_jitter is not None and best_first is not None and best_period is not None:
+            jitter_max = best_jitter + max(ZERO, best_first - best_period)
     return _new_event_model(period, jitter, best.period_max if best else None, jitter_max,
                             min(firsts) if firsts else None)
 
@@ -440,19 +446,23 @@ def combine_and(members: list[EventModel]) -> EventModel:
     arrival: ``δ⁺(n) ≤ (n−1)·maxₘ A⁺ₘ`` (§5.2)."""
     if not members or any(m.silent for m in members):
         return SILENT
-    known = [m for m in members if m.period_min is not None and m.jitter_min is not None]
-    # (the known members have period_min and jitter_min; gap and first: no None, checked)
-    slowest = max(known, key=lambda m: (m.period_min, -m.jitter_min)) if known else None  # type: ignore[operator]
-    period = slowest.period_min if slowest else None
-    jitter = slowest.jitter_min + slowest.period_min if slowest else None  # type: ignore[operator]
-    if slowest is not None and len(known) == len(members) and all(m.period_min == period for m in known):
-        widest = max(m.jitter_min for m in known)  # type: ignore[type-var]
-        jitter = min(jitter, widest)  # type: ignore[type-var]
-    gaps = [m.a_max for m in members]
-    gap = None if any(g is None for g in gaps) else max(gaps)  # type: ignore[type-var]
-    firsts = [m.first_max for m in members]
-    first = None if any(f is None for f in firsts) else max(firsts)  # type: ignore[type-var]
+    known = [(p, j) for p, j in ((m.period_min, m.jitter_min) for m in members) if p is not None and j is not None]
+    period: Fraction | None = None
+    jitter: Fraction | None = None
+    if known:
+        period, slowest_jitter = max(known, key=lambda pj: (pj[0], -pj[1]))  # the slowest member
+        jitter = slowest_jitter + period
+        if len(known) == len(members) and all(p == period for p, _ in known):
+            jitter = min(jitter, max(j for _, j in known))
+    gap = _greatest_if_all([m.a_max for m in members])
+    first = _greatest_if_all([m.first_max for m in members])
     return _new_event_model(period, jitter, gap, ZERO if gap is not None else None, first)
+
+
+def _greatest_if_all(values: list[Fraction | None]) -> Fraction | None:
+    """The greatest of ``values`` when none is None, else None."""
+    known = [v for v in values if v is not None]
+    return max(known) if len(known) == len(values) else None
 
 
 def first_of_k(stream: EventModel, members: list[EventModel], mode: str, k: int) -> Fraction | None:
@@ -498,14 +508,14 @@ def event_models(system: SystemModel, infos: Mapping[str, ActivationInfo], order
     models: dict[str, EventModel] = {}
     for tid in order:
         info = infos[tid]
-        if info.kind in ("timer", "sporadic"):
+        if info.timed:
             model = memo.get(tid) if memo is not None else None
             if model is None:
                 model = source_event_model(system.task(tid))
                 if memo is not None:
                     memo[tid] = model
             models[tid] = model
-        elif info.kind == "trigger" and not info.in_cycle:
+        elif info.trigger_port is not None and not info.in_cycle:
             if memo is not None:
                 key = [(models.get(src.writer), wcrt.get(src.writer)) for src in info.sources if src.writer]
                 last = memo.get(tid)
@@ -607,7 +617,15 @@ def _factor_text(value: Fraction | None) -> str:
     return "an unbounded factor" if value is None else f"a factor of {fmt_number(value)}"
 
 
-def _tolerance_violation(tol: Tolerance | None, flagged: bool, factor: Fraction | None) -> str | None:
+def tolerance_limit(tol: Tolerance) -> Fraction:
+    """The greatest over- or undersampling factor a tolerance that is not ``ok`` allows: 1 when it is
+    forbidden, else its factor (at least 1)."""
+    if tol.kind == "forbidden" or tol.factor is None:
+        return Fraction(1)
+    return max(Fraction(1), Fraction(tol.factor.value))
+
+
+def tolerance_violation(tol: Tolerance | None, flagged: bool, factor: Fraction | None) -> str | None:
     """The tolerance's wording if a flagged factor violates it, else None."""
     if tol is None or not flagged or tol.kind == "ok":
         return None
@@ -647,7 +665,7 @@ def check_sampling(system: SystemModel, samplings: tuple[LinkSampling, ...], sin
             continue
         for direction, tol, flagged, factor in (("over", read.oversampling, s.oversampled, s.oversampling),
                                                 ("under", read.undersampling, s.undersampled, s.undersampling)):
-            allowed = _tolerance_violation(tol, flagged, factor)
+            allowed = tolerance_violation(tol, flagged, factor)
             if allowed is None:
                 continue
             assert tol is not None  # a violated tolerance exists
@@ -671,7 +689,7 @@ def check_trigger_constraints(system: SystemModel, infos: Mapping[str, Activatio
     check_compound_constraints(system, infos, sink)
     for task in system.tasks:
         info = infos[task.id]
-        if info.kind != "trigger" or info.rate is None:
+        if info.trigger_port is None or info.rate is None:
             continue
         if task.min_rate is None and task.max_rate is None:
             continue

@@ -19,6 +19,7 @@ from collections.abc import Iterable
 from fractions import Fraction
 from typing import Any
 
+from ..model.activations import KINDS
 from ..model.units import fmt_number, fmt_time
 from . import AnalysisResult, TaskTiming
 from .chains import SPEC_WORDS, Bound, ChainBounds, Step, Term
@@ -197,7 +198,7 @@ JSON_SCHEMA: dict[str, Any] = _obj({
     "tasks": {"type": "array", "items": _obj({
         "id": {"type": "string"}, "core": {"type": "string"}, "priority": {"type": "integer"},
         "kind": {"enum": ["preemptive", "cooperative"]}, "bcet": _NUM, "wcet": _NUM,
-        "activation": _obj({"kind": {"enum": ["timer", "sporadic", "trigger", "hole"]}, "period": _NUM,
+        "activation": _obj({"kind": {"enum": list(KINDS)}, "period": _NUM,
                             "phase": _NUM, "rate": _INTERVAL, "rate_derivation": {"type": "string"},
                             "trigger_port": _STR, "mode": _STR,
                             "prescaler": {"type": ["integer", "null"]},
@@ -250,12 +251,11 @@ def _t(value: Fraction | None) -> str:
 
 def _rate_text(t: TaskTiming) -> str:
     a = t.activation
-    if a.kind == "timer":
-        how = f"timer {fmt_time(a.period)}" + (f" phase {fmt_time(a.phase)}" if a.phase is not None else "")
-    elif a.kind == "sporadic":
-        assert a.interarrival is not None  # (a sporadic task has its range)
-        how = f"sporadic {fmt_time(a.interarrival[0])} .. {fmt_time(a.interarrival[1])}"
-    elif a.kind == "trigger":
+    if a.period is not None:
+        how = f"{a.kind} {fmt_time(a.period)}" + (f" phase {fmt_time(a.phase)}" if a.phase is not None else "")
+    elif a.interarrival is not None:
+        how = f"{a.kind} {fmt_time(a.interarrival[0])} .. {fmt_time(a.interarrival[1])}"
+    elif a.trigger_port is not None:
         how = f"trigger {a.trigger_port}" + (f" every {a.prescaler}" if a.prescaler != 1 else "")
     else:
         how = "synthesis hole"
@@ -264,7 +264,7 @@ def _rate_text(t: TaskTiming) -> str:
     if a.rate is None:
         return f"{how}: rate {a.derivation}{source}"
     rate = str(a.rate)
-    derived = "" if a.kind in ("timer", "sporadic") or a.derivation == rate else f" = {a.derivation}"
+    derived = "" if a.timed or a.derivation == rate else f" = {a.derivation}"
     return f"{how}: {rate}{derived}{source}"
 
 

@@ -19,7 +19,6 @@ from typing import Any, Protocol
 import yaml
 
 from ...core.diagnostics import DiagnosticSink
-from ...model.activations import Periodic
 from ...model.system import ChainModel, SystemModel, TaskModel
 from ...core.source import Span
 from .read import UNDEFINED, Architecture
@@ -236,9 +235,10 @@ class _NodeWriter:
         act = t.activation
         entry: dict[str, Any] = {"callback_name": name}
         triggered: list[str] = []
-        if isinstance(act, Periodic):
+        period = act.strict_period
+        if period is not None:
             entry["callback_type"] = "timer_callback"
-            entry["period_ns"] = _ns(act.period, f"the period of `{t.id}`", t.span, self.sink)
+            entry["period_ns"] = _ns(period, f"the period of `{t.id}`", t.span, self.sink)
         else:
             entry["callback_type"] = "subscription_callback"
             members = list(act.trigger_members) if act.trigger_port is not None else []

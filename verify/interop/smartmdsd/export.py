@@ -14,7 +14,6 @@ import math
 from dataclasses import dataclass
 from fractions import Fraction
 
-from ...model.activations import DataTriggered, Periodic, SporadicSource
 from ...core.diagnostics import DiagnosticSink
 from ...model.system import SystemModel, TaskModel
 from ...core.source import Span
@@ -120,12 +119,13 @@ class _Exporter:
         if self.model.link_into(f"{t.instance}.{port}") is None or port not in {r.port for r in t.reads}:
             return None
         act = t.activation
-        return "TriggerInputNode" if isinstance(act, DataTriggered) and act.port == port else "RegisterInputNode"
+        return "TriggerInputNode" if act.trigger_port == port else "RegisterInputNode"
 
     def node_text(self, t: TaskModel) -> list[str]:
         name, act = self.node[t.id], t.activation
         if t.id in self.handlers:
-            if not isinstance(act, DataTriggered) or act.mode != "single":
+            port = act.single_port
+            if port is None:
                 self.sink.emit("E706", f"`{t.id}` is an input handler: it runs on its port's messages, so it cannot "
                                "have this activation in SmartMDSD", t.span, "not a data trigger",
                                help="activate it with `trigger PORT [every K]`")
@@ -134,8 +134,8 @@ class _Exporter:
             self.sink.emit("E707", f"the execution times, priority and core of input handler `{t.id}` have no "
                            "counterpart (an InputHandlerNode holds only a prescaler): not exported", t.span,
                            "not exported", help="keep them in the .vfy model; an import gives the handler none")
-            return [f"\tInputHandlerNode {name} {{", f"\t\tinput TriggerInputNode {act.port}",
-                    f"\t\tprescale {act.prescaler}", "\t}"]
+            return [f"\tInputHandlerNode {name} {{", f"\t\tinput TriggerInputNode {port}",
+                    f"\t\tprescale {act.release_every}", "\t}"]
         lines = [f"\tActivityNode {name} {{"]
         inputs = [(self._input_kind(t, r.port), r.port) for r in t.reads]
         if any(kind for kind, _ in inputs):
@@ -163,21 +163,22 @@ class _Exporter:
 
     def source_text(self, t: TaskModel) -> list[str]:
         act = t.activation
-        if isinstance(act, Periodic):
-            if act.phase is not None:
+        period, gaps, port = act.strict_period, act.gaps, act.single_port
+        if period is not None:
+            if act.fixed_phase is not None:
                 self.sink.emit("E707", f"the phase of `{t.id}` has no counterpart in SmartMDSD: its timer is "
                                "exported without it (an unknown phase, which the analysis covers)", t.span,
                                "phase dropped", help="nothing to do: every phase is then analysed")
-            freq = _decimal(1 / act.period, f"the rate of `{t.id}`", t.span, self.sink)
+            freq = _decimal(1 / period, f"the rate of `{t.id}`", t.span, self.sink)
             return ["\t\tactivationSource PeriodicTimer {", f"\t\t\tperiodicActFreq {freq} Hz", "\t\t}"]
-        if isinstance(act, SporadicSource):
-            low = _decimal(1 / act.max_interarrival, f"the slowest rate of `{t.id}`", t.span, self.sink)
-            high = _decimal(1 / act.min_interarrival, f"the fastest rate of `{t.id}`", t.span, self.sink)
+        if gaps is not None:  # released by time, not strictly periodically
+            low = _decimal(1 / gaps[1], f"the slowest rate of `{t.id}`", t.span, self.sink)
+            high = _decimal(1 / gaps[0], f"the fastest rate of `{t.id}`", t.span, self.sink)
             return ["\t\tactivationSource Sporadic {", f"\t\t\tminActFreq {low} Hz", f"\t\t\tmaxActFreq {high} Hz",
                     "\t\t}"]
-        if isinstance(act, DataTriggered) and act.mode == "single":
-            return [f"\t\tactivationSource DataTriggered {act.port} {{", f"\t\t\tprescale {act.prescaler}", "\t\t}"]
-        what = "an AND/OR compound trigger" if isinstance(act, DataTriggered) else "a synthesis hole"
+        if port is not None:
+            return [f"\t\tactivationSource DataTriggered {port} {{", f"\t\t\tprescale {act.release_every}", "\t\t}"]
+        what = "an AND/OR compound trigger" if act.trigger_port is not None else "a synthesis hole"
         self.sink.emit("E706", f"`{t.id}` has {what}: SmartMDSD has no counterpart", t.span, "cannot be exported",
                        help="run synth first" if what.endswith("hole") else "trigger it by one in-port")
         return []

@@ -12,14 +12,16 @@ testing its class:
 - *Releases by data*: ``trigger_members`` are the in-ports whose arrivals count, ``release_every`` the
   prescaler (the task runs on every k-th activation event), ``all_members`` whether an event needs a
   fresh sample on every member, ``trigger_port`` the port or compound it names, ``single_port`` that port
-  when it is one plain in-port,
+  when it is one plain in-port, ``trigger_mode`` how the members make an event (single, and, or),
   ``listens_to(member)`` whether an arrival on ``member`` counts.
+- *On an executor*: ``timer_callback`` whether the callback is a timer (else a subscription).
 - *Open*: ``unknown`` is true for what ``synth`` has still to choose (no release is known).
+- *Text*: ``describe()`` as the analysis report shows it, ``as_written()`` as a binding writes it.
 """
 from __future__ import annotations
 
 from fractions import Fraction
-from typing import ClassVar
+from typing import ClassVar, Literal
 
 
 class Activation:
@@ -94,6 +96,12 @@ class Activation:
         """The port of a data trigger on one plain in-port."""
         return None
 
+    @property
+    def trigger_mode(self) -> Literal["single", "and", "or"] | None:
+        """How a data trigger's members make an activation event: one in-port (``single``), a fresh sample
+        on every member (``and``), an arrival on any member (``or``); None when not released by data."""
+        return None
+
     def listens_to(self, member: str) -> bool:
         """An arrival on in-port ``member`` is an activation event."""
         return member in self.trigger_members
@@ -101,6 +109,18 @@ class Activation:
     def describe(self) -> str:
         """The activation as the analysis report shows it, e.g. ``timer 10 ms``."""
         return self.kind
+
+    def as_written(self) -> str:
+        """The activation as a binding writes it, e.g. ``timer 10 ms phase 2 ms`` (``describe`` unless the
+        kind writes more)."""
+        return self.describe()
+
+    # ------------------------------------------------------------------ executors (specs/timing.md §9)
+
+    @property
+    def timer_callback(self) -> bool:
+        """On an executor, the callback is a timer (rcl skips a missed period), not a subscription."""
+        return self.strict_period is not None
 
     # ------------------------------------------------------------------ synthesis
 

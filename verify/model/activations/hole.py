@@ -29,7 +29,7 @@ class Hole(Activation):
     hole as written (canonical: ``timer ? in 25 ms .. 200 ms step 25 ms``), ``range_text`` its range
     (``25 ms .. 200 ms step 25 ms``); ``span`` is the activation, ``range_span`` the ``?`` and its range.
 
-    ``Hole(node)`` with the syntax node of a hole builds the same object (``Hole.of(node)``)."""
+    ``Hole.of(node)`` builds it from the syntax node of a hole."""
 
     kind: ClassVar[str] = "hole"
 
@@ -44,11 +44,6 @@ class Hole(Activation):
     span: Span = field(default=NO_SPAN, compare=False, repr=False)
     range_span: Span = field(default=NO_SPAN, compare=False, repr=False)
 
-    def __post_init__(self) -> None:
-        if not isinstance(self.what, str):  # Hole(syntax node)
-            for name, value in _hole_fields(self.what).items():
-                object.__setattr__(self, name, value)
-
     @classmethod
     def of(cls, node: s.Activation) -> Hole:
         """The hole that the activation ``node`` (with a ``?``) leaves open."""
@@ -56,6 +51,9 @@ class Hole(Activation):
 
     def describe(self) -> str:
         return "synthesis hole"
+
+    def as_written(self) -> str:
+        return self.text
 
     @property
     def unknown(self) -> bool:

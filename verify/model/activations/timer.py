@@ -36,3 +36,7 @@ class Periodic(Activation):
 
     def describe(self) -> str:
         return f"timer {fmt_time(self.period)}"
+
+    def as_written(self) -> str:
+        phase = f" phase {fmt_time(self.phase)}" if self.phase is not None else ""
+        return f"timer {fmt_time(self.period)}{phase}"

@@ -45,5 +45,9 @@ class DataTriggered(Activation):
     def single_port(self) -> str | None:
         return self.port if self.mode == "single" else None
 
+    @property
+    def trigger_mode(self) -> Literal["single", "and", "or"]:
+        return self.mode
+
     def describe(self) -> str:
         return f"trigger {self.port}" + (f" every {self.prescaler}" if self.prescaler != 1 else "")
