@@ -21,7 +21,10 @@ from . import syntax as s
 from .activations import KINDS as KINDS
 from .activations import Activation as Activation
 from .activations import ActivationModel as ActivationModel
-from .activations import DataTriggered, Hole, Periodic, SporadicSource
+from .activations import DataTriggered as DataTriggered
+from .activations import Hole as Hole
+from .activations import Periodic as Periodic
+from .activations import SporadicSource as SporadicSource
 from .activations import HoleWhat as HoleWhat
 from ..core.ids import PortId, TaskId
 from ..core.source import NO_SPAN, Span
