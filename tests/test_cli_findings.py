@@ -192,7 +192,7 @@ def test_bash_completion_completes_commands_options_and_choices(capsys):
     assert _bash_complete(script, ["verify", "ch"]) == ["check"]
     assert _bash_complete(script, ["verify", "check", "--format", ""]) == ["text", "json", "sarif"]
     assert _bash_complete(script, ["verify", "--color", "check", "--fo"]) == ["--format"]
-    assert _bash_complete(script, ["verify", "gen", "r"]) == ["ros1"]
+    assert _bash_complete(script, ["verify", "gen", "r"]) == ["ros1", "ros2"]
     assert _bash_complete(script, ["verify", "explain", "E10"]) == sorted(c for c in CODES if c.startswith("E10"))
     assert _bash_complete(script, ["synth", "--objective", "x"]) == []  # (no choices: no file named x here)
     assert "--objective" in _bash_complete(script, ["synth", "--obj"])
