@@ -67,7 +67,7 @@ def _describe_expected(names: Iterable[str]) -> str:
     return "one of " + ", ".join(words)
 
 
-def shorten(text: str, width: int = 40) -> str:
+def _shorten(text: str, width: int = 40) -> str:
     """``text`` from the user's file for a message: at most ``width`` characters, an ellipsis where cut."""
     return text if len(text) <= width else text[:width - 3] + "..."
 
@@ -75,10 +75,10 @@ def shorten(text: str, width: int = 40) -> str:
 def _describe_found(token: Token) -> str:
     if token.type == "$END":
         return "the end of the file"
-    return f"'{shorten(str(token))}'"
+    return f"'{_shorten(str(token))}'"
 
 
-def token_span(path: str, tok: Token) -> Span:
+def _token_span(path: str, tok: Token) -> Span:
     line = tok.line or 1
     col = tok.column or 1
     end_line = tok.end_line or line
@@ -238,7 +238,7 @@ def _syntax_help(expected: set[str], token: Token, glued: tuple[str, Token, Toke
     word = str(token) if token.type != "$END" else ""
     if glued is not None:
         kw, _, tail = glued
-        return f"did you mean `{kw} {shorten(str(tail))}`? a keyword is separated from the word after it by a space"
+        return f"did you mean `{kw} {_shorten(str(tail))}`? a keyword is separated from the word after it by a space"
     if "UNIT" in expected:
         return "write a unit after the number, e.g. `10 ms` or `40 Hz`"
     if token.type == "RBRACE" and "COMPONENT" in expected:
@@ -259,7 +259,7 @@ def _syntax_help(expected: set[str], token: Token, glued: tuple[str, Token, Toke
         if word in keywords:
             return (f"`{word}` cannot stand here: it belongs to another kind of declaration; "
                     f"specs/language.md gives the syntax of each")
-        return (f"`{shorten(word)}` is not a keyword of the language; specs/language.md gives the syntax of each "
+        return (f"`{_shorten(word)}` is not a keyword of the language; specs/language.md gives the syntax of each "
                 "declaration")
     if len(expected) == 1:
         found = _describe_found(token)
@@ -354,7 +354,7 @@ def _report_unexpected(sink: DiagnosticSink, path: str, err: UnexpectedInput, te
         if expected is None:
             expected = _accepted(err)
         glued = notes.glued
-        span = token_span(path, err.token)
+        span = _token_span(path, err.token)
         if err.token.type == "$END":
             span = _end_span(path, text)
         number = _number_before(text, err.token) if "UNIT" in expected else None
