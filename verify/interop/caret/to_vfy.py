@@ -50,6 +50,20 @@ def _reserved() -> frozenset[str]:
     return frozenset(_keyword_terminals()) | frozenset(("kHz", "Hz", "ms", "us", "ns", "s"))
 
 
+def language_name(ros: str, camel: bool = False, reserved: frozenset[str] | None = None) -> str:
+    """A ROS name (``/ns/node``, ``/topic``) as a name of the language, before it is made unique in its
+    scope: what ``verify import caret`` names an instance (``ns_node``), a port or, ``camel``, a component;
+    ``verify trace`` finds a recorded node's instance and a topic's port by it."""
+    base = re.sub(r"[^A-Za-z0-9_]+", "_", ros).strip("_") or "unnamed"
+    if camel:
+        base = "".join(part[:1].upper() + part[1:] for part in base.split("_") if part) or "Unnamed"
+    if base[0].isdigit():
+        base = "n" + base
+    if base in (_reserved() if reserved is None else reserved):
+        base += "_"
+    return base
+
+
 class _Names:
     """ROS names as names of the language, unique within one scope."""
 
@@ -58,13 +72,7 @@ class _Names:
         self.words = _reserved()
 
     def __call__(self, ros: str, camel: bool = False) -> str:
-        base = re.sub(r"[^A-Za-z0-9_]+", "_", ros).strip("_") or "unnamed"
-        if camel:
-            base = "".join(part[:1].upper() + part[1:] for part in base.split("_") if part) or "Unnamed"
-        if base[0].isdigit():
-            base = "n" + base
-        if base in self.words:
-            base += "_"
+        base = language_name(ros, camel, self.words)
         name, k = base, 2
         while name in self.taken:
             name, k = f"{base}_{k}", k + 1

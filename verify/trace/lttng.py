@@ -1,0 +1,266 @@
+"""LTTng (CTF) traces as ros2_tracing and CARET record them, read with babeltrace2's Python bindings
+(specs/trace.md §1.1).
+
+The bindings are Debian's ``python3-bt2``, built for the system Python: ``bindings()`` imports them as
+they are, or from the system interpreter's packages when that interpreter is the same Python version
+as this one (only the ``bt2`` package is loaded from there). No CTF is parsed here.
+
+The reader streams: every event is seen once, in time order across the traces given, and only what
+the model can use is kept — the registrations of nodes, timers, subscriptions and callbacks (a few per
+callback) and three numbers per job (start, end, last publish). Events of the ``ros2`` provider that
+play no part are counted by name; events of other providers are counted as such.
+"""
+from __future__ import annotations
+
+import functools
+import importlib.util
+import os
+import subprocess
+import sys
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+from types import ModuleType
+
+from .recording import Callback, Jobs, Recording
+
+#: the events read (ros2_tracing's names and fields; CARET records the same)
+USED = ("ros2:rcl_node_init", "ros2:rcl_timer_init", "ros2:rclcpp_timer_callback_added", "ros2:rclcpp_timer_link_node",
+        "ros2:rcl_subscription_init", "ros2:rclcpp_subscription_init", "ros2:rclcpp_subscription_callback_added",
+        "ros2:rclcpp_callback_register", "ros2:callback_start", "ros2:callback_end", "ros2:rcl_publish",
+        "ros2:rcl_publisher_init")
+#: where Debian installs the bindings for the system interpreter
+SYSTEM_PYTHON = "/usr/bin/python3"
+
+
+class Unavailable(Exception):
+    """The bindings cannot be loaded: the message says what to install."""
+
+
+@functools.lru_cache(maxsize=1)
+def bindings() -> ModuleType:
+    """babeltrace2's ``bt2`` module (Unavailable when it is not installed for this Python version)."""
+    try:
+        import bt2  # type: ignore[import-not-found, unused-ignore]
+
+        module: ModuleType = bt2
+        return module
+    except ImportError:
+        pass
+    where = _system_bt2()
+    if where is None:
+        raise Unavailable("babeltrace2's Python bindings are not installed (Debian: `apt-get install python3-bt2`, "
+                          "or `scripts/install-tools`)")
+    spec = importlib.util.spec_from_file_location("bt2", os.path.join(where, "__init__.py"),
+                                                  submodule_search_locations=[where])
+    if spec is None or spec.loader is None:
+        raise Unavailable(f"babeltrace2's Python bindings in {where} cannot be loaded")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules["bt2"] = module
+    try:
+        spec.loader.exec_module(module)
+    except Exception as err:  # (a native module that does not load: any error of the import)
+        del sys.modules["bt2"]
+        raise Unavailable(f"babeltrace2's Python bindings in {where} do not load here: {err}") from None
+    return module
+
+
+def _system_bt2() -> str | None:
+    """The ``bt2`` package of the system interpreter, if that is this Python's version."""
+    if not os.path.exists(SYSTEM_PYTHON):
+        return None
+    probe = ("import sys, os, bt2; print('%d.%d' % sys.version_info[:2]); "
+             "print(os.path.dirname(bt2.__file__))")
+    try:
+        done = subprocess.run([SYSTEM_PYTHON, "-c", probe], capture_output=True, text=True, timeout=30, check=False)
+    except (OSError, subprocess.SubprocessError):
+        return None
+    lines = done.stdout.split()
+    if done.returncode != 0 or len(lines) != 2 or lines[0] != "%d.%d" % sys.version_info[:2]:
+        return None
+    return lines[1]
+
+
+# ------------------------------------------------------------------ the reader
+
+
+@dataclass
+class _Process:
+    """What one process registered, by handle (handles are addresses: unique within a process)."""
+
+    nodes: dict[int, str] = field(default_factory=dict)  # node handle -> "/ns/name"
+    timers: dict[int, int] = field(default_factory=dict)  # timer handle -> period (ns)
+    timer_nodes: dict[int, int] = field(default_factory=dict)  # timer handle -> node handle
+    timer_callbacks: dict[int, int] = field(default_factory=dict)  # callback -> timer handle
+    subscriptions: dict[int, tuple[int, str]] = field(default_factory=dict)  # rcl handle -> (node, topic)
+    rclcpp_subscriptions: dict[int, int] = field(default_factory=dict)  # rclcpp subscription -> rcl handle
+    subscription_callbacks: dict[int, int] = field(default_factory=dict)  # callback -> rclcpp subscription
+    symbols: dict[int, str] = field(default_factory=dict)  # callback -> symbol
+    registered: list[int] = field(default_factory=list)  # callbacks, in the order they were added
+    open: dict[int, tuple[int, int]] = field(default_factory=dict)  # callback -> (start, last publish)
+    running: dict[int, int] = field(default_factory=dict)  # thread -> callback running on it
+    jobs: dict[int, Jobs] = field(default_factory=dict)  # callback -> its jobs
+
+
+class _Reader:
+    def __init__(self) -> None:
+        self.processes: dict[int, _Process] = {}
+        self.events = 0
+        self.ignored: dict[str, int] = {}
+        self.handlers = {name: getattr(self, "on_" + name.split(":", 1)[1]) for name in USED}
+
+    def process(self, pid: int) -> _Process:
+        found = self.processes.get(pid)
+        if found is None:
+            found = self.processes[pid] = _Process()
+        return found
+
+    def feed(self, name: str, at: int, pid: int, tid: int, payload: object) -> None:
+        self.events += 1
+        handler = self.handlers.get(name)
+        if handler is None:
+            key = name if name.startswith("ros2:") else "(events of other providers)"
+            self.ignored[key] = self.ignored.get(key, 0) + 1
+            return
+        handler(self.process(pid), at, tid, payload)
+
+    # each handler: (process, time, thread, payload) — the payload indexes by ros2_tracing's field names
+
+    def on_rcl_node_init(self, p: _Process, at: int, tid: int, f: object) -> None:
+        ns, name = str(f["namespace"]), str(f["node_name"])  # type: ignore[index]
+        p.nodes[int(f["node_handle"])] = (ns.rstrip("/") + "/" + name) if ns else "/" + name  # type: ignore[index]
+
+    def on_rcl_timer_init(self, p: _Process, at: int, tid: int, f: object) -> None:
+        p.timers[int(f["timer_handle"])] = int(f["period"])  # type: ignore[index]
+
+    def on_rclcpp_timer_callback_added(self, p: _Process, at: int, tid: int, f: object) -> None:
+        callback = int(f["callback"])  # type: ignore[index]
+        p.timer_callbacks[callback] = int(f["timer_handle"])  # type: ignore[index]
+        p.registered.append(callback)
+
+    def on_rclcpp_timer_link_node(self, p: _Process, at: int, tid: int, f: object) -> None:
+        p.timer_nodes[int(f["timer_handle"])] = int(f["node_handle"])  # type: ignore[index]
+
+    def on_rcl_subscription_init(self, p: _Process, at: int, tid: int, f: object) -> None:
+        p.subscriptions[int(f["subscription_handle"])] = (int(f["node_handle"]), str(f["topic_name"]))  # type: ignore[index]
+
+    def on_rclcpp_subscription_init(self, p: _Process, at: int, tid: int, f: object) -> None:
+        p.rclcpp_subscriptions[int(f["subscription"])] = int(f["subscription_handle"])  # type: ignore[index]
+
+    def on_rclcpp_subscription_callback_added(self, p: _Process, at: int, tid: int, f: object) -> None:
+        callback = int(f["callback"])  # type: ignore[index]
+        p.subscription_callbacks[callback] = int(f["subscription"])  # type: ignore[index]
+        p.registered.append(callback)
+
+    def on_rclcpp_callback_register(self, p: _Process, at: int, tid: int, f: object) -> None:
+        p.symbols[int(f["callback"])] = str(f["symbol"])  # type: ignore[index]
+
+    def on_rcl_publisher_init(self, p: _Process, at: int, tid: int, f: object) -> None:
+        return None  # (publishers are found by the jobs they publish in)
+
+    def on_callback_start(self, p: _Process, at: int, tid: int, f: object) -> None:
+        callback = int(f["callback"])  # type: ignore[index]
+        p.open[callback] = (at, at)
+        p.running[tid] = callback
+
+    def on_callback_end(self, p: _Process, at: int, tid: int, f: object) -> None:
+        callback = int(f["callback"])  # type: ignore[index]
+        started = p.open.pop(callback, None)
+        p.running.pop(tid, None)
+        if started is None:
+            return  # (its start was before the trace began)
+        jobs = p.jobs.get(callback)
+        if jobs is None:
+            jobs = p.jobs[callback] = Jobs()
+        start, wrote = started
+        jobs.add(start, at, wrote if wrote > start else at)
+
+    def on_rcl_publish(self, p: _Process, at: int, tid: int, f: object) -> None:
+        callback = p.running.get(tid)
+        if callback is not None and callback in p.open:
+            p.open[callback] = (p.open[callback][0], at)
+
+    # ------------------------------------------------------------ the result
+
+    def recording(self, paths: tuple[str, ...]) -> Recording:
+        out = Recording(paths, "lttng", events=self.events)
+        out.ignored.update(self.ignored)
+        rank = 0
+        for pid in sorted(self.processes):
+            p = self.processes[pid]
+            alike: dict[tuple[object, ...], int] = {}
+            for callback in p.registered:
+                found = _identify(p, callback, pid)
+                if found is None:
+                    continue
+                same = (found.node, found.kind, found.period_ns, found.topic, found.symbol)
+                order = alike.get(same, 0)
+                alike[same] = order + 1
+                key = found.key
+                out.callbacks[key] = Callback(key, found.node, found.kind, found.period_ns, found.topic, found.symbol,
+                                              order, registered=rank)
+                rank += 1
+                out.jobs[key] = p.jobs.get(callback) or Jobs()
+            unfinished = sum(1 for c in p.open if c in p.jobs or c in p.timer_callbacks or c in p.subscription_callbacks)
+            if unfinished:
+                out.partial.append(f"{unfinished} job(s) of process {pid} started but did not end before the trace did "
+                                   "(left out)")
+        return out
+
+
+def _identify(p: _Process, callback: int, pid: int) -> Callback | None:
+    """A registered callback's identity (None: one of neither kind)."""
+    key = f"{pid}:{callback:#x}"
+    symbol = p.symbols.get(callback, "")
+    if callback in p.timer_callbacks:
+        timer = p.timer_callbacks[callback]
+        node = p.nodes.get(p.timer_nodes.get(timer, -1))
+        return Callback(key, node, "timer", p.timers.get(timer), None, symbol)
+    if callback in p.subscription_callbacks:
+        handle = p.rclcpp_subscriptions.get(p.subscription_callbacks[callback], -1)
+        node_handle, topic = p.subscriptions.get(handle, (-1, None))
+        return Callback(key, p.nodes.get(node_handle), "subscription", None, topic, symbol)
+    return None
+
+
+class Unreadable(Exception):
+    """A trace that cannot be read at all (not CTF, no such directory): the message says why."""
+
+
+def read(paths: Iterable[str]) -> Recording:
+    """The recording of the LTTng traces under ``paths`` (directories), merged in time order. A trace
+    that breaks off (truncated, corrupt) gives what was read before, with ``partial`` saying so;
+    Unreadable when nothing can be read; Unavailable without the bindings."""
+    bt2 = bindings()
+    given = tuple(paths)
+    reader = _Reader()
+    try:
+        messages = bt2.TraceCollectionMessageIterator(list(given))
+    except Exception as err:  # (bt2 reports every failure as its own error classes)
+        raise Unreadable(_first_line(err)) from None
+    recording_error = None
+    event_type = bt2._EventMessageConst
+    try:
+        for msg in messages:
+            if type(msg) is not event_type:
+                continue
+            ev = msg.event
+            context = ev.common_context_field
+            pid = int(context["vpid"]) if context is not None and "vpid" in context else 0
+            tid = int(context["vtid"]) if context is not None and "vtid" in context else 0
+            reader.feed(ev.name, msg.default_clock_snapshot.ns_from_origin, pid, tid, ev.payload_field)
+    except Exception as err:  # (the trace broke off: what was read stands, labelled partial)
+        recording_error = _first_line(err)
+    out = reader.recording(given)
+    if recording_error is not None:
+        if reader.events == 0:
+            raise Unreadable(recording_error)
+        out.partial.insert(0, f"the trace breaks off after {reader.events:,} events: {recording_error}")
+    return out
+
+
+def _first_line(err: BaseException) -> str:
+    """The gist of a babeltrace2 error (its first cause's message, one line)."""
+    lines = [ln.strip() for ln in str(err).splitlines() if ln.strip()]
+    useful = [ln for ln in lines if not ln.startswith(("File ", "Traceback"))]
+    text = (useful or lines or [type(err).__name__])[-1]
+    return text[:300]
