@@ -14,11 +14,13 @@ from __future__ import annotations
 
 import functools
 import importlib.util
+import multiprocessing
 import os
 import subprocess
 import sys
 from collections.abc import Iterable
 from dataclasses import dataclass, field
+from multiprocessing.connection import Connection
 from types import ModuleType
 
 from .recording import Callback, Jobs, Recording
@@ -229,9 +231,45 @@ class Unreadable(Exception):
 def read(paths: Iterable[str]) -> Recording:
     """The recording of the LTTng traces under ``paths`` (directories), merged in time order. A trace
     that breaks off (truncated, corrupt) gives what was read before, with ``partial`` saying so;
-    Unreadable when nothing can be read; Unavailable without the bindings."""
-    bt2 = bindings()
+    Unreadable when nothing can be read; Unavailable without the bindings.
+
+    babeltrace2 aborts its process on some corrupt traces, so the reading runs in a child process
+    (forked: nothing is imported again) that sends the recording back; a child that dies is a trace
+    that cannot be read."""
+    bindings()
     given = tuple(paths)
+    context = multiprocessing.get_context("fork")
+    receive, send = context.Pipe(duplex=False)
+    child = context.Process(target=_read_in_child, args=(given, send), daemon=True)
+    child.start()
+    send.close()
+    try:
+        outcome = receive.recv()
+    except EOFError:
+        outcome = None
+    child.join()
+    if outcome is None:
+        raise Unreadable(f"babeltrace2 stopped reading it (its process ended with status {child.exitcode}): "
+                         "the trace is corrupt")
+    if isinstance(outcome, Exception):
+        raise outcome
+    assert isinstance(outcome, Recording)
+    return outcome
+
+
+def _read_in_child(given: tuple[str, ...], send: Connection) -> None:
+    quiet = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(quiet, 2)  # (babeltrace2's own complaints, and an abort's, are not the user's to read)
+    try:
+        send.send(_read(given))
+    except (Unreadable, Unavailable) as err:
+        send.send(err)
+    finally:
+        send.close()
+
+
+def _read(given: tuple[str, ...]) -> Recording:
+    bt2 = bindings()
     reader = _Reader()
     try:
         messages = bt2.TraceCollectionMessageIterator(list(given))
