@@ -76,7 +76,7 @@ def test_the_command_reports_and_calibrates_the_caret_trace(tmp_path, capsys):
     before = model.read_text(encoding="utf-8")
     assert main(["trace", str(model), str(TRACE), "--calibrate", "--diff"]) == 0
     diff = capsys.readouterr().out
-    assert "-    wcet 200 us  // completed\n" in diff and "+    wcet 941 us  // completed\n" in diff  # 783.352 us + 20 %
+    assert "-    wcet 200 us  // completed\n" in diff and "+    wcet 941 us  // completed\n" in diff  # 783 us + 20 %
     assert "+    bcet 329 us  // completed\n" in diff  # 329.575 us, down
     assert model.read_text(encoding="utf-8") == before  # (--diff writes nothing)
     assert main(["trace", str(model), str(TRACE), "--calibrate", "--in-place"]) == 0

@@ -16,10 +16,16 @@ from __future__ import annotations
 
 import argparse
 from fractions import Fraction
+from typing import TYPE_CHECKING
 
 from ..outputs import Report, render
 from .common import (EXIT_INVALID, EXIT_OK, EXIT_VIOLATED, fail, load_configured, replace_file, show,
                      show_diagnostics, to_stderr, write_new_file)
+
+if TYPE_CHECKING:
+    from .. import api
+    from ..model import SystemModel
+    from ..trace.run import TraceResult
 
 HELP = "measurements of the robot (LTTng traces, job records) against the model; --calibrate writes them in"
 RESULT = "trace"
@@ -76,13 +82,14 @@ def run(args: argparse.Namespace) -> int:
     return EXIT_VIOLATED if any(d.severity.value == "error" for d in traced.diagnostics) else EXIT_OK
 
 
-def _calibrate(args: argparse.Namespace, loaded, system, traced) -> int:  # type: ignore[no-untyped-def]
+def _calibrate(args: argparse.Namespace, loaded: api.LoadResult, system: SystemModel, traced: TraceResult) -> int:
     from .. import api
     from ..synth.writeback import unified_diff
     from ..trace.calibrate import DEFAULT_MARGIN, calibrate
     from ..units import fmt_time
 
     root = loaded.project.root_module
+    assert root is not None, "a loaded model has its root module"
     source = loaded.sources[loaded.project.root]
     done = calibrate(root, source, system, traced.measured, DEFAULT_MARGIN if args.margin is None else args.margin)
     check = api.load(loaded.project.root, root=args.root, include=tuple(args.include or ()),

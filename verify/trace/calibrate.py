@@ -90,7 +90,8 @@ def calibrate(root: s.Module, source: SourceFile, model: SystemModel, measured: 
             indent = smap.line_text(task.end.line)[:task.end.column - 1]
             edits.append(Edit(line_start, line_start, "".join(f"{indent}  {m}  // measured\n" for m in missing)))
     edited = {(c.component, c.task) for c in changes}
-    elsewhere = tuple(sorted({c for c, t in times if c not in local or ((c, t) not in edited and _one_line(local[c], t))}))
+    elsewhere = tuple(sorted({c for c, t in times
+                              if c not in local or ((c, t) not in edited and _one_line(local[c], t))}))
     text = apply_edits(source.text, sorted(edits, key=lambda e: e.start))
     return Calibration(text, tuple(changes), elsewhere)
 

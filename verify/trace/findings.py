@@ -20,7 +20,8 @@ from fractions import Fraction
 from .. import syntax as s
 from ..diagnostics import DiagnosticSink, Label, Severity
 from ..loader import Project
-from ..model import ChainModel, Periodic, SystemModel
+from ..activations import Periodic
+from ..model import ChainModel, SystemModel
 from ..source import NO_SPAN, Span
 from ..timing import AnalysisResult
 from ..units import fmt_time

@@ -22,6 +22,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass, field
 from multiprocessing.connection import Connection
 from types import ModuleType
+from typing import Any
 
 from .recording import Callback, Jobs, Recording
 
@@ -42,10 +43,7 @@ class Unavailable(Exception):
 def bindings() -> ModuleType:
     """babeltrace2's ``bt2`` module (Unavailable when it is not installed for this Python version)."""
     try:
-        import bt2  # type: ignore[import-not-found, unused-ignore]
-
-        module: ModuleType = bt2
-        return module
+        return importlib.import_module("bt2")
     except ImportError:
         pass
     where = _system_bt2()
@@ -77,7 +75,7 @@ def _system_bt2() -> str | None:
     except (OSError, subprocess.SubprocessError):
         return None
     lines = done.stdout.split()
-    if done.returncode != 0 or len(lines) != 2 or lines[0] != "%d.%d" % sys.version_info[:2]:
+    if done.returncode != 0 or len(lines) != 2 or lines[0] != "{}.{}".format(*sys.version_info[:2]):
         return None
     return lines[1]
 
@@ -116,7 +114,7 @@ class _Reader:
             found = self.processes[pid] = _Process()
         return found
 
-    def feed(self, name: str, at: int, pid: int, tid: int, payload: object) -> None:
+    def feed(self, name: str, at: int, pid: int, tid: int, payload: Any) -> None:
         self.events += 1
         handler = self.handlers.get(name)
         if handler is None:
@@ -127,45 +125,45 @@ class _Reader:
 
     # each handler: (process, time, thread, payload) — the payload indexes by ros2_tracing's field names
 
-    def on_rcl_node_init(self, p: _Process, at: int, tid: int, f: object) -> None:
-        ns, name = str(f["namespace"]), str(f["node_name"])  # type: ignore[index]
-        p.nodes[int(f["node_handle"])] = (ns.rstrip("/") + "/" + name) if ns else "/" + name  # type: ignore[index]
+    def on_rcl_node_init(self, p: _Process, at: int, tid: int, f: Any) -> None:
+        ns, name = str(f["namespace"]), str(f["node_name"])
+        p.nodes[int(f["node_handle"])] = (ns.rstrip("/") + "/" + name) if ns else "/" + name
 
-    def on_rcl_timer_init(self, p: _Process, at: int, tid: int, f: object) -> None:
-        p.timers[int(f["timer_handle"])] = int(f["period"])  # type: ignore[index]
+    def on_rcl_timer_init(self, p: _Process, at: int, tid: int, f: Any) -> None:
+        p.timers[int(f["timer_handle"])] = int(f["period"])
 
-    def on_rclcpp_timer_callback_added(self, p: _Process, at: int, tid: int, f: object) -> None:
-        callback = int(f["callback"])  # type: ignore[index]
-        p.timer_callbacks[callback] = int(f["timer_handle"])  # type: ignore[index]
+    def on_rclcpp_timer_callback_added(self, p: _Process, at: int, tid: int, f: Any) -> None:
+        callback = int(f["callback"])
+        p.timer_callbacks[callback] = int(f["timer_handle"])
         p.registered.append(callback)
 
-    def on_rclcpp_timer_link_node(self, p: _Process, at: int, tid: int, f: object) -> None:
-        p.timer_nodes[int(f["timer_handle"])] = int(f["node_handle"])  # type: ignore[index]
+    def on_rclcpp_timer_link_node(self, p: _Process, at: int, tid: int, f: Any) -> None:
+        p.timer_nodes[int(f["timer_handle"])] = int(f["node_handle"])
 
-    def on_rcl_subscription_init(self, p: _Process, at: int, tid: int, f: object) -> None:
-        p.subscriptions[int(f["subscription_handle"])] = (int(f["node_handle"]), str(f["topic_name"]))  # type: ignore[index]
+    def on_rcl_subscription_init(self, p: _Process, at: int, tid: int, f: Any) -> None:
+        p.subscriptions[int(f["subscription_handle"])] = (int(f["node_handle"]), str(f["topic_name"]))
 
-    def on_rclcpp_subscription_init(self, p: _Process, at: int, tid: int, f: object) -> None:
-        p.rclcpp_subscriptions[int(f["subscription"])] = int(f["subscription_handle"])  # type: ignore[index]
+    def on_rclcpp_subscription_init(self, p: _Process, at: int, tid: int, f: Any) -> None:
+        p.rclcpp_subscriptions[int(f["subscription"])] = int(f["subscription_handle"])
 
-    def on_rclcpp_subscription_callback_added(self, p: _Process, at: int, tid: int, f: object) -> None:
-        callback = int(f["callback"])  # type: ignore[index]
-        p.subscription_callbacks[callback] = int(f["subscription"])  # type: ignore[index]
+    def on_rclcpp_subscription_callback_added(self, p: _Process, at: int, tid: int, f: Any) -> None:
+        callback = int(f["callback"])
+        p.subscription_callbacks[callback] = int(f["subscription"])
         p.registered.append(callback)
 
-    def on_rclcpp_callback_register(self, p: _Process, at: int, tid: int, f: object) -> None:
-        p.symbols[int(f["callback"])] = str(f["symbol"])  # type: ignore[index]
+    def on_rclcpp_callback_register(self, p: _Process, at: int, tid: int, f: Any) -> None:
+        p.symbols[int(f["callback"])] = str(f["symbol"])
 
-    def on_rcl_publisher_init(self, p: _Process, at: int, tid: int, f: object) -> None:
+    def on_rcl_publisher_init(self, p: _Process, at: int, tid: int, f: Any) -> None:
         return None  # (publishers are found by the jobs they publish in)
 
-    def on_callback_start(self, p: _Process, at: int, tid: int, f: object) -> None:
-        callback = int(f["callback"])  # type: ignore[index]
+    def on_callback_start(self, p: _Process, at: int, tid: int, f: Any) -> None:
+        callback = int(f["callback"])
         p.open[callback] = (at, at)
         p.running[tid] = callback
 
-    def on_callback_end(self, p: _Process, at: int, tid: int, f: object) -> None:
-        callback = int(f["callback"])  # type: ignore[index]
+    def on_callback_end(self, p: _Process, at: int, tid: int, f: Any) -> None:
+        callback = int(f["callback"])
         started = p.open.pop(callback, None)
         p.running.pop(tid, None)
         if started is None:
@@ -176,7 +174,7 @@ class _Reader:
         start, wrote = started
         jobs.add(start, at, wrote if wrote > start else at)
 
-    def on_rcl_publish(self, p: _Process, at: int, tid: int, f: object) -> None:
+    def on_rcl_publish(self, p: _Process, at: int, tid: int, f: Any) -> None:
         callback = p.running.get(tid)
         if callback is not None and callback in p.open:
             p.open[callback] = (p.open[callback][0], at)
@@ -202,7 +200,8 @@ class _Reader:
                                               order, registered=rank)
                 rank += 1
                 out.jobs[key] = p.jobs.get(callback) or Jobs()
-            unfinished = sum(1 for c in p.open if c in p.jobs or c in p.timer_callbacks or c in p.subscription_callbacks)
+            unfinished = sum(1 for c in p.open
+                             if c in p.jobs or c in p.timer_callbacks or c in p.subscription_callbacks)
             if unfinished:
                 out.partial.append(f"{unfinished} job(s) of process {pid} started but did not end before the trace did "
                                    "(left out)")

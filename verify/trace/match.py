@@ -19,7 +19,8 @@ from fractions import Fraction
 
 from ..interop.caret.read import IGNORED_TOPICS
 from ..interop.caret.to_vfy import language_name
-from ..model import DataTriggered, Periodic, SystemModel, TaskModel
+from ..activations import DataTriggered, Periodic
+from ..model import SystemModel, TaskModel
 from .recording import Callback, Recording
 
 
@@ -117,7 +118,7 @@ def _pair_by_period(tasks: list[TaskModel], found: list[Callback]) -> dict[str, 
     trace_periods = sorted(Fraction(c.period_ns or 0, 10**9) for c in found)
     if model_periods != trace_periods:
         return None
-    out = {}
+    out: dict[str, str] = {}
     for p in dict.fromkeys(model_periods):
         alike = [c for c in found if Fraction(c.period_ns or 0, 10**9) == p]
         out.update({t.id: c.key for t, c in zip((t for t in tasks if period(t) == p), alike, strict=False)})

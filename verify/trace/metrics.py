@@ -20,7 +20,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from fractions import Fraction
 
-from ..model import ChainModel, Periodic, SystemModel
+from ..activations import Periodic
+from ..model import ChainModel, SystemModel
 from .match import Matching
 from .recording import Jobs, Recording
 
