@@ -18,19 +18,27 @@ import multiprocessing
 import os
 import subprocess
 import sys
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from multiprocessing.connection import Connection
 from types import ModuleType
-from typing import Any
 
 from .recording import Callback, Jobs, Recording
 
-#: the events read (ros2_tracing's names and fields; CARET records the same)
-USED = ("ros2:rcl_node_init", "ros2:rcl_timer_init", "ros2:rclcpp_timer_callback_added", "ros2:rclcpp_timer_link_node",
-        "ros2:rcl_subscription_init", "ros2:rclcpp_subscription_init", "ros2:rclcpp_subscription_callback_added",
-        "ros2:rclcpp_callback_register", "ros2:callback_start", "ros2:callback_end", "ros2:rcl_publish",
-        "ros2:rcl_publisher_init")
+#: the events read, with the fields each handler takes (ros2_tracing's names; CARET records the same)
+USED: dict[str, tuple[str, ...]] = {
+    "ros2:rcl_node_init": ("node_handle", "node_name", "namespace"),
+    "ros2:rcl_timer_init": ("timer_handle", "period"),
+    "ros2:rclcpp_timer_callback_added": ("timer_handle", "callback"),
+    "ros2:rclcpp_timer_link_node": ("timer_handle", "node_handle"),
+    "ros2:rcl_subscription_init": ("subscription_handle", "node_handle", "topic_name"),
+    "ros2:rclcpp_subscription_init": ("subscription_handle", "subscription"),
+    "ros2:rclcpp_subscription_callback_added": ("subscription", "callback"),
+    "ros2:rclcpp_callback_register": ("callback", "symbol"),
+    "ros2:callback_start": ("callback",),
+    "ros2:callback_end": ("callback",),
+    "ros2:rcl_publish": ("publisher_handle",),
+}
 #: where Debian installs the bindings for the system interpreter
 SYSTEM_PYTHON = "/usr/bin/python3"
 
@@ -106,7 +114,8 @@ class _Reader:
         self.processes: dict[int, _Process] = {}
         self.events = 0
         self.ignored: dict[str, int] = {}
-        self.handlers = {name: getattr(self, "on_" + name.split(":", 1)[1]) for name in USED}
+        self.handlers: dict[str, Callable[..., None]] = {name: getattr(self, "on_" + name.split(":", 1)[1])
+                                                         for name in USED}
 
     def process(self, pid: int) -> _Process:
         found = self.processes.get(pid)
@@ -114,56 +123,44 @@ class _Reader:
             found = self.processes[pid] = _Process()
         return found
 
-    def feed(self, name: str, at: int, pid: int, tid: int, payload: Any) -> None:
-        self.events += 1
-        handler = self.handlers.get(name)
-        if handler is None:
-            key = name if name.startswith("ros2:") else "(events of other providers)"
-            self.ignored[key] = self.ignored.get(key, 0) + 1
-            return
-        handler(self.process(pid), at, tid, payload)
+    def ignore(self, name: str) -> None:
+        key = name if name.startswith("ros2:") else "(events of other providers)"
+        self.ignored[key] = self.ignored.get(key, 0) + 1
 
-    # each handler: (process, time, thread, payload) — the payload indexes by ros2_tracing's field names
+    # each handler: (process, time, thread, the event's fields in the order USED names them)
 
-    def on_rcl_node_init(self, p: _Process, at: int, tid: int, f: Any) -> None:
-        ns, name = str(f["namespace"]), str(f["node_name"])
-        p.nodes[int(f["node_handle"])] = (ns.rstrip("/") + "/" + name) if ns else "/" + name
+    def on_rcl_node_init(self, p: _Process, at: int, tid: int, node: int, name: str, ns: str) -> None:
+        p.nodes[node] = (ns.rstrip("/") + "/" + name) if ns else "/" + name
 
-    def on_rcl_timer_init(self, p: _Process, at: int, tid: int, f: Any) -> None:
-        p.timers[int(f["timer_handle"])] = int(f["period"])
+    def on_rcl_timer_init(self, p: _Process, at: int, tid: int, timer: int, period: int) -> None:
+        p.timers[timer] = period
 
-    def on_rclcpp_timer_callback_added(self, p: _Process, at: int, tid: int, f: Any) -> None:
-        callback = int(f["callback"])
-        p.timer_callbacks[callback] = int(f["timer_handle"])
+    def on_rclcpp_timer_callback_added(self, p: _Process, at: int, tid: int, timer: int, callback: int) -> None:
+        p.timer_callbacks[callback] = timer
         p.registered.append(callback)
 
-    def on_rclcpp_timer_link_node(self, p: _Process, at: int, tid: int, f: Any) -> None:
-        p.timer_nodes[int(f["timer_handle"])] = int(f["node_handle"])
+    def on_rclcpp_timer_link_node(self, p: _Process, at: int, tid: int, timer: int, node: int) -> None:
+        p.timer_nodes[timer] = node
 
-    def on_rcl_subscription_init(self, p: _Process, at: int, tid: int, f: Any) -> None:
-        p.subscriptions[int(f["subscription_handle"])] = (int(f["node_handle"]), str(f["topic_name"]))
+    def on_rcl_subscription_init(self, p: _Process, at: int, tid: int, handle: int, node: int, topic: str) -> None:
+        p.subscriptions[handle] = (node, topic)
 
-    def on_rclcpp_subscription_init(self, p: _Process, at: int, tid: int, f: Any) -> None:
-        p.rclcpp_subscriptions[int(f["subscription"])] = int(f["subscription_handle"])
+    def on_rclcpp_subscription_init(self, p: _Process, at: int, tid: int, handle: int, subscription: int) -> None:
+        p.rclcpp_subscriptions[subscription] = handle
 
-    def on_rclcpp_subscription_callback_added(self, p: _Process, at: int, tid: int, f: Any) -> None:
-        callback = int(f["callback"])
-        p.subscription_callbacks[callback] = int(f["subscription"])
+    def on_rclcpp_subscription_callback_added(self, p: _Process, at: int, tid: int, subscription: int,
+                                              callback: int) -> None:
+        p.subscription_callbacks[callback] = subscription
         p.registered.append(callback)
 
-    def on_rclcpp_callback_register(self, p: _Process, at: int, tid: int, f: Any) -> None:
-        p.symbols[int(f["callback"])] = str(f["symbol"])
+    def on_rclcpp_callback_register(self, p: _Process, at: int, tid: int, callback: int, symbol: str) -> None:
+        p.symbols[callback] = symbol
 
-    def on_rcl_publisher_init(self, p: _Process, at: int, tid: int, f: Any) -> None:
-        return None  # (publishers are found by the jobs they publish in)
-
-    def on_callback_start(self, p: _Process, at: int, tid: int, f: Any) -> None:
-        callback = int(f["callback"])
+    def on_callback_start(self, p: _Process, at: int, tid: int, callback: int) -> None:
         p.open[callback] = (at, at)
         p.running[tid] = callback
 
-    def on_callback_end(self, p: _Process, at: int, tid: int, f: Any) -> None:
-        callback = int(f["callback"])
+    def on_callback_end(self, p: _Process, at: int, tid: int, callback: int) -> None:
         started = p.open.pop(callback, None)
         p.running.pop(tid, None)
         if started is None:
@@ -174,7 +171,7 @@ class _Reader:
         start, wrote = started
         jobs.add(start, at, wrote if wrote > start else at)
 
-    def on_rcl_publish(self, p: _Process, at: int, tid: int, f: Any) -> None:
+    def on_rcl_publish(self, p: _Process, at: int, tid: int, publisher: int) -> None:
         callback = p.running.get(tid)
         if callback is not None and callback in p.open:
             p.open[callback] = (p.open[callback][0], at)
@@ -268,30 +265,23 @@ def _read_in_child(given: tuple[str, ...], send: Connection) -> None:
 
 
 def _read(given: tuple[str, ...]) -> Recording:
-    bt2 = bindings()
+    bindings()
+    from . import lttng_graph
+
     reader = _Reader()
+    traces = lttng_graph.trace_directories(given)
+    if not traces:
+        raise Unreadable("no LTTng trace under it (no `metadata` file)")
     try:
-        messages = bt2.TraceCollectionMessageIterator(list(given))
-    except Exception as err:  # (bt2 reports every failure as its own error classes)
-        raise Unreadable(_first_line(err)) from None
-    recording_error = None
-    event_type = bt2._EventMessageConst
-    try:
-        for msg in messages:
-            if type(msg) is not event_type:
-                continue
-            ev = msg.event
-            context = ev.common_context_field
-            pid = int(context["vpid"]) if context is not None and "vpid" in context else 0
-            tid = int(context["vtid"]) if context is not None and "vtid" in context else 0
-            reader.feed(ev.name, msg.default_clock_snapshot.ns_from_origin, pid, tid, ev.payload_field)
-    except Exception as err:  # (the trace broke off: what was read stands, labelled partial)
-        recording_error = _first_line(err)
+        lttng_graph.run(traces, reader)
+        stopped = None
+    except lttng_graph.Failed as err:
+        stopped = err.reason
     out = reader.recording(given)
-    if recording_error is not None:
+    if stopped is not None:
         if reader.events == 0:
-            raise Unreadable(recording_error)
-        out.partial.insert(0, f"the trace breaks off after {reader.events:,} events: {recording_error}")
+            raise Unreadable(stopped)
+        out.partial.insert(0, f"the trace breaks off after {reader.events:,} events: {stopped}")
     return out
 
 
