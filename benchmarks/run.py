@@ -86,7 +86,7 @@ from collections.abc import Callable
 
 import verify
 
-from . import hostile, lsp, ros1, startup, tightness
+from . import hostile, lsp, ros1, startup, tightness, trace
 from .generate import generate_chain_system, generate_executor_system, generate_pipeline_system, generate_system
 
 DEFAULT_OUT = Path(__file__).resolve().parent / "out" / "results.json"
@@ -647,6 +647,7 @@ startup.register(stage, BenchmarkError)
 ros1.register(stage, BenchmarkError, UNAVAILABLE)
 lsp.register(stage, BenchmarkError, UNAVAILABLE)
 tightness.register(stage, BenchmarkError, UNAVAILABLE)
+trace.register(stage, BenchmarkError, UNAVAILABLE)
 
 
 # ------------------------------------------------------------------------------ measuring
