@@ -52,11 +52,12 @@ def run(args: argparse.Namespace) -> int:
     from ..prove.core import prove
     from ..timing import analyze
 
-    measured = None
+    measured: str | None = None
     if args.trace:
-        measured = _measured(args, loaded)
-        if isinstance(measured, int):
-            return measured
+        found = _measured(args, loaded)
+        if isinstance(found, int):
+            return found
+        measured = found
     page = to_html(system, analyze(system), prove(system, budget=args.budget), args.file, measured)
     return write_output(args.output, page, args.force)
 
