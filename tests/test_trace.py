@@ -192,3 +192,25 @@ def test_another_systems_trace_pairs_nothing_and_lists_it(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "warning[E805]: task `c.T` is not found in the trace" in err
     assert "the model has no instance `talker`" in err
+
+
+@pytest.mark.parametrize("name, said", [("missing.jsonl", "there is no such file"),
+                                        ("/dev/null", "it is not a regular file"),
+                                        ("junk.jsonl", "no job record in")])
+def test_a_file_that_is_no_job_records_is_e806(tmp_path, capsys, name, said):
+    (tmp_path / "junk.jsonl").write_bytes(b'{"node": "/S/c", "task": "T", "start": 5, "finish": 3}\n\xff\x00[1]\n')
+    path = name if name.startswith("/") else str(tmp_path / name)
+    assert main(["trace", str(COMPLETED), path]) == 2
+    err = capsys.readouterr().err
+    assert "error[E806]" in err and said in err and "Traceback" not in err
+
+
+def test_lines_that_are_no_records_leave_a_partial_recording(tmp_path, capsys):
+    model, jobs = tmp_path / "m.vfy", tmp_path / "jobs.jsonl"
+    model.write_text(MODEL, encoding="utf-8")
+    _records(jobs, [1500, 1500])
+    with jobs.open("a", encoding="utf-8") as fh:
+        fh.write('{"topic": "/other", "data": "x"}\nnot json\n')
+    assert main(["trace", str(model), str(jobs)]) == 0
+    out, err = capsys.readouterr()
+    assert "PARTIAL: 1 line(s) are not job records" in out and "warning[E806]" in err and "jobs.jsonl:4" in err

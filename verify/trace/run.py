@@ -54,9 +54,14 @@ def read_traces(paths: Sequence[str], sink: DiagnosticSink) -> Recording | None:
     except lttng.Unavailable as err:
         sink.emit("E806", f"LTTng traces cannot be read here: {err}", where, "not read",
                   help="install babeltrace2's Python bindings (`scripts/install-tools`)")
-    except (Refused, OSError) as err:
-        sink.emit("E806", f"{', '.join(given)} cannot be read: {getattr(err, 'strerror', None) or err}", where,
-                  "cannot be read", help="name an existing trace directory or job-record file")
+    except Refused as err:
+        why = {"missing": "there is no such file", "special": "it is not a regular file (a device, a pipe)",
+               "directory": "it is a directory", "link": "it is a symbolic link"}.get(err.reason, err.reason)
+        sink.emit("E806", f"{err.path} cannot be read: {why}", where, "cannot be read",
+                  help="name an existing trace directory or job-record file")
+    except OSError as err:
+        sink.emit("E806", f"{', '.join(given)} cannot be read: {err.strerror or err}", where, "cannot be read",
+                  help="name an existing trace directory or job-record file")
     return None
 
 
