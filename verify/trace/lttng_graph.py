@@ -144,7 +144,7 @@ def _consumer(nb: Any, classes: _Classes, reader: _Reader, stop: type[Exception]
     clock, ns_from_origin = nb.message_event_borrow_default_clock_snapshot_const, nb.clock_snapshot_get_ns_from_origin
     payload_of, context_of = nb.event_borrow_payload_field_const, nb.event_borrow_common_context_field_const
     member, put = nb.field_structure_borrow_member_field_by_index_const, nb.message_put_ref
-    process, ignore = reader.process, reader.ignore
+    process, ignore, known = reader.process, reader.ignore, classes.known
 
     def consume(iterator: Any) -> None:
         status, messages = get_range(iterator)
@@ -154,24 +154,31 @@ def _consumer(nb: Any, classes: _Classes, reader: _Reader, stop: type[Exception]
             return
         if status != ok:
             raise Failed(f"babeltrace2 stopped with status {status}")
+        count = 0
         try:
             for m in messages:
                 if message_type(m) != event_type:
                     continue
                 event = borrow_event(m)
-                handler, name, fields, pid, tid = classes.of(borrow_class(event))
-                reader.events += 1
+                cls = borrow_class(event)
+                handler, name, fields, pid, tid = known.get(int(cls)) or classes.of(cls)
+                count += 1
                 if handler is None:
                     ignore(name)
                     continue
                 _, at = ns_from_origin(clock(m))
                 payload = payload_of(event)
-                values = [g(member(payload, i)) for i, g in fields]
+                if len(fields) == 1:  # (callback_start, callback_end, rcl_publish: most events)
+                    (i, g), = fields
+                    values = (g(member(payload, i)),)
+                else:
+                    values = tuple(g(member(payload, i)) for i, g in fields)
                 context = context_of(event) if pid is not None or tid is not None else None
                 p = pid[1](member(context, pid[0])) if pid is not None else 0
                 t = tid[1](member(context, tid[0])) if tid is not None else 0
                 handler(process(p), at, t, *values)
         finally:
+            reader.events += count
             for m in messages:
                 put(m)
 
