@@ -56,6 +56,8 @@ def match(model: SystemModel, recording: Recording) -> Matching:
     """The pairing of ``model``'s tasks with ``recording``'s callbacks."""
     if recording.source == "job records":
         return _match_records(model, recording)
+    if recording.source == "bag":
+        return _match_topics(model, recording)
     left_out = [c for c in recording.callbacks.values() if c.kind == "subscription" and c.topic in IGNORED_TOPICS]
     callbacks = [c for c in recording.callbacks.values() if c not in left_out]
     groups: dict[tuple[str | None, str, str | None], tuple[list[TaskModel], list[Callback]]] = {}
@@ -136,6 +138,39 @@ def _match_records(model: SystemModel, recording: Recording) -> Matching:
         else:
             pairs[task] = c.key
     missing = tuple((t.id, "no job of it in the records") for t in model.tasks if t.id not in pairs)
+    return Matching(pairs, missing, tuple(unmatched), 0)
+
+
+def _topic_port(model: SystemModel, topic: str) -> str | None:
+    """The out-port a topic is: ``/SYSTEM/INSTANCE/PORT`` (the generated nodes' topics), or ``/PORT`` (the
+    topic an imported model's port is named after) of the one instance with an out-port so named."""
+    parts = [language_name(p) for p in topic.strip("/").split("/") if p]
+    if not parts:
+        return None
+    outs = [p for p in model.ports if p.direction == "out" and p.name == parts[-1]]
+    if len(parts) >= 2:
+        exact = [p for p in outs if p.instance == parts[-2]]
+        if exact:
+            return exact[0].id
+    return outs[0].id if len(outs) == 1 else None
+
+
+def _match_topics(model: SystemModel, recording: Recording) -> Matching:
+    pairs: dict[str, str] = {}
+    unmatched = []
+    for c in recording.callbacks.values():
+        if c.topic in IGNORED_TOPICS:
+            continue
+        port = _topic_port(model, c.topic or "")
+        task = model.producer(port) if port is not None else None
+        if task is None:
+            unmatched.append((c.key, "no out-port of the model is this topic" if port is None
+                              else f"no task produces `{port}`"))
+        elif task in pairs:
+            unmatched.append((c.key, f"task `{task}` is measured by topic `{pairs[task]}` already"))
+        else:
+            pairs[task] = c.key
+    missing = tuple((t.id, "it produces no topic of the bag") for t in model.tasks if t.id not in pairs)
     return Matching(pairs, missing, tuple(unmatched), 0)
 
 

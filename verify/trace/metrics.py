@@ -97,7 +97,7 @@ def measure(model: SystemModel, recording: Recording, matching: Matching) -> Mea
             continue
         jobs = recording.jobs_of(key)
         callback = recording.callbacks[key]
-        execution = [e - s for s, e in zip(jobs.starts, jobs.ends, strict=True)]
+        execution = [] if callback.kind == "topic" else [e - s for s, e in zip(jobs.starts, jobs.ends, strict=True)]
         activations = jobs.releases if len(jobs.releases) == len(jobs) and len(jobs) else jobs.starts
         intervals = [b - a for a, b in zip(activations, activations[1:], strict=False)]
         mean = Fraction(activations[-1] - activations[0], (len(activations) - 1) * NS) if len(activations) > 1 else None
@@ -112,6 +112,8 @@ def measure(model: SystemModel, recording: Recording, matching: Matching) -> Mea
 
 
 def _chain(model: SystemModel, chain: ChainModel, recording: Recording, matching: Matching) -> ChainMeasure:
+    if recording.source == "bag":
+        return ChainMeasure(chain.name, None, None, "a bag records when messages were written, not when jobs ran")
     missing = [t for t in chain.tasks if t not in matching.pairs]
     if missing:
         return ChainMeasure(chain.name, None, None, f"task `{missing[0]}` is not in the trace")

@@ -19,7 +19,7 @@ class Callback:
 
     key: str
     node: str | None
-    kind: str
+    kind: str  # "timer" | "subscription" | "task" | "topic" (a bag's: its messages)
     period_ns: int | None = None
     topic: str | None = None
     symbol: str = ""
@@ -28,6 +28,8 @@ class Callback:
     registered: int = 0  # its rank among all callbacks of the recording, in registration order
 
     def describe(self) -> str:
+        if self.kind == "topic":
+            return f"topic `{self.topic}`"
         what = {"timer": f"timer callback ({_period(self.period_ns)})",
                 "subscription": f"subscription callback on `{self.topic}`"}.get(self.kind, f"task `{self.task}`")
         return f"{what} of node `{self.node or '?'}`" + (f", construction order {self.order}" if self.order else "")
@@ -66,7 +68,7 @@ class Recording:
     its end); ``ignored`` counts the events of kinds the reader does not use, by name."""
 
     paths: tuple[str, ...]
-    source: str  # "lttng" | "job records"
+    source: str  # "lttng" | "job records" | "bag"
     callbacks: dict[str, Callback] = field(default_factory=dict)
     jobs: dict[str, Jobs] = field(default_factory=dict)
     events: int = 0

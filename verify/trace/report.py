@@ -37,7 +37,13 @@ def to_text(result: TraceResult) -> str:
     model = result.analysis
     for m in result.measured.tasks:
         t = model.task(m.task)
-        ok = "over wcet" if m.execution is not None and m.execution.max > t.wcet else "ok"
+        if m.execution is None:  # (a bag's topic: when its messages were written, not how long jobs ran)
+            lines.append(f"  {m.task}: {m.jobs} messages on {m.callback}")
+            if m.mean_period is not None and m.intervals is not None:
+                lines.append(f"    activation: mean period {fmt_time(m.mean_period)}, gaps {fmt_time(m.intervals.min)}"
+                             f" .. {fmt_time(m.intervals.max)}")
+            continue
+        ok = "over wcet" if m.execution.max > t.wcet else "ok"
         lines.append(f"  {m.task}: {m.jobs} jobs, {_words(m.execution)} in [{fmt_time(t.bcet)}, {fmt_time(t.wcet)}]"
                      f" {ok}")
         lines.append(f"    {m.callback}")

@@ -28,15 +28,22 @@ class TraceResult:
 
 
 def read_traces(paths: Sequence[str], sink: DiagnosticSink) -> Recording | None:
-    """The recording of ``paths``: LTTng trace directories, or job-record files (``.jsonl``); None after
-    E806 when they cannot be read."""
+    """The recording of ``paths``: LTTng trace directories, job-record files (``.jsonl``), or bags (ROS 1
+    ``.bag`` files, ROS 2 bag directories); None after E806 when they cannot be read."""
     from ..fileaccess import Refused
-    from . import jobrecords, lttng
+    from . import bags, jobrecords, lttng
 
     given = tuple(paths)
     where = Span(given[0] if given else "<command line>", 1, 1, 1, 1)
     records = [p for p in given if not os.path.isdir(p)]
+    kinds = {bags.is_bag(p) for p in given}
     try:
+        if kinds == {True}:
+            return bags.read(given)
+        if True in kinds:
+            sink.emit("E806", "bags and other traces are read apart", where, "mixed",
+                      help="give either bags (ROS 1 `.bag` files, ROS 2 bag directories) or other traces")
+            return None
         if records and len(records) == len(given):
             return jobrecords.read(given)
         if records:
@@ -45,6 +52,9 @@ def read_traces(paths: Sequence[str], sink: DiagnosticSink) -> Recording | None:
                       help="give either LTTng trace directories or job-record files (.jsonl)")
             return None
         return lttng.read(given)
+    except bags.NotBag as err:
+        sink.emit("E806", f"{', '.join(given)} cannot be read as a bag: {err}", where, "not a bag",
+                  help="give a ROS 1 `.bag` file or a ROS 2 bag directory (`ros2 bag record` writes it)")
     except jobrecords.NotRecords as err:
         sink.emit("E806", f"{err}", where, "not a trace", help="give an LTTng trace directory (`ros2 trace`, "
                   "CARET's recording) or the job records of the generated nodes (one JSON object a line)")
