@@ -1,7 +1,7 @@
 """``verify trace MODEL TRACE...``: what the robot measured, held against the model (specs/trace.md).
 
-TRACE is an LTTng trace directory (ros2_tracing, CARET) or a file of the generated nodes' job records
-(``.jsonl``); several of one kind are read as one run. The measurements go to standard output, the
+TRACE is an LTTng trace directory (ros2_tracing, CARET), a file of the generated nodes' job records
+(``.jsonl``), or a bag (ROS 1 ``.bag``, ROS 2 bag directory); several of one kind are read as one run. The measurements go to standard output, the
 findings (E801–E806) to standard error; ``--format json|sarif`` prints one document instead.
 
 ``--calibrate`` writes the measured execution times into the model (``--margin``, default 20 %):
@@ -27,7 +27,7 @@ if TYPE_CHECKING:
     from ..model import SystemModel
     from ..trace.run import TraceResult
 
-HELP = "measurements of the robot (LTTng traces, job records) against the model; --calibrate writes them in"
+HELP = "measurements of the robot (LTTng traces, job records, bags) against the model; --calibrate writes them in"
 RESULT = "trace"
 MODEL, SYSTEM = True, True
 
@@ -44,7 +44,8 @@ def _percent(text: str) -> Fraction:
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("traces", metavar="TRACE", nargs="+",
-                   help="an LTTng trace directory (ros2_tracing, CARET) or a job-records file (.jsonl)")
+                   help="an LTTng trace directory (ros2_tracing, CARET), a job-records file (.jsonl) of the "
+                        "generated nodes, or a bag (ROS 1 .bag, ROS 2 bag directory)")
     p.add_argument("--tolerance", metavar="PERCENT", type=_percent, default=Fraction(1, 100),
                    help="how far a timer's mean measured period may be off the model (default 1)")
     p.add_argument("--calibrate", action="store_true",
