@@ -1,8 +1,9 @@
 """``verify trace MODEL TRACE...``: what the robot measured, held against the model (specs/trace.md).
 
 TRACE is an LTTng trace directory (ros2_tracing, CARET), a file of the generated nodes' job records
-(``.jsonl``), or a bag (ROS 1 ``.bag``, ROS 2 bag directory); several of one kind are read as one run. The measurements go to standard output, the
-findings (E801–E806) to standard error; ``--format json|sarif`` prints one document instead.
+(``.jsonl``), or a bag (ROS 1 ``.bag``, ROS 2 bag directory); several of one kind are read as one run.
+The measurements go to standard output, the findings (E801–E806) to standard error; ``--format
+json|sarif`` prints one document instead.
 
 ``--calibrate`` writes the measured execution times into the model (``--margin``, default 20 %):
 without ``-o``/``--in-place`` the calibrated file goes to standard output (``--diff``: a unified diff);
