@@ -214,3 +214,25 @@ def test_lines_that_are_no_records_leave_a_partial_recording(tmp_path, capsys):
     assert main(["trace", str(model), str(jobs)]) == 0
     out, err = capsys.readouterr()
     assert "PARTIAL: 1 line(s) are not job records" in out and "warning[E806]" in err and "jobs.jsonl:4" in err
+
+
+def test_a_callback_running_on_two_threads_at_once_gives_two_jobs_in_start_order():
+    """A callback of a reentrant group: its jobs on two threads overlap; each end closes its thread's job."""
+    from verify.trace.lttng import Reader
+
+    reader = Reader()
+    p = reader.process(7)
+    reader.on_rcl_node_init(p, 0, 1, 0x10, "n", "/")
+    reader.on_rcl_timer_init(p, 0, 1, 0x20, 5_000_000)
+    reader.on_rclcpp_timer_callback_added(p, 0, 1, 0x20, 0x30)
+    reader.on_rclcpp_timer_link_node(p, 0, 1, 0x20, 0x10)
+    reader.on_callback_start(p, 100, 1, 0x30)
+    reader.on_callback_start(p, 200, 2, 0x30)
+    reader.on_rcl_publish(p, 250, 2, 0x40)
+    reader.on_callback_end(p, 400, 2, 0x30)
+    reader.on_callback_end(p, 500, 1, 0x30)
+    recording = reader.recording(("t",))
+    (key,) = recording.callbacks
+    jobs = recording.jobs[key]
+    assert (list(jobs.starts), list(jobs.ends), list(jobs.writes)) == ([100, 200], [500, 400], [500, 250])
+    assert recording.callbacks[key].node == "/n" and recording.callbacks[key].period_ns == 5_000_000

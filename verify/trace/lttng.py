@@ -104,12 +104,13 @@ class _Process:
     subscription_callbacks: dict[int, int] = field(default_factory=dict)  # callback -> rclcpp subscription
     symbols: dict[int, str] = field(default_factory=dict)  # callback -> symbol
     registered: list[int] = field(default_factory=list)  # callbacks, in the order they were added
-    open: dict[int, tuple[int, int]] = field(default_factory=dict)  # callback -> (start, last publish)
+    open: dict[tuple[int, int], tuple[int, int]] = field(default_factory=dict)  # (callback, thread) -> (start,
+    # last publish): a callback of a reentrant group may run on two threads at once
     running: dict[int, int] = field(default_factory=dict)  # thread -> callback running on it
     jobs: dict[int, Jobs] = field(default_factory=dict)  # callback -> its jobs
 
 
-class _Reader:
+class Reader:
     def __init__(self) -> None:
         self.processes: dict[int, _Process] = {}
         self.events = 0
@@ -157,11 +158,11 @@ class _Reader:
         p.symbols[callback] = symbol
 
     def on_callback_start(self, p: _Process, at: int, tid: int, callback: int) -> None:
-        p.open[callback] = (at, at)
+        p.open[(callback, tid)] = (at, at)
         p.running[tid] = callback
 
     def on_callback_end(self, p: _Process, at: int, tid: int, callback: int) -> None:
-        started = p.open.pop(callback, None)
+        started = p.open.pop((callback, tid), None)
         p.running.pop(tid, None)
         if started is None:
             return  # (its start was before the trace began)
@@ -173,8 +174,11 @@ class _Reader:
 
     def on_rcl_publish(self, p: _Process, at: int, tid: int, publisher: int) -> None:
         callback = p.running.get(tid)
-        if callback is not None and callback in p.open:
-            p.open[callback] = (p.open[callback][0], at)
+        if callback is None:
+            return
+        started = p.open.get((callback, tid))
+        if started is not None:
+            p.open[(callback, tid)] = (started[0], at)
 
     # ------------------------------------------------------------ the result
 
@@ -196,13 +200,26 @@ class _Reader:
                 out.callbacks[key] = Callback(key, found.node, found.kind, found.period_ns, found.topic, found.symbol,
                                               order, registered=rank)
                 rank += 1
-                out.jobs[key] = p.jobs.get(callback) or Jobs()
-            unfinished = sum(1 for c in p.open
+                out.jobs[key] = _in_start_order(p.jobs.get(callback) or Jobs())
+            unfinished = sum(1 for c, _ in p.open
                              if c in p.jobs or c in p.timer_callbacks or c in p.subscription_callbacks)
             if unfinished:
                 out.partial.append(f"{unfinished} job(s) of process {pid} started but did not end before the trace did "
                                    "(left out)")
         return out
+
+
+def _in_start_order(jobs: Jobs) -> Jobs:
+    """The jobs in the order they started (they are recorded as they end: a callback running on two
+    threads at once ends out of order)."""
+    starts = jobs.starts
+    if all(a <= b for a, b in zip(starts, starts[1:], strict=False)):
+        return jobs
+    order = sorted(range(len(jobs)), key=starts.__getitem__)
+    out = Jobs()
+    for k in order:
+        out.add(jobs.starts[k], jobs.ends[k], jobs.writes[k])
+    return out
 
 
 def _identify(p: _Process, callback: int, pid: int) -> Callback | None:
@@ -268,7 +285,7 @@ def _read(given: tuple[str, ...]) -> Recording:
     bindings()
     from . import lttng_graph
 
-    reader = _Reader()
+    reader = Reader()
     traces = lttng_graph.trace_directories(given)
     if not traces:
         raise Unreadable("no LTTng trace under it (no `metadata` file)")

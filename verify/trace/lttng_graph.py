@@ -15,7 +15,7 @@ import os
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from .lttng import USED, _Reader
+from .lttng import USED, Reader
 
 
 class Failed(Exception):
@@ -63,7 +63,7 @@ def _members(nb: Any, structure: Any, getters: dict[int, Getter]) -> dict[str, t
 class _Classes:
     """What each event class holds, looked up once: (handler or None, name, payload fields, pid, tid)."""
 
-    def __init__(self, nb: Any, reader: _Reader):
+    def __init__(self, nb: Any, reader: Reader):
         self.nb, self.reader, self.getters = nb, reader, _getters(nb)
         self.known: dict[int, tuple[Any, ...]] = {}
 
@@ -93,7 +93,7 @@ class _Classes:
         return (handler, name, fields, pid if pid[1] else None, tid if tid[1] else None)
 
 
-def run(traces: Sequence[str], reader: _Reader) -> None:
+def run(traces: Sequence[str], reader: Reader) -> None:
     """Feed every event of ``traces``, in time order, to ``reader`` (Failed when the graph stops early)."""
     from .lttng import bindings
 
@@ -136,7 +136,7 @@ def _sink_class(bt2: Any, consume: Callable[[Any], None]) -> Any:
                                         "_user_consume": _user_consume, "__module__": __name__})
 
 
-def _consumer(nb: Any, classes: _Classes, reader: _Reader, stop: type[Exception]) -> Callable[[Any], None]:
+def _consumer(nb: Any, classes: _Classes, reader: Reader, stop: type[Exception]) -> Callable[[Any], None]:
     get_range = nb.bt2_self_component_port_input_get_msg_range
     end, again, ok = (getattr(nb, "__BT_FUNC_STATUS_" + s) for s in ("END", "AGAIN", "OK"))
     message_type, event_type = nb.message_get_type, nb.MESSAGE_TYPE_EVENT
