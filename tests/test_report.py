@@ -112,9 +112,9 @@ def test_without_graphviz_the_page_holds_the_dot_text(tmp_path, monkeypatch):
 def test_measurements_are_shown_beside_the_bounds_and_load_in_a_browser(tmp_path):
     """`--trace`: CARET's recorded talker and listener (tests/data/caret-traces/) beside their model: a box
     plot per task over its [bcet, wcet] and per chain metric against its bound and spec."""
-    from .test_trace import COMPLETED, TRACE, _bindings
+    from .test_trace import COMPLETED, TRACE, require_bindings
 
-    _bindings()
+    require_bindings()
     out = tmp_path / "measured.html"
     assert main(["report", str(COMPLETED), "-o", str(out), "--trace", str(TRACE)]) == 0
     page = out.read_text(encoding="utf-8")

@@ -20,7 +20,7 @@ TRACE = Path(__file__).parent / "data" / "caret-traces" / "talker_listener"
 COMPLETED = EXAMPLES / "caret-talker-listener" / "completed.vfy"
 
 
-def _bindings() -> None:
+def require_bindings() -> None:
     from verify.trace import lttng
 
     try:
@@ -40,7 +40,7 @@ def _traced(model_path: Path, traces: list[str]):
 
 
 def test_the_caret_trace_gives_the_talkers_period_and_each_callbacks_execution_times():
-    _bindings()
+    require_bindings()
     result = _traced(COMPLETED, [str(TRACE)])
     assert result.matching.pairs.keys() == {"talker.timer_callback_0", "listener.subscription_callback_0"}
     assert result.matching.callbacks_left_out == 2  # (the nodes' /parameter_events subscriptions, as in CARET)
@@ -61,7 +61,7 @@ def test_the_caret_trace_gives_the_talkers_period_and_each_callbacks_execution_t
 
 
 def test_the_command_reports_and_calibrates_the_caret_trace(tmp_path, capsys):
-    _bindings()
+    require_bindings()
     model = tmp_path / "completed.vfy"
     shutil.copy(COMPLETED, model)
     assert main(["trace", str(model), str(TRACE)]) == 1  # (E801: above the wcet)
@@ -156,7 +156,7 @@ def test_a_chain_recomputed_from_job_records_follows_timing_section_4(tmp_path):
 # ------------------------------------------------------------------ bad input: never a traceback
 
 def test_a_truncated_trace_is_read_in_part_or_refused_never_a_traceback(tmp_path, capsys):
-    _bindings()
+    require_bindings()
     broken = tmp_path / "trace"
     shutil.copytree(TRACE, broken)
     streams = sorted(p for p in broken.rglob("ros2_*") if p.is_file() and p.parent.name == "64-bit")
@@ -178,14 +178,14 @@ def test_what_is_no_trace_is_e806(tmp_path, capsys, what):
         target.mkdir()
         (target / "metadata").write_bytes(b"\x00garbage" * 100)
     if what != "missing":
-        _bindings()
+        require_bindings()
     assert main(["trace", str(COMPLETED), str(target)]) == 2
     err = capsys.readouterr().err
     assert "error[E806]" in err and "Traceback" not in err
 
 
 def test_another_systems_trace_pairs_nothing_and_lists_it(tmp_path, capsys):
-    _bindings()
+    require_bindings()
     other = tmp_path / "other.vfy"
     other.write_text(MODEL, encoding="utf-8")
     assert main(["trace", str(other), str(TRACE)]) == 0
