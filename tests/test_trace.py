@@ -236,3 +236,14 @@ def test_a_callback_running_on_two_threads_at_once_gives_two_jobs_in_start_order
     jobs = recording.jobs[key]
     assert (list(jobs.starts), list(jobs.ends), list(jobs.writes)) == ([100, 200], [500, 400], [500, 250])
     assert recording.callbacks[key].node == "/n" and recording.callbacks[key].period_ns == 5_000_000
+
+
+def test_a_timer_registered_with_another_period_is_paired_and_e802(tmp_path, capsys):
+    require_bindings()
+    text = COMPLETED.read_text(encoding="utf-8").replace("timer 1 s", "timer 500 ms")
+    model = tmp_path / "m.vfy"
+    model.write_text(text, encoding="utf-8")
+    assert main(["trace", str(model), str(TRACE)]) == 1
+    err = capsys.readouterr().err
+    # one timer on each side: paired, and its period is off the model
+    assert "error[E802]: the timer of `talker.timer_callback_0` has the period 1 s in the trace, not 500 ms" in err

@@ -19,6 +19,7 @@ from fractions import Fraction
 
 from .. import syntax as s
 from ..diagnostics import DiagnosticSink, Label, Severity
+from ..interop.caret.to_vfy import language_name
 from ..loader import Project
 from ..activations import Periodic
 from ..model import ChainModel, SystemModel
@@ -85,7 +86,7 @@ def _unmatched(model: SystemModel, recording: Recording, matching: Matching, whe
                        "(a timer, or a trigger on the port named after the topic); specs/trace.md §2")
     for key, reason in matching.callbacks_unmatched:
         c = recording.callbacks[key]
-        instance = c.node and next((i.name for i in model.instances if f"/{i.name}" == c.node), None)
+        instance = c.node and next((i.name for i in model.instances if language_name(c.node) == i.name), None)
         span = where.instance_span(model, instance) if instance else model.span
         sink.emit("E805", f"the trace's {c.describe()} is not paired with a task: {reason}", span, "not paired",
                   help="add the task it runs to the model, or leave it: it is not measured")
