@@ -36,7 +36,10 @@ def session_daemon() -> None:
     """A session daemon for this user (started, daemonized, when none answers)."""
     if subprocess.run(["lttng", "list"], capture_output=True).returncode == 0:
         return
-    subprocess.run(["lttng-sessiond", "--daemonize"], check=True, capture_output=True, timeout=60)
+    started = subprocess.run(["lttng-sessiond", "--daemonize"], capture_output=True, text=True, timeout=60)
+    # (another test process may have started one meanwhile: what matters is that one answers now)
+    if subprocess.run(["lttng", "list"], capture_output=True).returncode != 0:
+        raise RuntimeError(f"lttng-sessiond --daemonize: {started.stderr.strip() or started.returncode}")
 
 
 def _lttng(*args: str) -> None:
