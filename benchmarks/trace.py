@@ -42,6 +42,7 @@ system S {
     task subscription_callback_0 executor main trigger chatter
   }
   connect talker.chatter -> listener.chatter
+  chain chatter: talker.chatter -> listener.subscription_callback_0
 }
 """
 
