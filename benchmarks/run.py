@@ -87,7 +87,7 @@ from collections.abc import Callable
 
 import verify
 
-from . import hostile, lsp, ros1, ros2, startup, tightness
+from . import hostile, lsp, ros1, ros2, startup, tightness, trace
 from .generate import generate_chain_system, generate_executor_system, generate_pipeline_system, generate_system
 
 DEFAULT_OUT = Path(__file__).resolve().parent / "out" / "results.json"
@@ -652,6 +652,7 @@ ros1.register(stage, BenchmarkError, UNAVAILABLE)
 ros2.register(stage, BenchmarkError, UNAVAILABLE)
 lsp.register(stage, BenchmarkError, UNAVAILABLE)
 tightness.register(stage, BenchmarkError, UNAVAILABLE)
+trace.register(stage, BenchmarkError, UNAVAILABLE)
 
 
 # ------------------------------------------------------------------------------ measuring

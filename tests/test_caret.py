@@ -199,3 +199,41 @@ def test_a_topic_named_like_a_callback_gets_a_name_of_its_own(tmp_path):
     assert "in callback_0_2 : Message" in text and "task callback_0 trigger callback_0_2" in text
     checked = verify.load_text(text, "a.vfy")
     assert "E102" not in {d.code for d in checked.diagnostics}
+
+
+# ------------------------------------------------------------------ callback identity (construction_order)
+
+ORDERED = Path(__file__).parent / "caret" / "construction-order.yaml"
+
+
+def test_two_callbacks_of_one_name_are_told_apart_by_their_construction_order():
+    """CARET's documented sample has two `timer_callback_0` in one node, the second with
+    `construction_order: 1`: two tasks, no duplicate; a reference by name alone is order 0."""
+    text, diagnostics = _import(ORDERED)
+    assert "  task timer_callback_0 {  // timer_callback_0\n" in text
+    assert "  task timer_callback_0_order1 {  // timer_callback_0 (construction_order 1)\n" in text
+    assert "task timer_callback_0 executor executor_0 timer 100 ms" in text  # (the group names order 0)
+    assert "task timer_callback_0_order1 timer 100 ms" in text
+    assert text.count("produces ping") == 1
+    codes = [d.code for d in verify.load_text(text, "imported.vfy").diagnostics]
+    assert "E102" not in codes and "E203" not in codes and "E217" in codes  # (only what is left to complete)
+    unknown = [d for d in diagnostics if d.code == "E702" and "callback group" in d.message]
+    assert len(unknown) == 1 and (unknown[0].span.line, unknown[0].span.column) == (15, 5)  # the name itself
+
+
+def test_the_same_callback_twice_is_reported_and_imported_once(tmp_path):
+    twice = ORDERED.read_text(encoding="utf-8").replace("    construction_order: 1\n", "")
+    path = tmp_path / "twice.yaml"
+    path.write_text(twice, encoding="utf-8")
+    text, diagnostics = _import(path)
+    assert [d.span.line for d in diagnostics if d.code == "E705"] == [33]
+    assert text.count("task timer_callback_0 ") == 2  # (the component's task and its binding, once each)
+
+
+def test_a_construction_order_that_is_no_number_is_malformed(tmp_path):
+    path = tmp_path / "bad.yaml"
+    path.write_text(ORDERED.read_text(encoding="utf-8").replace("construction_order: 1", "construction_order: x"),
+                    encoding="utf-8")
+    sink = DiagnosticSink()
+    imported, _ = import_dirs([str(path)], None, sink)
+    assert imported is None and [(d.code, d.span.line) for d in sink.items] == [("E701", 37)]

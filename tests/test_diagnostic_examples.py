@@ -53,7 +53,7 @@ class Section:
 
     @property
     def command(self) -> str:
-        for command in ("synth", "prove", "analyze", "gen", "import", "export"):
+        for command in ("synth", "prove", "analyze", "gen", "import", "export", "trace"):
             if any(b.command == command for b in self.blocks):
                 return command
         return "check"
@@ -120,6 +120,8 @@ def run_example(section: Section, directory: Path):
     if section.command == "gen":
         diagnostics, files = gen_diagnostics(model, directory, section.blocks[0].target)
         return diagnostics, {**result.sources, **files}
+    if section.command == "trace":
+        return trace_diagnostics(section, directory, result, model), result.sources
     if section.command == "prove":
         from verify.prove import prove
 
@@ -141,6 +143,18 @@ def gen_diagnostics(model, directory: Path, name: str):
         return unsupported, {}
     out = str(directory / "out")
     return refusals(plan(module.generate(model), out, force=False), out)
+
+
+def trace_diagnostics(section: Section, directory: Path, result, model) -> list:
+    """What `verify trace main.vfy TRACE...` reports, its traces the example's other files."""
+    from verify.diagnostics import DiagnosticSink
+    from verify.trace.run import read_traces, trace_system
+
+    sink = DiagnosticSink()
+    recording = read_traces([str(directory / b.name) for b in section.blocks[1:]], sink)
+    if recording is None:
+        return sink.items
+    return list(trace_system(model, result.project, recording).diagnostics)
 
 
 def import_diagnostics(directory: Path):

@@ -240,6 +240,37 @@ def test_no_observed_latency_exceeds_the_analysis_bound(live):
             assert worst <= bound, f"chain {chain.name}: observed {metric} {float(worst)} s, bound {float(bound)} s"
 
 
+def test_verify_trace_reads_the_job_records_and_recomputes_the_monitors_chains(live, capsys):
+    """`verify trace` on the run's recording (the /verify/jobs records among the recorder's lines): every
+    task paired with its node's records, its jobs counted as recorded, and each chain's data ages, from
+    the jobs alone, those the stamps the nodes carried give (specs/timing.md §4)."""
+    model, jobs = live["model"], rosrun.jobs(live["records"])
+    code = main(["trace", str(live["model_dir"] / MODEL), str(live["base"] / "run.jsonl"), "--format", "json"])
+    doc = json.loads(capsys.readouterr().out)
+    assert code in (0, 1) and doc["source"] == "job records" and not doc["unpaired"]["tasks"]
+    for task in doc["tasks"]:
+        assert task["jobs"] == len(_by_task(jobs, *_node(model, task["task"])))
+    for index, chain in enumerate(doc["chains"]):
+        seen = chain_observations(model, jobs, index)["data_age"]
+        assert chain["data_age"]["count"] == len(seen), chain["chain"]
+        assert Fraction(chain["data_age"]["max_s"]) == Fraction(max(seen), 10**9), chain["chain"]
+        assert Fraction(chain["data_age"]["min_s"]) == Fraction(min(seen), 10**9), chain["chain"]
+
+
+def test_the_report_shows_the_navigation_examples_measurements_against_its_bounds(live, tmp_path):
+    from .test_report import chromium, console_messages
+
+    out = tmp_path / "navigation-measured.html"
+    assert main(["report", str(live["model_dir"] / MODEL), "-o", str(out), "--trace",
+                 str(live["base"] / "run.jsonl")]) == 0
+    section = out.read_text(encoding="utf-8").split('<div id="measured">')[1]
+    model = live["model"]
+    assert section.count('class="model"') == len(model.tasks)  # every task's [bcet, wcet] with its jobs
+    assert section.count('<g class="measured"') == len(model.tasks) + 2 * len(model.chains)
+    done = chromium(tmp_path, out, "--dump-dom")
+    assert done.returncode == 0 and console_messages(done.stderr) == []
+
+
 #: a bag of sensor_msgs/LaserScan at 40 Hz, made with the rosbag Python API (Debian's python3)
 MAKE_BAG = """\
 import sys, rosbag, rospy

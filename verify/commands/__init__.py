@@ -13,7 +13,7 @@ import importlib
 from types import ModuleType
 
 #: the commands, in the order ``verify --help`` lists them
-COMMANDS = ("check", "analyze", "synth", "prove", "gen", "graph", "report", "import", "export", "lsp", "fmt",
+COMMANDS = ("check", "analyze", "synth", "prove", "trace", "gen", "graph", "report", "import", "export", "lsp", "fmt",
             "explain", "completion")
 #: a command whose name is a Python keyword lives in ``NAME_``
 _MODULES = {"import": "import_"}

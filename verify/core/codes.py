@@ -1,7 +1,7 @@
 """The registry of diagnostic codes: one place, stable numbers.
 
 E0xx syntax and files, E1xx names, E2xx structure, E3xx timing, E4xx synthesis, E5xx proof, E6xx code generation,
-E7xx import and export.
+E7xx import and export, E8xx measurements (``verify trace``).
 Every code has a section ``## <code>`` in ``specs/diagnostics.md`` with a minimal failing example that
 ``tests/test_diagnostic_examples.py`` runs; ``verify explain CODE`` prints that section.
 """
@@ -103,6 +103,13 @@ _ALL = [
     Code("E705", "inconsistent imported model"),
     Code("E706", "construct cannot be exported"),
     Code("E707", "export approximates the model", Severity.WARNING),
+    # E8xx: measurements held against the model (`verify trace`, specs/trace.md)
+    Code("E801", "measured execution time above the worst case"),
+    Code("E802", "measured activation period off the model"),
+    Code("E803", "measured latency above its bound", Severity.WARNING),
+    Code("E804", "measured latency above its spec"),
+    Code("E805", "task or callback not found in the trace", Severity.WARNING),
+    Code("E806", "trace cannot be read"),
 ]
 
 CODES: dict[str, Code] = {c.code: c for c in _ALL}

@@ -148,12 +148,15 @@ def _counterexamples(model: SystemModel, proof: ProofResult) -> str:
     return "\n".join(parts)
 
 
-def to_html(model: SystemModel, analysis: AnalysisResult, proof: ProofResult, source: str) -> str:
-    """The report of ``model`` (analysed and proved) as one HTML document."""
+def to_html(model: SystemModel, analysis: AnalysisResult, proof: ProofResult, source: str,
+            measured: str | None = None) -> str:
+    """The report of ``model`` (analysed and proved) as one HTML document; ``measured``: the section of
+    a trace's measurements (``verify.trace.html``), after the chains."""
     body = [f"<h1>{_e(model.name)}: timing report</h1>",
             f'<p class="meta">{_e(source)} · verify {_e(__version__)} · data age {_e(analysis.data_age_variant)}</p>',
             _summary(proof), "<h2>System</h2>", _diagram(model, analysis), "<h2>Tasks</h2>", _outline(model, analysis),
             "<h2>Chains and deadlines</h2>", f'<div id="chains">{_chains(analysis, proof)}</div>',
+            *(["<h2>Measured on the robot</h2>", measured] if measured is not None else []),
             "<h2>Counterexamples</h2>", _counterexamples(model, proof)]
     return "\n".join(["<!DOCTYPE html>", '<html lang="en">', "<head>", '<meta charset="utf-8">',
                       f'<meta http-equiv="Content-Security-Policy" content="{POLICY}">',

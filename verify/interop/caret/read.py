@@ -97,6 +97,13 @@ class Callback:
     period_ns: int | None = None
     topic: str | None = None
     symbol: str | None = None
+    order: int = 0  # `construction_order`: tells apart callbacks alike in name, type, period or topic and symbol
+
+    @property
+    def key(self) -> str:
+        """The callback's identity in its node: its name, and its construction order unless 0 (CARET: a
+        reference by name alone means construction order 0)."""
+        return self.name if self.order == 0 else f"{self.name}#{self.order}"
 
 
 @dataclass
@@ -151,6 +158,7 @@ class Executor:
     groups: list[str]
     span: Span
     groups_span: Span
+    group_spans: list[Span] = field(default_factory=list)  # each group name where it stands
 
 
 @dataclass
@@ -294,6 +302,7 @@ def _callback(c: Y, what: str) -> Callback:
     name = _text(_key(c, "callback_name", f"a callback of {what}"), "`callback_name`")
     kind = _text(kind_y, "`callback_type`")
     symbol = fields["symbol"].value if "symbol" in fields and isinstance(fields["symbol"].value, str) else None
+    order = _construction_order(fields, name)
     if kind == "timer_callback":
         period = _text(_key(c, "period_ns", f"timer callback `{name}`"), "`period_ns`")
         if len(period) > NUMBER_LENGTH:  # (never converted whole: no number is longer in the language either)
@@ -303,19 +312,31 @@ def _callback(c: Y, what: str) -> Callback:
         if not period.isascii() or not period.isdigit() or int(period) <= 0:
             raise Malformed(f"the period of timer callback `{name}` is not a positive number of nanoseconds",
                             fields["period_ns"].span, "write `period_ns` as a whole number, e.g. 100000000")
-        return Callback(name, "timer", c.span, period_ns=int(period), symbol=symbol)
+        return Callback(name, "timer", c.span, period_ns=int(period), symbol=symbol, order=order)
     if kind == "subscription_callback":
         topic = _text(_key(c, "topic_name", f"subscription callback `{name}`"), "`topic_name`")
-        return Callback(name, "subscription", c.span, topic=topic, symbol=symbol)
-    return Callback(name, kind, c.span, symbol=symbol)
+        return Callback(name, "subscription", c.span, topic=topic, symbol=symbol, order=order)
+    return Callback(name, kind, c.span, symbol=symbol, order=order)
+
+
+def _construction_order(fields: dict[str, Y], name: str) -> int:
+    """A callback's ``construction_order`` (CARET: 0 when absent)."""
+    found = fields.get("construction_order")
+    if found is None or found.value is None:
+        return 0
+    text = _text(found, "`construction_order`")
+    if not text.isascii() or not text.isdigit() or len(text) > NUMBER_LENGTH:
+        raise Malformed(f"the construction order of callback `{name}` is not a whole number", found.span,
+                        "write `construction_order` as 0, 1, 2 … (the callback's rank among those alike)")
+    return int(text)
 
 
 def _executor(y: Y) -> Executor:
     names = _key(y, "callback_group_names", "an executor")
+    items = _list(names, "`callback_group_names`")
     return Executor(_text(_key(y, "executor_name", "an executor"), "`executor_name`"),
                     _text(_key(y, "executor_type", "an executor"), "`executor_type`"),
-                    [_text(n, "a callback group name") for n in _list(names, "`callback_group_names`")],
-                    y.span, names.span)
+                    [_text(n, "a callback group name") for n in items], y.span, names.span, [n.span for n in items])
 
 
 def _path(y: Y) -> NamedPath:

@@ -50,6 +50,20 @@ def _reserved() -> frozenset[str]:
     return reserved_words()
 
 
+def language_name(ros: str, camel: bool = False, reserved: frozenset[str] | None = None) -> str:
+    """A ROS name (``/ns/node``, ``/topic``) as a name of the language, before it is made unique in its
+    scope: what ``verify import caret`` names an instance (``ns_node``), a port or, ``camel``, a component;
+    ``verify trace`` finds a recorded node's instance and a topic's port by it."""
+    base = re.sub(r"[^A-Za-z0-9_]+", "_", ros).strip("_") or "unnamed"
+    if camel:
+        base = "".join(part[:1].upper() + part[1:] for part in base.split("_") if part) or "Unnamed"
+    if base[0].isdigit():
+        base = "n" + base
+    if base in (_reserved() if reserved is None else reserved):
+        base += "_"
+    return base
+
+
 class _Names:
     """ROS names as names of the language, unique within one scope."""
 
@@ -58,13 +72,7 @@ class _Names:
         self.words = _reserved()
 
     def __call__(self, ros: str, camel: bool = False) -> str:
-        base = re.sub(r"[^A-Za-z0-9_]+", "_", ros).strip("_") or "unnamed"
-        if camel:
-            base = "".join(part[:1].upper() + part[1:] for part in base.split("_") if part) or "Unnamed"
-        if base[0].isdigit():
-            base = "n" + base
-        if base in self.words:
-            base += "_"
+        base = language_name(ros, camel, self.words)
         name, k = base, 2
         while name in self.taken:
             name, k = f"{base}_{k}", k + 1
@@ -107,8 +115,14 @@ class _Importer:
                                    "no counterpart: it is not imported", cb.span, "no counterpart",
                                    help="only timer and subscription callbacks are modelled")
                     continue
-                n.tasks[cb.name] = tasks(cb.name.rsplit("/", 1)[-1])
-                n.reads[cb.name], n.produces[cb.name] = [], []
+                if cb.key in n.tasks:
+                    self.sink.emit("E705", f"node `{n.node.name}` has two callbacks `{cb.name}` of construction order "
+                                   f"{cb.order}: the second is not imported", cb.span, "defined twice",
+                                   help="tell them apart by `construction_order` (0, 1, …), as CARET writes it")
+                    continue
+                short = cb.name.rsplit("/", 1)[-1]
+                n.tasks[cb.key] = tasks(short if cb.order == 0 else f"{short}_order{cb.order}")
+                n.reads[cb.key], n.produces[cb.key] = [], []
             for sub in n.node.subscribes:
                 port = n.topic_in.setdefault(sub.topic, n.ports(sub.topic))
                 if sub.callback in n.tasks:
@@ -187,11 +201,11 @@ class _Importer:
                 self.sink.emit("E703", f"the callback groups of executor `{ex.name}` have no counterpart: in a "
                                "single-threaded executor its callbacks run one at a time whatever their group",
                                ex.groups_span, "no counterpart", help="nothing to do: the groups change nothing here")
-            for g in ex.groups:
+            for g, where in zip(ex.groups, ex.group_spans or [ex.groups_span] * len(ex.groups), strict=True):
                 found = groups.get(g)
                 if found is None:
                     self.sink.emit("E702", f"executor `{ex.name}` names callback group `{g}`, which no node has",
-                                   ex.groups_span, "unknown group", help="name a group of a node")
+                                   where, "unknown group", help="name a group of a node")
                     continue
                 n, group = found
                 for member in group.callbacks:
@@ -201,7 +215,7 @@ class _Importer:
                     self._declare_group(n, group)
         for n in self.nodes.values():
             for callback in n.node.callbacks:
-                if callback.name in n.tasks and (n.node.name, callback.name) not in self.executor_of:
+                if callback.key in n.tasks and (n.node.name, callback.key) not in self.executor_of:
                     self.sink.emit("E704", f"callback `{callback.name}` of node `{n.node.name}` runs on no executor "
                                    "of the file", callback.span, "no executor",
                                    help="bind the imported task to an executor, or give it a priority and a core")
@@ -284,9 +298,9 @@ class _Importer:
         for n in self.nodes.values():
             lines.append(f"  instance {n.instance} : {n.component} {{")
             lines += [f"    group {name} {kind}  // {comment(source)}" for name, kind, source in n.groups]
-            for cb in n.node.callbacks:
-                if cb.name in n.tasks:
-                    lines.append(f"    task {n.tasks[cb.name]}" + self._binding(n, cb))
+            for cb in _distinct(n.node.callbacks):
+                if cb.key in n.tasks:
+                    lines.append(f"    task {n.tasks[cb.key]}" + self._binding(n, cb))
             lines.append("  }")
         lines += self._connections()
         chains = _Names()
@@ -300,22 +314,23 @@ class _Importer:
         lines += [f"  out {p} : Message" for p in n.topic_out.values()]
         for (_w, _r), (out, into) in n.passing.items():
             lines += [f"  out {out} : Variable", f"  in {into} : Variable"]
-        for cb in n.node.callbacks:
-            if cb.name not in n.tasks:
+        for cb in _distinct(n.node.callbacks):
+            if cb.key not in n.tasks:
                 continue
-            lines.append(f"  task {n.tasks[cb.name]} {{  // {comment(cb.name)}")
-            lines += [f"    reads {p}" for p in dict.fromkeys(n.reads[cb.name])]
-            if n.produces[cb.name]:
-                lines.append("    produces " + ", ".join(dict.fromkeys(n.produces[cb.name])))
+            order = f" (construction_order {cb.order})" if cb.order else ""
+            lines.append(f"  task {n.tasks[cb.key]} {{  // {comment(cb.name + order)}")
+            lines += [f"    reads {p}" for p in dict.fromkeys(n.reads[cb.key])]
+            if n.produces[cb.key]:
+                lines.append("    produces " + ", ".join(dict.fromkeys(n.produces[cb.key])))
             lines.append("  }")
         lines.append("}")
         return lines
 
     def _binding(self, n: _Node, cb: Callback) -> str:
-        executor = self.executor_of.get((n.node.name, cb.name))
+        executor = self.executor_of.get((n.node.name, cb.key))
         text = f" executor {executor}" if executor else ""
-        if executor and cb.name in n.group_of:
-            text += f" group {n.group_of[cb.name]}"
+        if executor and cb.key in n.group_of:
+            text += f" group {n.group_of[cb.key]}"
         if cb.kind == "timer":
             assert cb.period_ns is not None
             return text + f" timer {fmt_time(Fraction(cb.period_ns, 10**9))}"
@@ -348,6 +363,14 @@ class _Importer:
         for n in self.nodes.values():
             lines += [f"  connect {n.instance}.{out} -> {n.instance}.{into}" for out, into in n.passing.values()]
         return lines
+
+
+def _distinct(callbacks: list[Callback]) -> list[Callback]:
+    """The callbacks of a node, the first of each identity (a later one of the same is reported, E705)."""
+    seen: dict[str, Callback] = {}
+    for cb in callbacks:
+        seen.setdefault(cb.key, cb)
+    return list(seen.values())
 
 
 def import_architecture(arch: Architecture, system: str | None, sink: DiagnosticSink) -> Imported:

@@ -1,0 +1,249 @@
+"""`verify trace` (specs/trace.md) on a real trace CARET recorded (tests/data/caret-traces/, with its
+origin and licence) and on job records with known answers."""
+from __future__ import annotations
+
+import json
+import shutil
+from fractions import Fraction
+from pathlib import Path
+
+import pytest
+
+import verify
+from verify.cli import main
+from verify.diagnostics import DiagnosticSink
+from verify.trace.run import read_traces, trace_system
+
+from .conftest import EXAMPLES, in_ci
+
+TRACE = Path(__file__).parent / "data" / "caret-traces" / "talker_listener"
+COMPLETED = EXAMPLES / "caret-talker-listener" / "completed.vfy"
+
+
+def require_bindings() -> None:
+    from verify.trace import lttng
+
+    try:
+        lttng.bindings()
+    except lttng.Unavailable:
+        if in_ci():
+            raise
+        pytest.skip("babeltrace2's Python bindings are not installed (scripts/install-tools)")
+
+
+def _traced(model_path: Path, traces: list[str]):
+    loaded = verify.load(str(model_path))
+    sink = DiagnosticSink()
+    recording = read_traces(traces, sink)
+    assert recording is not None, [d.message for d in sink.items]
+    return trace_system(loaded.system(None), loaded.project, recording)
+
+
+def test_the_caret_trace_gives_the_talkers_period_and_each_callbacks_execution_times():
+    require_bindings()
+    result = _traced(COMPLETED, [str(TRACE)])
+    assert result.matching.pairs.keys() == {"talker.timer_callback_0", "listener.subscription_callback_0"}
+    assert result.matching.callbacks_left_out == 2  # (the nodes' /parameter_events subscriptions, as in CARET)
+    talker = result.measured.task("talker.timer_callback_0")
+    listener = result.measured.task("listener.subscription_callback_0")
+    assert talker is not None and listener is not None
+    assert talker.configured_period == 1 and talker.jobs == 5 and listener.jobs == 5
+    # the talker's callback_start/callback_end pairs of the trace (babeltrace2 prints them): ns exact
+    assert talker.execution is not None and talker.execution.max == Fraction(783352, 10**9)
+    assert talker.execution.min == Fraction(329575, 10**9)
+    assert listener.execution is not None and listener.execution.max == Fraction(459751, 10**9)
+    assert talker.mean_period is not None and abs(talker.mean_period - 1) < Fraction(1, 1000)
+    codes = sorted(d.code for d in result.diagnostics)
+    assert codes.count("E801") == 2  # both callbacks ran longer than the guessed wcets of completed.vfy
+    chain = result.measured.chains[0]
+    assert chain.data_age is not None and chain.data_age.max < Fraction(5, 1000)  # its spec holds
+    assert chain.reaction_time is not None and chain.reaction_time.max < Fraction(1010, 1000)
+
+
+def test_the_command_reports_and_calibrates_the_caret_trace(tmp_path, capsys):
+    require_bindings()
+    model = tmp_path / "completed.vfy"
+    shutil.copy(COMPLETED, model)
+    assert main(["trace", str(model), str(TRACE)]) == 1  # (E801: above the wcet)
+    out, err = capsys.readouterr()
+    assert "timer callback (period 1 s) of node `/talker`" in out and "error[E801]" in err
+    assert main(["trace", str(model), str(TRACE), "--format", "json"]) == 1
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["schema"] == "verify.trace/1" and {t["task"] for t in doc["tasks"]} == {
+        "talker.timer_callback_0", "listener.subscription_callback_0"}
+    assert main(["trace", str(model), str(TRACE), "--format", "sarif"]) == 1
+    assert json.loads(capsys.readouterr().out)["version"] == "2.1.0"
+    before = model.read_text(encoding="utf-8")
+    assert main(["trace", str(model), str(TRACE), "--calibrate", "--diff"]) == 0
+    diff = capsys.readouterr().out
+    assert "-    wcet 200 us  // completed\n" in diff and "+    wcet 941 us  // completed\n" in diff  # 783 us + 20 %
+    assert "+    bcet 329 us  // completed\n" in diff  # 329.575 us, down
+    assert model.read_text(encoding="utf-8") == before  # (--diff writes nothing)
+    assert main(["trace", str(model), str(TRACE), "--calibrate", "--in-place"]) == 0
+    capsys.readouterr()
+    assert main(["trace", str(model), str(TRACE)]) == 0  # calibrated: the measurements agree with the model
+    assert "E801" not in capsys.readouterr().err
+
+
+# ------------------------------------------------------------------ job records: known answers
+
+MODEL = """\
+component C {
+  task T {
+    bcet 1 ms  // kept
+    wcet 2 ms
+  }
+}
+
+system S {
+  core cpu0
+  instance c : C on cpu0 {
+    task T priority 1 timer 10 ms
+  }
+}
+"""
+
+
+def _records(path: Path, times_us: list[int]) -> None:
+    lines = [json.dumps({"node": "/S/c", "task": "T", "seq": k, "release": k * 10_000_000,
+                         "start": k * 10_000_000, "finish": k * 10_000_000 + us * 1000})
+             for k, us in enumerate(times_us)]
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+
+
+def test_burned_times_calibrate_to_those_times(tmp_path, capsys):
+    model, jobs = tmp_path / "m.vfy", tmp_path / "jobs.jsonl"
+    model.write_text(MODEL, encoding="utf-8")
+    _records(jobs, [1200, 1500, 1800, 1300])
+    assert main(["trace", str(model), str(jobs), "--calibrate", "--margin", "0", "-o", str(tmp_path / "out.vfy")]) == 0
+    written = (tmp_path / "out.vfy").read_text(encoding="utf-8")
+    assert "    bcet 1200 us  // kept\n    wcet 1800 us\n" in written
+    assert written.replace("1200 us", "1 ms").replace("1800 us", "2 ms") == MODEL  # only the values changed
+
+
+def test_one_overrun_job_gives_exactly_one_located_error(tmp_path, capsys):
+    model, jobs = tmp_path / "m.vfy", tmp_path / "jobs.jsonl"
+    model.write_text(MODEL, encoding="utf-8")
+    _records(jobs, [1500] * 20 + [2500] + [1500] * 20)
+    assert main(["trace", str(model), str(jobs)]) == 1
+    err = capsys.readouterr().err
+    assert err.count("error[") == 1 and "error[E801]" in err and "m.vfy:4:10" in err
+    assert "1 of 41 jobs above the wcet: job 21: 2.5 ms" in err
+
+
+def test_a_chain_recomputed_from_job_records_follows_timing_section_4(tmp_path):
+    """A sensor every 10 ms, a controller triggered 1 ms after each publish: data age = finish − the
+    sensor job's start; reaction time per sensor read s_j: the first end holding s_j, minus s_(j−1)."""
+    text = (Path(__file__).parent.parent / "specs" / "diagnostics.md").read_text(encoding="utf-8")
+    model_text = text.split("## E804")[1].split("```vfy command=trace\n")[1].split("```")[0]
+    model = tmp_path / "m.vfy"
+    model.write_text(model_text.replace("data_age <= 5 ms", "data_age <= 50 ms"), encoding="utf-8")
+    jobs = []
+    for k in range(5):
+        t = k * 10_000_000
+        jobs.append({"node": "/Loop/sensor", "task": "Sample", "release": t, "start": t, "finish": t + 1_000_000})
+        jobs.append({"node": "/Loop/control", "task": "Step", "release": t + 1_000_000, "start": t + 2_000_000,
+                     "finish": t + 3_000_000})
+    path = tmp_path / "jobs.jsonl"
+    path.write_text("".join(json.dumps(j) + "\n" for j in jobs), encoding="utf-8")
+    result = _traced(model, [str(path)])
+    chain = result.measured.chains[0]
+    assert chain.data_age is not None and chain.data_age.min == chain.data_age.max == Fraction(3, 1000)
+    assert chain.reaction_time is not None and chain.reaction_time.max == Fraction(13, 1000)
+    assert chain.reaction_time.count == 4
+
+
+# ------------------------------------------------------------------ bad input: never a traceback
+
+def test_a_truncated_trace_is_read_in_part_or_refused_never_a_traceback(tmp_path, capsys):
+    require_bindings()
+    broken = tmp_path / "trace"
+    shutil.copytree(TRACE, broken)
+    streams = sorted(p for p in broken.rglob("ros2_*") if p.is_file() and p.parent.name == "64-bit")
+    biggest = max(streams, key=lambda p: p.stat().st_size)
+    data = biggest.read_bytes()
+    biggest.write_bytes(data[: len(data) // 2 + 7])
+    code = main(["trace", str(COMPLETED), str(broken)])
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and code in (0, 1, 2)
+    assert "E806" in err  # (read in part: a warning; or not read: an error)
+
+
+@pytest.mark.parametrize("what", ["empty-dir", "not-ctf", "missing"])
+def test_what_is_no_trace_is_e806(tmp_path, capsys, what):
+    target = tmp_path / "t"
+    if what == "empty-dir":
+        target.mkdir()
+    elif what == "not-ctf":
+        target.mkdir()
+        (target / "metadata").write_bytes(b"\x00garbage" * 100)
+    if what != "missing":
+        require_bindings()
+    assert main(["trace", str(COMPLETED), str(target)]) == 2
+    err = capsys.readouterr().err
+    assert "error[E806]" in err and "Traceback" not in err
+
+
+def test_another_systems_trace_pairs_nothing_and_lists_it(tmp_path, capsys):
+    require_bindings()
+    other = tmp_path / "other.vfy"
+    other.write_text(MODEL, encoding="utf-8")
+    assert main(["trace", str(other), str(TRACE)]) == 0
+    err = capsys.readouterr().err
+    assert "warning[E805]: task `c.T` is not found in the trace" in err
+    assert "the model has no instance `talker`" in err
+
+
+@pytest.mark.parametrize("name, said", [("missing.jsonl", "there is no such file"),
+                                        ("/dev/null", "it is not a regular file"),
+                                        ("junk.jsonl", "no job record in")])
+def test_a_file_that_is_no_job_records_is_e806(tmp_path, capsys, name, said):
+    (tmp_path / "junk.jsonl").write_bytes(b'{"node": "/S/c", "task": "T", "start": 5, "finish": 3}\n\xff\x00[1]\n')
+    path = name if name.startswith("/") else str(tmp_path / name)
+    assert main(["trace", str(COMPLETED), path]) == 2
+    err = capsys.readouterr().err
+    assert "error[E806]" in err and said in err and "Traceback" not in err
+
+
+def test_lines_that_are_no_records_leave_a_partial_recording(tmp_path, capsys):
+    model, jobs = tmp_path / "m.vfy", tmp_path / "jobs.jsonl"
+    model.write_text(MODEL, encoding="utf-8")
+    _records(jobs, [1500, 1500])
+    with jobs.open("a", encoding="utf-8") as fh:
+        fh.write('{"topic": "/other", "data": "x"}\nnot json\n')
+    assert main(["trace", str(model), str(jobs)]) == 0
+    out, err = capsys.readouterr()
+    assert "PARTIAL: 1 line(s) are not job records" in out and "warning[E806]" in err and "jobs.jsonl:4" in err
+
+
+def test_a_callback_running_on_two_threads_at_once_gives_two_jobs_in_start_order():
+    """A callback of a reentrant group: its jobs on two threads overlap; each end closes its thread's job."""
+    from verify.trace.lttng import Reader
+
+    reader = Reader()
+    p = reader.process(7)
+    reader.on_rcl_node_init(p, 0, 1, 0x10, "n", "/")
+    reader.on_rcl_timer_init(p, 0, 1, 0x20, 5_000_000)
+    reader.on_rclcpp_timer_callback_added(p, 0, 1, 0x20, 0x30)
+    reader.on_rclcpp_timer_link_node(p, 0, 1, 0x20, 0x10)
+    reader.on_callback_start(p, 100, 1, 0x30)
+    reader.on_callback_start(p, 200, 2, 0x30)
+    reader.on_rcl_publish(p, 250, 2, 0x40)
+    reader.on_callback_end(p, 400, 2, 0x30)
+    reader.on_callback_end(p, 500, 1, 0x30)
+    recording = reader.recording(("t",))
+    (key,) = recording.callbacks
+    jobs = recording.jobs[key]
+    assert (list(jobs.starts), list(jobs.ends), list(jobs.writes)) == ([100, 200], [500, 400], [500, 250])
+    assert recording.callbacks[key].node == "/n" and recording.callbacks[key].period_ns == 5_000_000
+
+
+def test_a_timer_registered_with_another_period_is_paired_and_e802(tmp_path, capsys):
+    require_bindings()
+    text = COMPLETED.read_text(encoding="utf-8").replace("timer 1 s", "timer 500 ms")
+    model = tmp_path / "m.vfy"
+    model.write_text(text, encoding="utf-8")
+    assert main(["trace", str(model), str(TRACE)]) == 1
+    err = capsys.readouterr().err
+    # one timer on each side: paired, and its period is off the model
+    assert "error[E802]: the timer of `talker.timer_callback_0` has the period 1 s in the trace, not 500 ms" in err

@@ -1,0 +1,126 @@
+"""`verify trace` on LTTng traces recorded here by the real tools (benchmarks/lttnglive.py): a small C
+program emitting the `ros2` provider's events with ros2_tracing's names and fields through Debian's
+liblttng-ust, recorded by Debian's LTTng in a session per test. Known answers: a talker whose jobs burn
+known times, a listener after each."""
+from __future__ import annotations
+
+import re
+from fractions import Fraction
+from pathlib import Path
+
+import pytest
+
+import verify
+from benchmarks import lttnglive
+from verify.cli import main
+from verify.diagnostics import DiagnosticSink
+from verify.trace.run import read_traces, trace_system
+
+from .conftest import in_ci
+
+MODEL = """\
+component Talker {
+  out chatter : Message
+  task timer_callback_0 {
+    produces chatter
+    bcet 1 ms
+    wcet 4 ms
+  }
+}
+
+component Listener {
+  in chatter : Message
+  task subscription_callback_0 {
+    reads chatter
+    bcet 500 us
+    wcet 2 ms
+  }
+}
+
+system S {
+  core cpu0
+  executor main single_threaded on cpu0 priority 10
+  instance talker : Talker {
+    task timer_callback_0 executor main timer 20 ms
+  }
+  instance listener : Listener {
+    task subscription_callback_0 executor main trigger chatter
+  }
+  connect talker.chatter -> listener.chatter
+  chain chatter: talker.chatter -> listener.subscription_callback_0 {
+    data_age <= 100 ms
+  }
+}
+"""
+#: how much longer than its burn a job may measure (the publish and end events after the spin; the
+#: program runs at a real-time priority where it may, so the machine's other work does not preempt it)
+SLACK_US = 1000
+
+
+@pytest.fixture(scope="module")
+def program(tmp_path_factory):
+    missing = lttnglive.missing_tools()
+    if missing:
+        message = f"LTTng tools missing: {', '.join(missing)} (scripts/install-tools installs them)"
+        if in_ci():
+            pytest.fail(message)
+        pytest.skip(message)
+    return lttnglive.build(tmp_path_factory.mktemp("ros2_events"))
+
+
+def _record(program: Path, tmp_path: Path, burns_us: list[int]) -> Path:
+    return lttnglive.record(program, ["20000", "1000", ",".join(map(str, burns_us))], tmp_path / "trace",
+                            realtime=True)
+
+
+def test_burned_times_calibrate_to_those_times(program, tmp_path, capsys):
+    trace = _record(program, tmp_path, [2000, 3000, 3500, 2500, 3000])
+    model = tmp_path / "m.vfy"
+    model.write_text(MODEL, encoding="utf-8")
+    assert main(["trace", str(model), str(trace), "--calibrate", "--margin", "0", "--in-place"]) == 0
+    text = model.read_text(encoding="utf-8")
+    times = {k: int(v) for k, v in re.findall(r"(bcet|wcet) (\d+) us", text)[:2]}  # the talker's
+    assert 2000 <= times["bcet"] <= 2000 + SLACK_US and 3500 <= times["wcet"] <= 3500 + SLACK_US
+    assert text.count(" us") == 4 and "timer 20 ms" in text  # (both tasks calibrated; nothing else changed)
+    capsys.readouterr()
+    assert main(["trace", str(model), str(trace)]) == 0  # the calibrated model agrees with its trace
+
+
+def test_one_overrun_job_gives_exactly_one_located_error(program, tmp_path, capsys):
+    trace = _record(program, tmp_path, [2000] * 5 + [6000] + [2000] * 5)
+    model = tmp_path / "m.vfy"
+    model.write_text(MODEL, encoding="utf-8")
+    assert main(["trace", str(model), str(trace)]) == 1
+    err = capsys.readouterr().err
+    assert err.count("error[") == 1 and "error[E801]" in err and f"{model}:6:10" in err
+    assert "1 of 11 jobs above the wcet: job 6: 6." in err
+
+
+def test_the_trace_pairs_both_callbacks_and_measures_the_chain(program, tmp_path):
+    trace = _record(program, tmp_path, [2000, 2000, 2000, 2000])
+    loaded = verify.load_text(MODEL, str(tmp_path / "m.vfy"))
+    sink = DiagnosticSink()
+    recording = read_traces([str(trace)], sink)
+    assert recording is not None and not recording.partial
+    result = trace_system(loaded.system(None), loaded.project, recording)
+    assert set(result.matching.pairs) == {"talker.timer_callback_0", "listener.subscription_callback_0"}
+    talker = result.measured.task("talker.timer_callback_0")
+    assert talker is not None and talker.configured_period == Fraction(20, 1000) and talker.jobs == 4
+    assert talker.mean_period is not None and abs(talker.mean_period - Fraction(20, 1000)) < Fraction(1, 1000)
+    chain = result.measured.chains[0]
+    # data age: the listener's end − the talker's start = 2 ms burnt + 1 ms burnt (+ the events between)
+    assert chain.data_age is not None and chain.data_age.count == 4
+    assert Fraction(3, 1000) <= chain.data_age.min <= chain.data_age.max <= Fraction(3000 + SLACK_US, 10**6)
+
+
+def test_a_truncated_recording_is_read_in_part(program, tmp_path, capsys):
+    trace = _record(program, tmp_path, [500] * 40)
+    streams = [p for p in trace.rglob("*") if p.is_file() and p.parent.name == "64-bit" and p.name != "metadata"]
+    biggest = max(streams, key=lambda p: p.stat().st_size)
+    data = biggest.read_bytes()
+    biggest.write_bytes(data[: len(data) * 2 // 3])
+    model = tmp_path / "m.vfy"
+    model.write_text(MODEL, encoding="utf-8")
+    code = main(["trace", str(model), str(trace)])
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and "E806" in err and code in (0, 1, 2)

@@ -1,0 +1,87 @@
+/* A talker and a listener as ROS 2 records them, without ROS: the `ros2` provider's events
+ * (ros2_tp.h: ros2_tracing's names and fields) of a node `/talker` whose timer callback runs every
+ * PERIOD_US and burns the given times, publishing `/chatter` each time, and a node `/listener` whose
+ * subscription callback then burns LISTENER_US. For tests/test_trace_lttng.py and the benchmark.
+ *
+ *   ros2_events PERIOD_US LISTENER_US BURN_US[,BURN_US...]   a job every period, burning those times
+ *   ros2_events --fast N                                     N jobs of each, back to back, no burning
+ *
+ * Times are burnt by spinning on CLOCK_MONOTONIC (LTTng's clock): a job's start-to-end is its burn.
+ */
+#define TRACEPOINT_DEFINE
+#define TRACEPOINT_CREATE_PROBES
+#include "ros2_tp.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+static const char NODE_T[1], RMW_T[1], NODE_L[1], RMW_L[1], TIMER[1], TIMER_CB[1], PUB[1], SUB[1], RMW_SUB[1],
+    SUB_CPP[1], SUB_CB[1], MESSAGE[1];
+
+static long long now_ns(void) {
+  struct timespec t;
+  clock_gettime(CLOCK_MONOTONIC, &t);
+  return (long long)t.tv_sec * 1000000000LL + t.tv_nsec;
+}
+
+static void burn_us(long long us) {
+  const long long until = now_ns() + us * 1000LL;
+  while (now_ns() < until) {
+  }
+}
+
+static void sleep_until(long long ns) {
+  struct timespec t = {(time_t)(ns / 1000000000LL), (long)(ns % 1000000000LL)};
+  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &t, NULL) != 0) {
+  }
+}
+
+static void registrations(long long period_us) {
+  tracepoint(ros2, rcl_node_init, NODE_T, RMW_T, "talker", "/");
+  tracepoint(ros2, rcl_timer_init, TIMER, period_us * 1000LL);
+  tracepoint(ros2, rclcpp_timer_callback_added, TIMER, TIMER_CB);
+  tracepoint(ros2, rclcpp_callback_register, TIMER_CB, "demo::Talker::Talker()::{lambda()#1}");
+  tracepoint(ros2, rclcpp_timer_link_node, TIMER, NODE_T);
+  tracepoint(ros2, rcl_node_init, NODE_L, RMW_L, "listener", "/");
+  tracepoint(ros2, rcl_subscription_init, SUB, NODE_L, RMW_SUB, "/chatter", 10);
+  tracepoint(ros2, rclcpp_subscription_init, SUB, SUB_CPP);
+  tracepoint(ros2, rclcpp_subscription_callback_added, SUB_CPP, SUB_CB);
+  tracepoint(ros2, rclcpp_callback_register, SUB_CB, "demo::Listener::Listener()::{lambda(msg)#1}");
+}
+
+static void job(long long talker_us, long long listener_us) {
+  tracepoint(ros2, callback_start, TIMER_CB, 0);
+  burn_us(talker_us);
+  tracepoint(ros2, rcl_publish, PUB, MESSAGE);
+  tracepoint(ros2, callback_end, TIMER_CB);
+  tracepoint(ros2, rmw_take, RMW_SUB, MESSAGE, now_ns(), 1);
+  tracepoint(ros2, callback_start, SUB_CB, 0);
+  burn_us(listener_us);
+  tracepoint(ros2, callback_end, SUB_CB);
+}
+
+int main(int argc, char **argv) {
+  if (argc == 3 && strcmp(argv[1], "--fast") == 0) {
+    const long long n = atoll(argv[2]);
+    registrations(1000);
+    for (long long k = 0; k < n; ++k) {
+      job(0, 0);
+    }
+    return 0;
+  }
+  if (argc != 4) {
+    fprintf(stderr, "usage: ros2_events PERIOD_US LISTENER_US BURN_US[,BURN_US...] | --fast N\n");
+    return 2;
+  }
+  const long long period_us = atoll(argv[1]), listener_us = atoll(argv[2]);
+  registrations(period_us);
+  long long next = now_ns() + period_us * 1000LL;
+  for (char *item = strtok(argv[3], ","); item != NULL; item = strtok(NULL, ",")) {
+    sleep_until(next);
+    job(atoll(item), listener_us);
+    next += period_us * 1000LL;
+  }
+  return 0;
+}

@@ -1,0 +1,101 @@
+"""``verify trace --calibrate``: measured execution times written into the model by minimal edits
+(specs/trace.md §5), as ``synth`` writes its holes (``verify.synth.writeback``): only the values of
+``bcet`` and ``wcet`` change (or, for a task without one, a line is added before the task's closing
+brace); every other byte — comments, layout, line endings — stays.
+
+A component's task gets, over the instances measured: ``wcet`` = the greatest measured execution time
+times (1 + margin), rounded up to a microsecond; ``bcet`` = the least measured execution time, rounded
+down to a microsecond. Only components in the model's root file are edited; the others are named.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from fractions import Fraction
+
+from .. import syntax as s
+from ..model import SystemModel
+from ..source import SourceFile
+from ..synth.writeback import Edit, apply_edits
+from .metrics import Measurements
+
+#: the margin on the measured worst case, unless ``--margin`` says otherwise (specs/trace.md §5)
+DEFAULT_MARGIN = Fraction(20, 100)
+US = Fraction(1, 10**6)
+
+
+@dataclass(frozen=True)
+class Change:
+    component: str
+    task: str
+    what: str  # "bcet" | "wcet"
+    old: Fraction | None
+    new: Fraction
+
+
+@dataclass(frozen=True)
+class Calibration:
+    text: str
+    changes: tuple[Change, ...]
+    elsewhere: tuple[str, ...]  # components measured but not in the root file
+
+
+def _us(x: Fraction) -> str:
+    """A whole number of microseconds as the language writes it."""
+    return f"{math.ceil(x / US)} us"
+
+
+def measured_times(model: SystemModel, measured: Measurements,
+                   margin: Fraction) -> dict[tuple[str, str], tuple[Fraction, Fraction]]:
+    """(component, task) → (bcet, wcet) from the measurements of every instance of it."""
+    out: dict[tuple[str, str], tuple[Fraction, Fraction]] = {}
+    for m in measured.tasks:
+        if m.execution is None:
+            continue
+        task = model.task(m.task)
+        key = (task.component, task.name)
+        low = math.floor(m.execution.min / US) * US
+        high = math.ceil(m.execution.max * (1 + margin) / US) * US
+        if key in out:
+            low, high = min(low, out[key][0]), max(high, out[key][1])
+        out[key] = (low, max(high, low))
+    return out
+
+
+def calibrate(root: s.Module, source: SourceFile, model: SystemModel, measured: Measurements,
+              margin: Fraction = DEFAULT_MARGIN) -> Calibration:
+    times = measured_times(model, measured, margin)
+    edits: list[Edit] = []
+    changes: list[Change] = []
+    local = {c.name.text: c for c in root.components}
+    smap = source.map
+    for (component, task_name), (bcet, wcet) in times.items():
+        comp = local.get(component)
+        task = next((t for t in comp.tasks if t.name.text == task_name), None) if comp is not None else None
+        if task is None or task.end.line == task.span.line:
+            continue  # (a task on one line is left as it is: named below)
+        missing = []
+        for what, value, given in (("bcet", bcet, task.bcet), ("wcet", wcet, task.wcet)):
+            if given is not None and given.value * s.TIME_UNITS[given.unit] == value:
+                continue
+            changes.append(Change(component, task_name, what, None if given is None else
+                                  given.value * s.TIME_UNITS[given.unit], value))
+            if given is None:
+                missing.append(f"{what} {_us(value)}")
+                continue
+            start, end = smap.span_offsets(given.span)
+            edits.append(Edit(start, end, _us(value)))
+        if missing:
+            line_start = smap.line_start(task.end.line)
+            indent = smap.line_text(task.end.line)[:task.end.column - 1]
+            edits.append(Edit(line_start, line_start, "".join(f"{indent}  {m}  // measured\n" for m in missing)))
+    edited = {(c.component, c.task) for c in changes}
+    elsewhere = tuple(sorted({c for c, t in times
+                              if c not in local or ((c, t) not in edited and _one_line(local[c], t))}))
+    text = apply_edits(source.text, sorted(edits, key=lambda e: e.start))
+    return Calibration(text, tuple(changes), elsewhere)
+
+
+def _one_line(component: s.Component, task_name: str) -> bool:
+    task = next((t for t in component.tasks if t.name.text == task_name), None)
+    return task is not None and task.end.line == task.span.line

@@ -1,0 +1,167 @@
+"""What a recording measures of the model's tasks and chains (specs/trace.md §3). Exact: nanoseconds
+as recorded, seconds as fractions; quantiles by nearest rank.
+
+- a task's **execution time**: end − start of each job (what a callback's start and end events, or a
+  job record's start and finish, enclose: its response from start, preemptions included);
+- its **activation**: the time between consecutive starts (job records: releases), their least and
+  greatest, and the mean period (last − first) / (n − 1); a timer callback's configured period;
+- a chain's **data age** and **reaction time** by specs/timing.md §4, on the jobs: a job of the
+  chain's first task holds its own start as the stamp; a job of a later task holds the stamp of the
+  writer's latest job whose output left (its last publish, else its end) at or before the job started;
+  data age = end − stamp per job of the last task holding one; reaction time, per start s_j of the
+  first task, the end of the first job of the last task holding a stamp ≥ s_j, minus s_(j−1); jitter
+  = greatest − least data age.
+"""
+from __future__ import annotations
+
+import bisect
+from array import array
+from collections.abc import Sequence
+from dataclasses import dataclass
+from fractions import Fraction
+
+from ..activations import Periodic
+from ..model import ChainModel, SystemModel
+from .match import Matching
+from .recording import Jobs, Recording
+
+NS = 10**9
+
+
+@dataclass(frozen=True)
+class Distribution:
+    """Measured values (seconds): how many, least, median, 99th percentile, greatest."""
+
+    count: int
+    min: Fraction
+    p50: Fraction
+    p99: Fraction
+    max: Fraction
+
+    @staticmethod
+    def of(values_ns: Sequence[int]) -> Distribution | None:
+        if not values_ns:
+            return None
+        ordered = sorted(values_ns)
+        n = len(ordered)
+
+        def rank(p: int) -> Fraction:
+            return Fraction(ordered[max(-(-p * n // 100) - 1, 0)], NS)
+
+        return Distribution(n, Fraction(ordered[0], NS), rank(50), rank(99), Fraction(ordered[-1], NS))
+
+
+@dataclass(frozen=True)
+class TaskMeasure:
+    task: str
+    callback: str  # the recorded callback, in words
+    jobs: int
+    execution: Distribution | None
+    intervals: Distribution | None  # between consecutive activations
+    mean_period: Fraction | None
+    configured_period: Fraction | None  # a timer callback's period as registered
+    overruns: tuple[tuple[int, Fraction], ...] = ()  # (job index, execution time) above the wcet: the first few
+    overrun_count: int = 0  # how many jobs ran longer than the wcet
+
+
+@dataclass(frozen=True)
+class ChainMeasure:
+    chain: str
+    data_age: Distribution | None
+    reaction_time: Distribution | None
+    missing: str | None = None  # why it is not measured
+
+    @property
+    def jitter(self) -> Fraction | None:
+        return None if self.data_age is None else self.data_age.max - self.data_age.min
+
+
+@dataclass(frozen=True)
+class Measurements:
+    tasks: tuple[TaskMeasure, ...]
+    chains: tuple[ChainMeasure, ...]
+
+    def task(self, task_id: str) -> TaskMeasure | None:
+        return next((t for t in self.tasks if t.task == task_id), None)
+
+
+#: how many overrunning jobs a task's measure names
+SHOWN_OVERRUNS = 5
+
+
+def measure(model: SystemModel, recording: Recording, matching: Matching) -> Measurements:
+    tasks = []
+    for task in model.tasks:
+        key = matching.pairs.get(task.id)
+        if key is None:
+            continue
+        jobs = recording.jobs_of(key)
+        callback = recording.callbacks[key]
+        execution = [] if callback.kind == "topic" else [e - s for s, e in zip(jobs.starts, jobs.ends, strict=True)]
+        activations = jobs.releases if len(jobs.releases) == len(jobs) and len(jobs) else jobs.starts
+        intervals = [b - a for a, b in zip(activations, activations[1:], strict=False)]
+        mean = Fraction(activations[-1] - activations[0], (len(activations) - 1) * NS) if len(activations) > 1 else None
+        limit = task.wcet * NS
+        above = [(k, Fraction(x, NS)) for k, x in enumerate(execution) if x > limit]
+        configured = Fraction(callback.period_ns, NS) if callback.period_ns else None
+        tasks.append(TaskMeasure(task.id, callback.describe(), len(jobs), Distribution.of(execution),
+                                 Distribution.of(intervals), mean, configured, tuple(above[:SHOWN_OVERRUNS]),
+                                 len(above)))
+    chains = tuple(_chain(model, chain, recording, matching) for chain in model.chains)
+    return Measurements(tuple(tasks), chains)
+
+
+def _chain(model: SystemModel, chain: ChainModel, recording: Recording, matching: Matching) -> ChainMeasure:
+    if recording.source == "bag":
+        return ChainMeasure(chain.name, None, None, "a bag records when messages were written, not when jobs ran")
+    missing = [t for t in chain.tasks if t not in matching.pairs]
+    if missing:
+        return ChainMeasure(chain.name, None, None, f"task `{missing[0]}` is not in the trace")
+    first = recording.jobs_of(matching.pairs[chain.tasks[0]])
+    stamps: array[int] = array("q", first.starts)
+    previous = first
+    for hop in chain.hops:
+        reader = recording.jobs_of(matching.pairs[hop.reader])
+        stamps = _held(previous, stamps, reader)
+        previous = reader
+    last = previous
+    ages = [end - s for end, s in zip(last.ends, stamps, strict=True) if s >= 0]
+    reactions = _reactions(first.starts, last.ends, stamps)
+    return ChainMeasure(chain.name, Distribution.of(ages), Distribution.of(reactions))
+
+
+def _held(writer: Jobs, writer_stamps: array[int], reader: Jobs) -> array[int]:
+    """The stamp each reader job holds: that of the writer's latest job whose output left at or before
+    the reader job started (−1: none yet)."""
+    out = array("q")
+    writes = writer.writes
+    for start in reader.starts:
+        k = bisect.bisect_right(writes, start) - 1
+        out.append(writer_stamps[k] if k >= 0 else -1)
+    return out
+
+
+def _reactions(starts: Sequence[int], ends: Sequence[int], stamps: Sequence[int]) -> list[int]:
+    """Per start s_j of the first task (j ≥ 1): the end of the first job of the last task holding a
+    stamp ≥ s_j, minus s_(j−1)."""
+    held = sorted((s, e) for s, e in zip(stamps, ends, strict=True) if s >= 0)
+    if not held:
+        return []
+    # earliest[k]: the least end among the jobs holding the k-th smallest stamp or a larger one
+    earliest = [0] * len(held)
+    least = None
+    for k in range(len(held) - 1, -1, -1):
+        least = held[k][1] if least is None else min(least, held[k][1])
+        earliest[k] = least
+    keys = [s for s, _ in held]
+    out = []
+    for before, read in zip(starts, starts[1:], strict=False):
+        k = bisect.bisect_left(keys, read)
+        if k < len(held):
+            out.append(earliest[k] - before)
+    return out
+
+
+def period_of(model: SystemModel, task_id: str) -> Fraction | None:
+    activation = model.task(task_id).activation
+    return activation.period if isinstance(activation, Periodic) else None

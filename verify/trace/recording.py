@@ -1,0 +1,79 @@
+"""What every trace reader gives: the callbacks seen, each identified as CARET identifies callbacks
+(node, type, period or topic, symbol, construction order), and the jobs each ran (specs/trace.md §1).
+
+Times are whole nanoseconds (the trace's clock); a job is (start, end, write): ``write`` is when its
+last output left (a publish inside the job, else its end), for the hops of a chain.
+"""
+from __future__ import annotations
+
+from array import array
+from collections import Counter
+from dataclasses import dataclass, field
+
+
+@dataclass(frozen=True)
+class Callback:
+    """A recorded callback. ``kind``: "timer", "subscription" or "task" (a job record names its task);
+    ``order``: its rank among the callbacks of its node alike in kind, period or topic and symbol, in
+    the order they were registered (CARET's ``construction_order``)."""
+
+    key: str
+    node: str | None
+    kind: str  # "timer" | "subscription" | "task" | "topic" (a bag's: its messages)
+    period_ns: int | None = None
+    topic: str | None = None
+    symbol: str = ""
+    order: int = 0
+    task: str | None = None  # a job record's task name
+    registered: int = 0  # its rank among all callbacks of the recording, in registration order
+
+    def describe(self) -> str:
+        if self.kind == "topic":
+            return f"topic `{self.topic}`"
+        what = {"timer": f"timer callback ({_period(self.period_ns)})",
+                "subscription": f"subscription callback on `{self.topic}`"}.get(self.kind, f"task `{self.task}`")
+        return f"{what} of node `{self.node or '?'}`" + (f", construction order {self.order}" if self.order else "")
+
+
+def _period(ns: int | None) -> str:
+    from fractions import Fraction
+
+    from ..units import fmt_time
+
+    return "period unknown" if ns is None else "period " + fmt_time(Fraction(ns, 10**9))
+
+
+@dataclass
+class Jobs:
+    """The jobs of one callback, in the order they started (three columns of nanoseconds: 24 bytes a job)."""
+
+    starts: array[int] = field(default_factory=lambda: array("q"))
+    ends: array[int] = field(default_factory=lambda: array("q"))
+    writes: array[int] = field(default_factory=lambda: array("q"))
+    releases: array[int] = field(default_factory=lambda: array("q"))  # job records only: when it was released
+
+    def add(self, start: int, end: int, write: int) -> None:
+        self.starts.append(start)
+        self.ends.append(end)
+        self.writes.append(write)
+
+    def __len__(self) -> int:
+        return len(self.starts)
+
+
+@dataclass
+class Recording:
+    """One trace (or several of one run) as read: its callbacks by key, their jobs, and what the reader
+    could not use. ``partial`` says why the recording is incomplete (a truncated trace, a job without
+    its end); ``ignored`` counts the events of kinds the reader does not use, by name."""
+
+    paths: tuple[str, ...]
+    source: str  # "lttng" | "job records" | "bag"
+    callbacks: dict[str, Callback] = field(default_factory=dict)
+    jobs: dict[str, Jobs] = field(default_factory=dict)
+    events: int = 0
+    ignored: Counter[str] = field(default_factory=Counter)
+    partial: list[str] = field(default_factory=list)
+
+    def jobs_of(self, key: str) -> Jobs:
+        return self.jobs.get(key) or Jobs()

@@ -1,0 +1,87 @@
+"""``verify trace`` without the command line: read the traces, pair, measure, find (specs/trace.md)."""
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass
+from fractions import Fraction
+
+from ..diagnostics import Diagnostic, DiagnosticSink
+from ..loader import Project
+from ..model import SystemModel
+from ..source import Span
+from ..timing import AnalysisResult, analyze
+from .findings import PERIOD_TOLERANCE, findings
+from .match import Matching, match
+from .metrics import Measurements, measure
+from .recording import Recording
+
+
+@dataclass(frozen=True)
+class TraceResult:
+    system: str
+    recording: Recording
+    matching: Matching
+    measured: Measurements
+    analysis: AnalysisResult
+    diagnostics: tuple[Diagnostic, ...]
+
+
+def read_traces(paths: Sequence[str], sink: DiagnosticSink) -> Recording | None:
+    """The recording of ``paths``: LTTng trace directories, job-record files (``.jsonl``), or bags (ROS 1
+    ``.bag`` files, ROS 2 bag directories); None after E806 when they cannot be read."""
+    from ..fileaccess import Refused
+    from . import bags, jobrecords, lttng
+
+    given = tuple(paths)
+    where = Span(given[0] if given else "<command line>", 1, 1, 1, 1)
+    records = [p for p in given if not os.path.isdir(p)]
+    kinds = {bags.is_bag(p) for p in given}
+    try:
+        if kinds == {True}:
+            return bags.read(given)
+        if True in kinds:
+            sink.emit("E806", "bags and other traces are read apart", where, "mixed",
+                      help="give either bags (ROS 1 `.bag` files, ROS 2 bag directories) or other traces")
+            return None
+        if records and len(records) == len(given):
+            return jobrecords.read(given)
+        if records:
+            sink.emit("E806", "LTTng trace directories and job-record files are read apart: "
+                      + ", ".join(records) + " is not a directory", where, "mixed",
+                      help="give either LTTng trace directories or job-record files (.jsonl)")
+            return None
+        return lttng.read(given)
+    except bags.NotBag as err:
+        sink.emit("E806", f"{', '.join(given)} cannot be read as a bag: {err}", where, "not a bag",
+                  help="give a ROS 1 `.bag` file or a ROS 2 bag directory (`ros2 bag record` writes it)")
+    except jobrecords.NotRecords as err:
+        sink.emit("E806", f"{err}", where, "not a trace", help="give an LTTng trace directory (`ros2 trace`, "
+                  "CARET's recording) or the job records of the generated nodes (one JSON object a line)")
+    except lttng.Unreadable as err:
+        sink.emit("E806", f"{', '.join(given)} cannot be read as an LTTng trace: {err}", where, "not a trace",
+                  help="give the directory `ros2 trace` or `lttng` wrote (it holds `metadata` and the streams)")
+    except lttng.Unavailable as err:
+        sink.emit("E806", f"LTTng traces cannot be read here: {err}", where, "not read",
+                  help="install babeltrace2's Python bindings (`scripts/install-tools`)")
+    except Refused as err:
+        why = {"missing": "there is no such file", "special": "it is not a regular file (a device, a pipe)",
+               "directory": "it is a directory", "link": "it is a symbolic link"}.get(err.reason, err.reason)
+        sink.emit("E806", f"{err.path} cannot be read: {why}", where, "cannot be read",
+                  help="name an existing trace directory or job-record file")
+    except OSError as err:
+        sink.emit("E806", f"{', '.join(given)} cannot be read: {err.strerror or err}", where, "cannot be read",
+                  help="name an existing trace directory or job-record file")
+    return None
+
+
+def trace_system(model: SystemModel, project: Project, recording: Recording, *,
+                 tolerance: Fraction = PERIOD_TOLERANCE) -> TraceResult:
+    """The measurements of ``recording`` against ``model``, with the findings."""
+    matching = match(model, recording)
+    measured = measure(model, recording, matching)
+    analysis = analyze(model)
+    sink = DiagnosticSink()
+    findings(model, analysis, recording, matching, measured, project, sink, tolerance)
+    return TraceResult(model.name, recording, matching, measured, analysis,
+                       tuple(sorted(sink.items, key=Diagnostic.sort_key)))
