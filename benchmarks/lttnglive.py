@@ -47,10 +47,12 @@ def _lttng(*args: str) -> None:
 
 
 def realtime_prefix() -> list[str]:
-    """``chrt -f 50`` when this user may run a program at a real-time priority (root), else nothing: a
-    program burning known times is then not preempted by the machine's other work."""
-    if shutil.which("chrt") and subprocess.run(["chrt", "-f", "50", "true"], capture_output=True).returncode == 0:
-        return ["chrt", "-f", "50"]
+    """``chrt -f 99`` when this user may run a program at a real-time priority (root), else nothing: a
+    program burning known times is then not preempted by the machine's other work, the generated ROS 2
+    nodes' real-time threads (priorities 97 to 99, specs/codegen.md) of a test running beside it included
+    (SCHED_FIFO does not preempt at equal priority)."""
+    if shutil.which("chrt") and subprocess.run(["chrt", "-f", "99", "true"], capture_output=True).returncode == 0:
+        return ["chrt", "-f", "99"]
     return []
 
 

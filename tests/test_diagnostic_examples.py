@@ -147,7 +147,7 @@ def gen_diagnostics(model, directory: Path, name: str):
 
 def trace_diagnostics(section: Section, directory: Path, result, model) -> list:
     """What `verify trace main.vfy TRACE...` reports, its traces the example's other files."""
-    from verify.diagnostics import DiagnosticSink
+    from verify.core.diagnostics import DiagnosticSink
     from verify.trace.run import read_traces, trace_system
 
     sink = DiagnosticSink()

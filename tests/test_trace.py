@@ -11,7 +11,7 @@ import pytest
 
 import verify
 from verify.cli import main
-from verify.diagnostics import DiagnosticSink
+from verify.core.diagnostics import DiagnosticSink
 from verify.trace.run import read_traces, trace_system
 
 from .conftest import EXAMPLES, in_ci
@@ -218,7 +218,7 @@ def test_lines_that_are_no_records_leave_a_partial_recording(tmp_path, capsys):
 
 def test_a_callback_running_on_two_threads_at_once_gives_two_jobs_in_start_order():
     """A callback of a reentrant group: its jobs on two threads overlap; each end closes its thread's job."""
-    from verify.trace.lttng import Reader
+    from verify.trace.lttng_events import Reader
 
     reader = Reader()
     p = reader.process(7)

@@ -13,7 +13,7 @@ import pytest
 import verify
 from benchmarks import lttnglive
 from verify.cli import main
-from verify.diagnostics import DiagnosticSink
+from verify.core.diagnostics import DiagnosticSink
 from verify.trace.run import read_traces, trace_system
 
 from .conftest import in_ci
@@ -87,13 +87,13 @@ def test_burned_times_calibrate_to_those_times(program, tmp_path, capsys):
 
 
 def test_one_overrun_job_gives_exactly_one_located_error(program, tmp_path, capsys):
-    trace = _record(program, tmp_path, [2000] * 5 + [6000] + [2000] * 5)
+    trace = _record(program, tmp_path, [1500] * 5 + [8000] + [1500] * 5)  # (2.5 ms below the wcet: room)
     model = tmp_path / "m.vfy"
     model.write_text(MODEL, encoding="utf-8")
     assert main(["trace", str(model), str(trace)]) == 1
     err = capsys.readouterr().err
     assert err.count("error[") == 1 and "error[E801]" in err and f"{model}:6:10" in err
-    assert "1 of 11 jobs above the wcet: job 6: 6." in err
+    assert "1 of 11 jobs above the wcet: job 6: 8." in err
 
 
 def test_the_trace_pairs_both_callbacks_and_measures_the_chain(program, tmp_path):

@@ -18,7 +18,7 @@ from .common import EXIT_INVALID, exists, fail, load_configured, show_diagnostic
 
 if TYPE_CHECKING:
     from .. import api
-    from ..model import SystemModel
+    from ..model.system import SystemModel
 
 HELP = "one self-contained HTML page: diagram, outline, chains with margins, counterexamples"
 RESULT = None
@@ -64,7 +64,7 @@ def run(args: argparse.Namespace) -> int:
 
 def _measured(args: argparse.Namespace, loaded: tuple[api.LoadResult, SystemModel]) -> str | int:
     """The section of the traces' measurements, or EXIT_INVALID after showing why they cannot be read."""
-    from ..diagnostics import DiagnosticSink
+    from ..core.diagnostics import DiagnosticSink
     from ..trace.html import section
     from ..trace.run import read_traces, trace_system
 

@@ -25,7 +25,7 @@ from .common import (EXIT_INVALID, EXIT_OK, EXIT_VIOLATED, fail, load_configured
 
 if TYPE_CHECKING:
     from .. import api
-    from ..model import SystemModel
+    from ..model.system import SystemModel
     from ..trace.run import TraceResult
 
 HELP = "measurements of the robot (LTTng traces, job records, bags) against the model; --calibrate writes them in"
@@ -61,7 +61,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..diagnostics import DiagnosticSink
+    from ..core.diagnostics import DiagnosticSink
     from ..trace.run import read_traces, trace_system
 
     if (args.output or args.diff or args.in_place or args.margin is not None) and not args.calibrate:
@@ -88,7 +88,7 @@ def _calibrate(args: argparse.Namespace, loaded: api.LoadResult, system: SystemM
     from .. import api
     from ..synth.writeback import unified_diff
     from ..trace.calibrate import DEFAULT_MARGIN, calibrate
-    from ..units import fmt_time
+    from ..model.units import fmt_time
 
     root = loaded.project.root_module
     assert root is not None, "a loaded model has its root module"

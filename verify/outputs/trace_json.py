@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 
-from ..render import diagnostics_json
+from .rendering import diagnostics_json
 from . import Output, Report
 from .diagnostics_json import render as diagnostics
 

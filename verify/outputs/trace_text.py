@@ -2,7 +2,7 @@
 (E801–E806) on standard error."""
 from __future__ import annotations
 
-from ..sanitize import shown_lines
+from ..core.sanitize import shown_lines
 from . import Output, Report
 from .diagnostics_text import render as diagnostics
 

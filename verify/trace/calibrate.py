@@ -13,9 +13,9 @@ import math
 from dataclasses import dataclass
 from fractions import Fraction
 
-from .. import syntax as s
-from ..model import SystemModel
-from ..source import SourceFile
+from ..model import syntax as s
+from ..model.system import SystemModel
+from ..core.source import SourceFile
 from ..synth.writeback import Edit, apply_edits
 from .metrics import Measurements
 

@@ -17,15 +17,15 @@ from __future__ import annotations
 from dataclasses import dataclass
 from fractions import Fraction
 
-from .. import syntax as s
-from ..diagnostics import DiagnosticSink, Label, Severity
+from ..model import syntax as s
+from ..core.diagnostics import DiagnosticSink, Label, Severity
 from ..interop.caret.to_vfy import language_name
-from ..loader import Project
-from ..activations import Periodic
-from ..model import ChainModel, SystemModel
-from ..source import NO_SPAN, Span
+from ..frontend.loader import Project
+from ..model.activations import Periodic
+from ..model.system import ChainModel, SystemModel
+from ..core.source import NO_SPAN, Span
 from ..timing import AnalysisResult
-from ..units import fmt_time
+from ..model.units import fmt_time
 from .match import Matching
 from .metrics import Distribution, Measurements, TaskMeasure
 from .recording import Recording

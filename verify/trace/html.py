@@ -7,7 +7,7 @@ from __future__ import annotations
 import html
 from fractions import Fraction
 
-from ..units import fmt_time
+from ..model.units import fmt_time
 from .metrics import Distribution
 from .run import TraceResult
 

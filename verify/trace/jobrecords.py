@@ -12,7 +12,7 @@ from __future__ import annotations
 import json
 import os
 
-from ..fileaccess import open_regular
+from ..core.fileaccess import open_regular
 from .recording import Callback, Jobs, Recording
 
 FIELDS = ("node", "task", "release", "start", "finish")

@@ -15,7 +15,7 @@ import os
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from .lttng import USED, Reader
+from .lttng_events import USED, Reader
 
 
 class Failed(Exception):
@@ -95,7 +95,7 @@ class _Classes:
 
 def run(traces: Sequence[str], reader: Reader) -> None:
     """Feed every event of ``traces``, in time order, to ``reader`` (Failed when the graph stops early)."""
-    from .lttng import bindings
+    from .lttng_events import bindings
 
     bt2 = bindings()
     nb = importlib.import_module("bt2._native_bt")

@@ -19,8 +19,8 @@ from fractions import Fraction
 
 from ..interop.caret.read import IGNORED_TOPICS
 from ..interop.caret.to_vfy import language_name
-from ..activations import DataTriggered, Periodic
-from ..model import SystemModel, TaskModel
+from ..model.activations import DataTriggered, Periodic
+from ..model.system import SystemModel, TaskModel
 from .recording import Callback, Recording
 
 

@@ -20,8 +20,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from fractions import Fraction
 
-from ..activations import Periodic
-from ..model import ChainModel, SystemModel
+from ..model.activations import Periodic
+from ..model.system import ChainModel, SystemModel
 from .match import Matching
 from .recording import Jobs, Recording
 

@@ -38,7 +38,7 @@ class Callback:
 def _period(ns: int | None) -> str:
     from fractions import Fraction
 
-    from ..units import fmt_time
+    from ..model.units import fmt_time
 
     return "period unknown" if ns is None else "period " + fmt_time(Fraction(ns, 10**9))
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 from fractions import Fraction
 from typing import Any
 
-from ..units import fmt_time
+from ..model.units import fmt_time
 from .metrics import Distribution
 from .run import TraceResult
 

@@ -6,10 +6,10 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from fractions import Fraction
 
-from ..diagnostics import Diagnostic, DiagnosticSink
-from ..loader import Project
-from ..model import SystemModel
-from ..source import Span
+from ..core.diagnostics import Diagnostic, DiagnosticSink
+from ..frontend.loader import Project
+from ..model.system import SystemModel
+from ..core.source import Span
 from ..timing import AnalysisResult, analyze
 from .findings import PERIOD_TOLERANCE, findings
 from .match import Matching, match
@@ -30,7 +30,7 @@ class TraceResult:
 def read_traces(paths: Sequence[str], sink: DiagnosticSink) -> Recording | None:
     """The recording of ``paths``: LTTng trace directories, job-record files (``.jsonl``), or bags (ROS 1
     ``.bag`` files, ROS 2 bag directories); None after E806 when they cannot be read."""
-    from ..fileaccess import Refused
+    from ..core.fileaccess import Refused
     from . import bags, jobrecords, lttng
 
     given = tuple(paths)

@@ -1,0 +1,228 @@
+"""The events an LTTng trace of ros2_tracing or CARET holds, and the reader's state as it sees them
+(specs/trace.md §1.1): which events are read with which fields (``USED``), babeltrace2's bindings
+(``bindings()``), and ``Reader``, which keeps the registrations and three numbers per job. The reading
+itself, in a child process over a babeltrace2 graph, is ``verify.trace.lttng.read``.
+"""
+from __future__ import annotations
+
+import functools
+import importlib.util
+import os
+import subprocess
+import sys
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from types import ModuleType
+
+from .recording import Callback, Jobs, Recording
+
+#: the events read, with the fields each handler takes (ros2_tracing's names; CARET records the same)
+USED: dict[str, tuple[str, ...]] = {
+    "ros2:rcl_node_init": ("node_handle", "node_name", "namespace"),
+    "ros2:rcl_timer_init": ("timer_handle", "period"),
+    "ros2:rclcpp_timer_callback_added": ("timer_handle", "callback"),
+    "ros2:rclcpp_timer_link_node": ("timer_handle", "node_handle"),
+    "ros2:rcl_subscription_init": ("subscription_handle", "node_handle", "topic_name"),
+    "ros2:rclcpp_subscription_init": ("subscription_handle", "subscription"),
+    "ros2:rclcpp_subscription_callback_added": ("subscription", "callback"),
+    "ros2:rclcpp_callback_register": ("callback", "symbol"),
+    "ros2:callback_start": ("callback",),
+    "ros2:callback_end": ("callback",),
+    "ros2:rcl_publish": ("publisher_handle",),
+}
+#: where Debian installs the bindings for the system interpreter
+SYSTEM_PYTHON = "/usr/bin/python3"
+
+
+class Unavailable(Exception):
+    """The bindings cannot be loaded: the message says what to install."""
+
+
+@functools.lru_cache(maxsize=1)
+def bindings() -> ModuleType:
+    """babeltrace2's ``bt2`` module (Unavailable when it is not installed for this Python version)."""
+    try:
+        return importlib.import_module("bt2")
+    except ImportError:
+        pass
+    where = _system_bt2()
+    if where is None:
+        raise Unavailable("babeltrace2's Python bindings are not installed (Debian: `apt-get install python3-bt2`, "
+                          "or `scripts/install-tools`)")
+    spec = importlib.util.spec_from_file_location("bt2", os.path.join(where, "__init__.py"),
+                                                  submodule_search_locations=[where])
+    if spec is None or spec.loader is None:
+        raise Unavailable(f"babeltrace2's Python bindings in {where} cannot be loaded")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules["bt2"] = module
+    try:
+        spec.loader.exec_module(module)
+    except Exception as err:  # (a native module that does not load: any error of the import)
+        del sys.modules["bt2"]
+        raise Unavailable(f"babeltrace2's Python bindings in {where} do not load here: {err}") from None
+    return module
+
+
+def _system_bt2() -> str | None:
+    """The ``bt2`` package of the system interpreter, if that is this Python's version."""
+    if not os.path.exists(SYSTEM_PYTHON):
+        return None
+    probe = ("import sys, os, bt2; print('%d.%d' % sys.version_info[:2]); "
+             "print(os.path.dirname(bt2.__file__))")
+    try:
+        done = subprocess.run([SYSTEM_PYTHON, "-c", probe], capture_output=True, text=True, timeout=30, check=False)
+    except (OSError, subprocess.SubprocessError):
+        return None
+    lines = done.stdout.split()
+    if done.returncode != 0 or len(lines) != 2 or lines[0] != "{}.{}".format(*sys.version_info[:2]):
+        return None
+    return lines[1]
+
+
+# ------------------------------------------------------------------ the reader
+
+
+@dataclass
+class _Process:
+    """What one process registered, by handle (handles are addresses: unique within a process)."""
+
+    nodes: dict[int, str] = field(default_factory=dict)  # node handle -> "/ns/name"
+    timers: dict[int, int] = field(default_factory=dict)  # timer handle -> period (ns)
+    timer_nodes: dict[int, int] = field(default_factory=dict)  # timer handle -> node handle
+    timer_callbacks: dict[int, int] = field(default_factory=dict)  # callback -> timer handle
+    subscriptions: dict[int, tuple[int, str]] = field(default_factory=dict)  # rcl handle -> (node, topic)
+    rclcpp_subscriptions: dict[int, int] = field(default_factory=dict)  # rclcpp subscription -> rcl handle
+    subscription_callbacks: dict[int, int] = field(default_factory=dict)  # callback -> rclcpp subscription
+    symbols: dict[int, str] = field(default_factory=dict)  # callback -> symbol
+    registered: list[int] = field(default_factory=list)  # callbacks, in the order they were added
+    open: dict[tuple[int, int], tuple[int, int]] = field(default_factory=dict)  # (callback, thread) -> (start,
+    # last publish): a callback of a reentrant group may run on two threads at once
+    running: dict[int, int] = field(default_factory=dict)  # thread -> callback running on it
+    jobs: dict[int, Jobs] = field(default_factory=dict)  # callback -> its jobs
+
+
+class Reader:
+    def __init__(self) -> None:
+        self.processes: dict[int, _Process] = {}
+        self.events = 0
+        self.ignored: dict[str, int] = {}
+        self.handlers: dict[str, Callable[..., None]] = {name: getattr(self, "on_" + name.split(":", 1)[1])
+                                                         for name in USED}
+
+    def process(self, pid: int) -> _Process:
+        found = self.processes.get(pid)
+        if found is None:
+            found = self.processes[pid] = _Process()
+        return found
+
+    def ignore(self, name: str) -> None:
+        key = name if name.startswith("ros2:") else "(events of other providers)"
+        self.ignored[key] = self.ignored.get(key, 0) + 1
+
+    # each handler: (process, time, thread, the event's fields in the order USED names them)
+
+    def on_rcl_node_init(self, p: _Process, at: int, tid: int, node: int, name: str, ns: str) -> None:
+        p.nodes[node] = (ns.rstrip("/") + "/" + name) if ns else "/" + name
+
+    def on_rcl_timer_init(self, p: _Process, at: int, tid: int, timer: int, period: int) -> None:
+        p.timers[timer] = period
+
+    def on_rclcpp_timer_callback_added(self, p: _Process, at: int, tid: int, timer: int, callback: int) -> None:
+        p.timer_callbacks[callback] = timer
+        p.registered.append(callback)
+
+    def on_rclcpp_timer_link_node(self, p: _Process, at: int, tid: int, timer: int, node: int) -> None:
+        p.timer_nodes[timer] = node
+
+    def on_rcl_subscription_init(self, p: _Process, at: int, tid: int, handle: int, node: int, topic: str) -> None:
+        p.subscriptions[handle] = (node, topic)
+
+    def on_rclcpp_subscription_init(self, p: _Process, at: int, tid: int, handle: int, subscription: int) -> None:
+        p.rclcpp_subscriptions[subscription] = handle
+
+    def on_rclcpp_subscription_callback_added(self, p: _Process, at: int, tid: int, subscription: int,
+                                              callback: int) -> None:
+        p.subscription_callbacks[callback] = subscription
+        p.registered.append(callback)
+
+    def on_rclcpp_callback_register(self, p: _Process, at: int, tid: int, callback: int, symbol: str) -> None:
+        p.symbols[callback] = symbol
+
+    def on_callback_start(self, p: _Process, at: int, tid: int, callback: int) -> None:
+        p.open[(callback, tid)] = (at, at)
+        p.running[tid] = callback
+
+    def on_callback_end(self, p: _Process, at: int, tid: int, callback: int) -> None:
+        started = p.open.pop((callback, tid), None)
+        p.running.pop(tid, None)
+        if started is None:
+            return  # (its start was before the trace began)
+        jobs = p.jobs.get(callback)
+        if jobs is None:
+            jobs = p.jobs[callback] = Jobs()
+        start, wrote = started
+        jobs.add(start, at, wrote if wrote > start else at)
+
+    def on_rcl_publish(self, p: _Process, at: int, tid: int, publisher: int) -> None:
+        callback = p.running.get(tid)
+        if callback is None:
+            return
+        started = p.open.get((callback, tid))
+        if started is not None:
+            p.open[(callback, tid)] = (started[0], at)
+
+    # ------------------------------------------------------------ the result
+
+    def recording(self, paths: tuple[str, ...]) -> Recording:
+        out = Recording(paths, "lttng", events=self.events)
+        out.ignored.update(self.ignored)
+        rank = 0
+        for pid in sorted(self.processes):
+            p = self.processes[pid]
+            alike: dict[tuple[object, ...], int] = {}
+            for callback in p.registered:
+                found = _identify(p, callback, pid)
+                if found is None:
+                    continue
+                same = (found.node, found.kind, found.period_ns, found.topic, found.symbol)
+                order = alike.get(same, 0)
+                alike[same] = order + 1
+                key = found.key
+                out.callbacks[key] = Callback(key, found.node, found.kind, found.period_ns, found.topic, found.symbol,
+                                              order, registered=rank)
+                rank += 1
+                out.jobs[key] = _in_start_order(p.jobs.get(callback) or Jobs())
+            unfinished = sum(1 for c, _ in p.open
+                             if c in p.jobs or c in p.timer_callbacks or c in p.subscription_callbacks)
+            if unfinished:
+                out.partial.append(f"{unfinished} job(s) of process {pid} started but did not end before the trace did "
+                                   "(left out)")
+        return out
+
+
+def _in_start_order(jobs: Jobs) -> Jobs:
+    """The jobs in the order they started (they are recorded as they end: a callback running on two
+    threads at once ends out of order)."""
+    starts = jobs.starts
+    if all(a <= b for a, b in zip(starts, starts[1:], strict=False)):
+        return jobs
+    order = sorted(range(len(jobs)), key=starts.__getitem__)
+    out = Jobs()
+    for k in order:
+        out.add(jobs.starts[k], jobs.ends[k], jobs.writes[k])
+    return out
+
+
+def _identify(p: _Process, callback: int, pid: int) -> Callback | None:
+    """A registered callback's identity (None: one of neither kind)."""
+    key = f"{pid}:{callback:#x}"
+    symbol = p.symbols.get(callback, "")
+    if callback in p.timer_callbacks:
+        timer = p.timer_callbacks[callback]
+        node = p.nodes.get(p.timer_nodes.get(timer, -1))
+        return Callback(key, node, "timer", p.timers.get(timer), None, symbol)
+    if callback in p.subscription_callbacks:
+        handle = p.rclcpp_subscriptions.get(p.subscription_callbacks[callback], -1)
+        node_handle, topic = p.subscriptions.get(handle, (-1, None))
+        return Callback(key, p.nodes.get(node_handle), "subscription", None, topic, symbol)
+    return None
