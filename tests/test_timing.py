@@ -10,9 +10,10 @@ from fractions import Fraction as F
 import jsonschema
 import pytest
 
+from verify.frontend.build import hole_of
 from verify.model import syntax as s
 from verify.model.system import (
-    ChainModel, CompoundModel, CoreModel, DataTriggered, Hole, HopModel, LinkModel, Periodic, ReadModel,
+    ChainModel, CompoundModel, CoreModel, DataTriggered, HopModel, LinkModel, Periodic, ReadModel,
     SporadicSource, SystemModel, TaskModel
 )
 from verify.prove.sim import KINDS, Scenario, chain_latencies, random_scenario, simulate
@@ -421,7 +422,7 @@ def test_analyze_never_raises_on_odd_systems():
     tasks = [task("a.A", timer(10), wcet=20 * MS, prio=3, produces=["o"]),
              task("b.B", trigger("x", members=("x", "y"), mode="or"), prio=2, reads=["x", "y"], produces=["o"]),
              task("c.C", trigger("z"), prio=1, reads=["z"]),  # unconnected trigger: never activated
-             task("d.D", Hole.of(s.UnknownActivation()), prio=1, core="c1")]
+             task("d.D", hole_of(s.UnknownActivation()), prio=1, core="c1")]
     links = [link("a.o", "b.x", tasks), link("b.o", "b.y", tasks)]  # b triggers itself through an OR
     result = analyze(system(tasks, links, [chain("loop", ["a.A", "b.B"], links, reaction_time=MS)]))
     assert result.task("b.B").rate is None and result.task("b.B").activation.in_cycle

@@ -5,18 +5,20 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from fractions import Fraction
-from typing import Literal, cast
+from typing import Literal, TypedDict, cast
 
 from ..core.construct import direct_constructor
 from ..core.ids import PortId, TaskId
+from ..core.source import Span
 from ..model import syntax as s
-from ..model.activations import DataTriggered, Hole, Periodic, SporadicSource
+from ..model.activations import DataTriggered, Hole, HoleWhat, Periodic, SporadicSource
 from ..model.system import (
     ActivationModel, ChainModel, ComponentModel, CompoundDecl, CompoundModel, CoreModel, ExecutorKind, ExecutorModel,
     GroupKind, GroupModel, HopModel, InstanceModel, LinkModel, MessageModel, PortDecl, PortModel, ReadModel,
     SystemModel, TaskDecl, TaskModel,
 )
 from ..model.units import quantity_hertz, quantity_seconds
+from .fmt import format_activation, format_number, format_quantity
 from .resolve import SystemScope, ros_message
 
 #: a 10,000-task system has as many of these (``verify.core.construct``)
@@ -46,17 +48,17 @@ def activation_model(act: s.Activation, component: s.Component) -> ActivationMod
     """The semantic activation of a (validated) binding of a task of ``component``."""
     if isinstance(act, s.Timer):
         if isinstance(act.period, s.PeriodHole):
-            return Hole.of(act)
+            return hole_of(act)
         return _new_periodic(quantity_seconds(act.period), _seconds(act.phase), act.span)
     if isinstance(act, s.Sporadic):
         a, b = quantity_seconds(act.low), quantity_seconds(act.high)
         return SporadicSource(min(a, b), max(a, b), act.span)
     if isinstance(act, s.Trigger):
         if isinstance(act.prescaler, s.PrescalerHole):
-            return Hole.of(act)
+            return hole_of(act)
         mode, members = _trigger_members(component, act.port.text)
         return DataTriggered(act.port.text, members, mode, int(act.prescaler.value), act.span)
-    return Hole.of(act)
+    return hole_of(act)
 
 
 def _trigger_members(component: s.Component, port: str) -> tuple[Literal["single", "and", "or"], tuple[str, ...]]:
@@ -287,3 +289,53 @@ def _chain_model(chain: s.Chain, model: SystemModel, scope: SystemScope) -> Chai
     return ChainModel(chain.name.text, tuple(tasks), tuple(hops), bounds.get("reaction_time"),
                       bounds.get("data_age"), bounds.get("jitter"), chain.span,
                       tuple((sp.kind, sp.span) for sp in chain.specs))
+
+
+def hole_of(node: s.Activation) -> Hole:
+    """The hole that the activation ``node`` (with a ``?``) leaves open."""
+    return Hole(**_hole_fields(node))
+
+
+class _HoleFields(TypedDict, total=False):
+    """The fields of a ``Hole`` read from its syntax node."""
+
+    what: HoleWhat
+    low: Fraction
+    high: Fraction
+    step: Fraction | None
+    phase: Fraction | None
+    port: str
+    text: str
+    range_text: str
+    span: Span
+    range_span: Span
+
+
+def _hole_fields(node: s.Activation) -> _HoleFields:
+    text = format_activation(node)
+    if isinstance(node, s.Timer) and isinstance(node.period, s.PeriodHole):
+        h = node.period
+        bounds: _HoleFields = {}
+        range_text = ""
+        if h.low is not None and h.high is not None:
+            bounds = {"low": h.low.seconds(), "high": h.high.seconds(),
+                      "step": h.step.seconds() if h.step is not None else None}
+            range_text = f"{format_quantity(h.low)} .. {format_quantity(h.high)}" + (
+                f" step {format_quantity(h.step)}" if h.step is not None else "")
+        phase = node.phase.seconds() if node.phase is not None else None
+        fields: _HoleFields = {"what": "period", "phase": phase, "text": text,
+                               "range_text": range_text, "span": node.span, "range_span": h.span}
+        fields.update(bounds)
+        return fields
+    if isinstance(node, s.Trigger) and isinstance(node.prescaler, s.PrescalerHole):
+        ph = node.prescaler
+        bounds = {}
+        range_text = ""
+        if ph.low is not None and ph.high is not None:
+            bounds = {"low": Fraction(ph.low.value), "high": Fraction(ph.high.value)}
+            range_text = f"{format_number(ph.low.value)} .. {format_number(ph.high.value)}"
+        fields = {"what": "prescaler", "port": node.port.text, "text": text, "range_text": range_text,
+                  "span": node.span, "range_span": ph.span}
+        fields.update(bounds)
+        return fields
+    return {"what": "kind", "text": text, "span": node.span, "range_span": node.span}
