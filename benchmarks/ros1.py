@@ -130,7 +130,7 @@ def register(stage: Callable[..., Callable], error: type[Exception], unavailable
     @stage("ros1-monitor", "the generated ROS 1 nodes' monitors: their work per chain hop and end (C++), against "
            "the middleware's median per-message latency in a live pipeline with and without monitors (the size "
            "is ignored)", sizes=(1,), quick_sizes=(1,), generator=pipeline_text, setup=setup,
-           params={"seconds": 8.0}, quick_params={"seconds": 2.0})
+           params={"seconds": 8.0}, quick_params={"seconds": 4.0})
     def ros1_monitor(inst, seconds: float) -> dict:
         try:
             micro = json.loads(subprocess.run([str(built["micro"])], capture_output=True, text=True, check=True,

@@ -78,6 +78,9 @@ def _models(texts: list[str]) -> list[object]:
 #: scenarios of prove's falsifying search per system (``verify.prove.exact.search``), and for the Autoware example
 SEARCH_BUDGET = 200
 AUTOWARE_SEARCH_BUDGET = 1000
+#: both of them with ``--quick`` (parameters ``budget`` and ``autoware_budget``): the smoke test checks that
+#: every part of the stage runs and no run is above its bound, not how close the searches come
+QUICK_SEARCH_BUDGET = 20
 
 
 class AboveBound(AssertionError):
@@ -195,18 +198,20 @@ def register(stage: Callable[..., Callable], error: type[Exception], unavailable
     @stage("tightness", "analysis against simulation on drawn systems of every shape (the property tests' "
            "generator, derandomized) and of the AND-join shape: per metric the share of chains bounded, mean and "
            "minimum of simulated worst / bound, and the share of systems with E312 (the size is the number of "
-           "systems of each kind)", sizes=(60,), quick_sizes=(4,), generator=generated)
-    def tightness(inst) -> dict:
+           "systems of each kind)", sizes=(60,), quick_sizes=(4,), generator=generated,
+           params={"budget": SEARCH_BUDGET, "autoware_budget": AUTOWARE_SEARCH_BUDGET},
+           quick_params={"budget": QUICK_SEARCH_BUDGET, "autoware_budget": QUICK_SEARCH_BUDGET})
+    def tightness(inst, budget: int, autoware_budget: int) -> dict:
         count = inst.n_tasks
         import verify
 
         try:
             drawn = _random_systems(count)
-            random_result = measure(_models(drawn))
-            own_result = measure(_models(_without_user_bounds(drawn)))
-            and_result = measure(_models(_and_systems(count)))
+            random_result = measure(_models(drawn), budget=budget)
+            own_result = measure(_models(_without_user_bounds(drawn)), budget=budget)
+            and_result = measure(_models(_and_systems(count)), budget=budget)
             autoware = verify.load(str(AUTOWARE)).system()
-            autoware_result = measure([autoware], runs=max(4, count // 2), budget=AUTOWARE_SEARCH_BUDGET)
+            autoware_result = measure([autoware], runs=max(4, count // 2), budget=autoware_budget)
         except AboveBound as err:  # a soundness bug: an error row, never a ratio above 1
             raise error(f"a run above its analytic bound: {err}") from err
         del autoware_result["systems"]

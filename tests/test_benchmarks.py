@@ -1,7 +1,8 @@
 """Smoke tests of the benchmark suite: the generator's systems load cleanly, are deterministic and
 follow the WATERS 2015 statistics; the infeasible option is infeasible; the chain generator for the
-exact search gives what ``prove-exact`` needs; the runner's quick mode runs every stage, per-stage
-defaults and overrides hold, and a failing stage becomes an error row with its time."""
+exact search gives what ``prove-exact`` needs; the quick mode's smoke tests (tests/test_benchmarks_quick*.py)
+run every stage, per-stage defaults and overrides hold, and a failing stage becomes an error row with its
+time."""
 from __future__ import annotations
 
 import json
@@ -16,6 +17,7 @@ import verify
 from benchmarks import run
 from benchmarks.generate import (PERIOD_SHARES, draw_chain, draw_system, generate_chain_system, generate_system,
                                  main as generate_main, render)
+from tests.benchmark_quick import GROUPS
 from verify.model.system import DataTriggered, Periodic
 
 
@@ -170,50 +172,12 @@ def test_generate_cli_refuses_to_overwrite(tmp_path, capsys):
     assert out.read_text(encoding="utf-8") == generate_system(12, 3, hole_share=Fraction(1, 2))
 
 
-@pytest.mark.slow
-def test_runner_quick_mode_writes_json(tmp_path, capsys):
-    out = tmp_path / "out" / "results.json"
-    assert run.main(["--quick", "--out", str(out)]) == 0  # 0: no stage failed
-    doc = json.loads(out.read_text(encoding="utf-8"))
-    assert doc["schema"] == run.SCHEMA
-    results = doc["results"]
-    assert not [r for r in results if "error" in r or "skipped" in r]
-    assert {r["stage"] for r in results} == set(run.STAGES)
-    by_stage = {name: [r for r in results if r["stage"] == name] for name in run.STAGES}
-    for name, rows in by_stage.items():
-        assert [r["tasks"] for r in rows] == list(run.QUICK[name]), name
-        for r in rows:
-            assert r["runs"] == 1 and len(r["seconds"]) == 1 and r["seconds"][0] > 0
-            assert r["peak_bytes"][0] > 0
-            # (the hostile-input stages' files are a flood of errors or one crowded core: no chain)
-            assert r["chains"] >= (0 if name in ("hostile-diagnostics", "hostile-recovery", "analyze-one-core") else 1)
-    assert [r["tasks"] for r in by_stage["parse+check"]] == list(run.QUICK_SIZES)
-    for r in by_stage["prove-bound"]:
-        assert r["result"]["proved"] == r["result"]["verdicts"] > 0
-        assert r["chains"] == max(1, r["tasks"] // 5)
-    (search,) = by_stage["prove-search"]
-    assert search["result"]["by search"] > 0
-    assert search["result"]["scenarios"] <= run.QUICK_PARAMS["prove-search"]["budget"]
-    (pipeline,) = by_stage["analyze-pipeline"]
-    assert pipeline["chains"] == 1 and pipeline["result"]["CPA rounds"] >= 1
-    (exact,) = by_stage["prove-exact"]
-    assert exact["chains"] == 1 and exact["result"]["jobs/hyperperiod"] > 0
-    assert all(" by exact-" in exact["result"][k] for k in ("reaction_time", "data_age"))
-    assert all(r["result"]["status"] == "sat" for r in by_stage["synth-feasibility"])
-    assert all(r["result"]["status"] == "sat" and r["result"]["optimal"] == "yes" for r in by_stage["synth-optimum"])
-    assert all(r["result"]["status"] == "unsat" and "core" in r["result"] for r in by_stage["unsat-core"])
-    for name in ("baseline-brute-force", "baseline-random-search"):
-        limit = run.QUICK_PARAMS[name]["limit"]
-        for r in by_stage[name]:
-            res = r["result"]
-            assert 1 <= res["evaluations"] <= limit and "combinations" in res["space"]
-            gave_up = res["evaluations"] == limit and res["status"] != "found"
-            assert res["status"] == (f"gave up after {limit} evaluations (limit)" if gave_up else res["status"])
-            assert res["status"] in ("found", "unsat (space exhausted)") or gave_up
-    assert all(r["result"]["status"] in ("sat", "unsat", "undecided") for r in by_stage["baseline-z3-direct"])
-    table = capsys.readouterr().out
-    assert "| parse+check | 10 |" in table and "| prove-exact | 4 | 1 |" in table
-    assert table.splitlines()[0].endswith("| result |")
+def test_quick_groups_hold_every_stage_once():
+    """The smoke tests of quick mode (tests/test_benchmarks_quick*.py) run every registered stage, each
+    in one group."""
+    named = [name for stages in GROUPS.values() for name in stages]
+    assert len(named) == len(set(named))
+    assert set(named) == set(run.STAGES)
 
 
 def test_stage_defaults_and_overrides(tmp_path):

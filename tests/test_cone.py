@@ -197,7 +197,7 @@ def test_a_counterexample_that_does_not_carry_over_is_decided_on_the_whole_syste
     sysm = system(ts, ls, [chain("ctl", ["c.H", "m.L"], ls, reaction_time=F(15, 1000))])
     calls = []
 
-    def mismatch(model, cexs):
+    def mismatch(model, cexs, *_):
         calls.append(model)
         raise SliceMismatch("test")
 

@@ -16,14 +16,15 @@ only look at the cone.
 """
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable
 from fractions import Fraction
 from typing import TYPE_CHECKING
 
 from ..model.system import SystemModel, TaskModel
-from .intsim import target_samples
+from .intsim import IntSimulator, samples_at
 from .scenario import ConcreteScenario, ResponseSample, Target
-from .sim import Sample
+from .sim import DEFAULT_MAX_EVENTS, Sample
 
 if TYPE_CHECKING:
     from .verdict import Counterexample
@@ -125,22 +126,50 @@ class SliceMismatch(AssertionError):
     """A run of a cone's subsystem whose sample the whole system does not reproduce (a bug)."""
 
 
-def check_all_carry_over(model: SystemModel, cexs: Iterable[Counterexample]) -> None:
+class Replays:
+    """Runs of the whole ``model`` by the integer simulator, one per scenario, each made as far as the
+    samples asked of it need and taken further when a later question needs more: a scenario that
+    several cones' counterexamples share (the first scenarios of their searches, run on the union of
+    the cones) is run on the whole system once, not once per cone."""
+
+    def __init__(self, model: SystemModel):
+        self.model = model
+        self.runs: dict[ConcreteScenario, IntSimulator] = {}
+
+    def samples(self, scenario: ConcreteScenario, targets: Iterable[Target],
+                end: Fraction | None) -> dict[Target, list[ResponseSample] | list[Sample]]:
+        """The samples of ``targets`` in the run of ``scenario`` up to its horizon, or with ``end`` up to
+        just after ``end`` (the run then holds every sample that ends by ``end``, as ``target_samples``
+        of the scenario cut there gives them)."""
+        sim = self.runs.get(scenario)
+        if sim is None:
+            sim = IntSimulator.of(self.model, scenario, DEFAULT_MAX_EVENTS, (scenario.horizon,))
+        horizon = sim.base.ticks(scenario.horizon)
+        until = horizon if end is None else min(horizon, math.floor(end / sim.unit) + 1)
+        self.runs.pop(scenario, None)  # (a run that fails on the way is not kept)
+        if until > sim.now:
+            sim.run_to(until)
+        self.runs[scenario] = sim
+        return samples_at(sim, self.model, targets, max(until, sim.now))
+
+
+def check_all_carry_over(model: SystemModel, cexs: Iterable[Counterexample], replays: Replays | None = None) -> None:
     """Replay counterexamples found on a subsystem on the whole ``model``: the same scenario (tasks
     outside the cone take the simulator's defaults) must hold the same sample(s). One run of the
     whole system per distinct scenario, up to the last sample it must hold, by the integer simulator
-    (``intsim.target_samples``: the samples the reference simulator's trace gives, at a fraction of
-    its cost on a large system); ``SliceMismatch`` if a sample is missing."""
+    (``intsim``: the samples the reference simulator's trace gives, at a fraction of its cost on a
+    large system), kept in ``replays`` (of ``model``) for the counterexamples of other cones;
+    ``SliceMismatch`` if a sample is missing."""
+    replays = replays if replays is not None else Replays(model)
     wanted: dict[ConcreteScenario, list[tuple[Target, object]]] = {}  # scenario -> [(target, sample)]
     for cex in cexs:
         for scenario, sample in ((cex.scenario, cex.sample), (cex.best_scenario, cex.best_sample)):
             if scenario is not None:
                 wanted.setdefault(scenario, []).append((cex.target, sample))
     for scenario, pairs in wanted.items():
-        ends = [e for _t, s in pairs if (e := _end(s)) is not None]
-        if len(ends) == len(pairs):  # the run up to the last sample's last event will do
-            scenario = scenario.with_horizon(min(scenario.horizon, max(ends) + Fraction(1, 10**12)))
-        samples = target_samples(model, scenario, sorted({t for t, _ in pairs}))
+        ends = [_end(sample) for _target, sample in pairs]
+        last = max(end for end in ends if end is not None) if None not in ends else None
+        samples = replays.samples(scenario, sorted({t for t, _ in pairs}), last)
         for target, sample in pairs:
             if sample not in samples[target]:
                 raise SliceMismatch(f"the run of the cone of {target} does not carry over to `{model.name}`")

@@ -25,7 +25,7 @@ from ..timing import TaskResponse, response_and_chain_bounds
 from ..model.units import fmt_time
 from . import bound as bound_mod
 from .bound import Obligation
-from .cone import SliceMismatch, check_all_carry_over, restrict, slices
+from .cone import Replays, SliceMismatch, check_all_carry_over, restrict, slices
 from .dominant import exact_system
 from .refine import refine, verdict as refined_verdict
 from .exact import (SEARCH_EVENTS, Budget, ExactResult, Extreme, Goal, approach, count_representatives,
@@ -156,11 +156,12 @@ def _decide(model: SystemModel, open_: list[tuple[int, Obligation]], budget: Bud
     over (a bug), its obligations are decided again on the whole system."""
     out: dict[int, Verdict] = {}
     pending: list[tuple[SystemModel, list[_Left]]] = []
+    replays = Replays(model)
     for sub, targets in slices(model, sorted({ob.target for _, ob in open_})):
         members = set(targets)
         items = [(i, ob) for i, ob in open_ if ob.target in members]
         decided, rest = _decide_exactly(sub, items, budget, rlimit, use_z3, jobs)
-        if sub is not model and not _carries_over(model, decided):
+        if sub is not model and not _carries_over(model, decided, replays=replays):
             decided, rest = _decide_exactly(model, items, budget, rlimit, use_z3, jobs)
             sub = model
         out.update(decided)
@@ -168,7 +169,7 @@ def _decide(model: SystemModel, open_: list[tuple[int, Obligation]], budget: Bud
             pending.append((sub, rest))
     if pending and analysis is not None:
         pending = _refined(model, pending, budget, jobs, analysis, out)
-    out.update(_search_all(model, pending, budget, jobs))
+    out.update(_search_all(model, pending, budget, jobs, replays))
     return out
 
 
@@ -205,14 +206,14 @@ class _Left:
 
 
 def _carries_over(model: SystemModel, decided: dict[int, Verdict],
-                  known: Mapping[ConcreteScenario, Measured] | None = None) -> bool:
+                  known: Mapping[ConcreteScenario, Measured] | None = None, replays: Replays | None = None) -> bool:
     """Every counterexample of ``decided`` (found on a subsystem) holds on the whole ``model``; one
     whose samples come from ``known`` runs (scenario -> ``Measured``, made on the whole ``model``
-    itself) needs no replay."""
+    itself) needs no replay, and the replays of ``model`` made for other cones are reused."""
     cexs = [v.counterexample for v in decided.values()
             if v.counterexample is not None and not _measured_on(v.counterexample, known or {})]
     try:
-        check_all_carry_over(model, cexs)
+        check_all_carry_over(model, cexs, replays)
     except SliceMismatch:
         return False
     return True
@@ -231,13 +232,15 @@ def _measured_on(cex: Counterexample, known: Mapping[ConcreteScenario, Measured]
 
 
 def _search_all(model: SystemModel, pending: list[tuple[SystemModel, list[_Left]]], budget: Budget,
-                jobs: int | None) -> dict[int, Verdict]:
+                jobs: int | None, replays: Replays | None = None) -> dict[int, Verdict]:
     """One falsifying search per cone, in batches of ``SEARCH_BATCH``: each search of a batch gets
     an equal share of the budget left with the cones from the batch on (what it does not use, because
     it refuted everything, goes to the cones after the batch). Budget left after the last batch goes
     to further rounds over the cones with undecided obligations, each search resuming from its best
-    runs with a new seed, until the budget is used or nothing is undecided."""
+    runs with a new seed, until the budget is used or nothing is undecided. The counterexamples found
+    on cones are replayed on the whole system in ``replays`` (a scenario once for all cones)."""
     out: dict[int, Verdict] = {}
+    replays = replays if replays is not None else Replays(model)
     horizons = [search_horizon(sub, max((r.ob.bound for r in rest if r.ob.bound is not None), default=None))
                 for sub, rest in pending]
     firsts, on_model = ((), False) if len(pending) < 2 else _shared_firsts(model, pending, max(horizons), budget,
@@ -248,7 +251,7 @@ def _search_all(model: SystemModel, pending: list[tuple[SystemModel, list[_Left]
     todo, round_ = list(range(len(cones))), 0
     while todo:
         before = budget.used
-        _search_round(model, cones, todo, round_, budget, jobs, known, out)
+        _search_round(model, cones, todo, round_, budget, jobs, known, out, replays)
         if budget.used == before or budget.left <= 0 or budget.expired():
             break
         todo = [k for k in todo if any(out[r.i].status == "undecided" for r in cones[k].items)]
@@ -269,23 +272,26 @@ class _Cone:
 
 
 def _search_round(model: SystemModel, cones: list[_Cone], todo: list[int], round_: int, budget: Budget,
-                  jobs: int | None, known: Mapping[ConcreteScenario, Measured], out: dict[int, Verdict]) -> None:
+                  jobs: int | None, known: Mapping[ConcreteScenario, Measured], out: dict[int, Verdict],
+                  replays: Replays) -> None:
     """One round of the searches of cones ``todo`` (their undecided obligations after round 0), in
-    batches: verdicts into ``out``, each cone's search kept for the next round."""
+    batches: verdicts into ``out``, each cone's search kept for the next round. The counterexamples of
+    a cone are replayed on the whole system here, in ``replays``, where those of other cones are."""
     for start in range(0, len(todo), SEARCH_BATCH):
         batch = todo[start:start + SEARCH_BATCH]
         parts = len(todo) - start
         shares = {k: budget.left // parts + (j < budget.left % parts) for j, k in enumerate(batch)}
-        size = sum((shares[k] + 1) * len(cones[k].sub.tasks) for k in batch)  # (+1: the carry-over replays)
+        size = sum((shares[k] + 1) * len(cones[k].sub.tasks) for k in batch)
         workers = resolve_workers(jobs) if size >= PARALLEL_TASK_SCENARIOS else 1
         items = {k: [r for r in cones[k].items if round_ == 0 or out[r.i].status == "undecided"] for k in batch}
 
-        work = partial(_search_batch_member, model, cones, batch, items, shares, budget, round_, known)
+        work = partial(_search_batch_member, cones, batch, items, shares, budget, round_)
         with closing(ordered_map(work, range(len(batch)), workers)) as runs:
-            for k, (verdicts, used, carried, found) in zip(batch, runs):  # (closing stops the workers)
+            for k, (verdicts, used, found) in zip(batch, runs):  # (closing stops the workers)
                 budget.spend(used)
                 cones[k].found = found
-                if not carried:  # a bug in the cone: search the whole system instead
+                if cones[k].sub is not model and not _carries_over(model, verdicts, known, replays):
+                    # a bug in the cone: search the whole system instead
                     cones[k].sub = model
                     found, used = _search_cone(model, items[k], budget.left // parts, budget.deadline,
                                                cones[k].horizon)
@@ -324,17 +330,15 @@ def _shared_firsts(model: SystemModel, pending: list[tuple[SystemModel, list[_Le
     return cast("tuple[Measured, ...]", runs), union is model  # (no run is None: checked above)
 
 
-def _search_batch_member(model: SystemModel, cones: list[_Cone], batch: list[int], items: dict[int, list[_Left]],
-                         shares: dict[int, int], budget: Budget, round_: int,
-                         known: Mapping[ConcreteScenario, Measured], j: int
-                         ) -> tuple[dict[int, Verdict], int, bool, SearchResult | None]:
-    """The search of cone ``batch[j]`` and the replay of its counterexamples on the whole system (both
-    in a worker when the batch is spread): (verdicts, scenarios used, carried over, search)."""
+def _search_batch_member(cones: list[_Cone], batch: list[int], items: dict[int, list[_Left]],
+                         shares: dict[int, int], budget: Budget, round_: int, j: int
+                         ) -> tuple[dict[int, Verdict], int, SearchResult | None]:
+    """The search of cone ``batch[j]`` (in a worker when the batch is spread): (verdicts, scenarios
+    used, search)."""
     cone = cones[batch[j]]
     found, used = _search_cone(cone.sub, items[batch[j]], shares[batch[j]], budget.deadline, cone.horizon, cone.given,
                                cone.found, round_)
-    verdicts = _search_verdicts(items[batch[j]], found, budget)
-    return verdicts, used, cone.sub is model or _carries_over(model, verdicts, known), found
+    return _search_verdicts(items[batch[j]], found, budget), used, found
 
 
 def _search_cone(model: SystemModel, items: list[_Left], share: int, deadline: float | None, horizon: Fraction,

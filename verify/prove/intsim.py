@@ -707,9 +707,18 @@ def target_samples(model: SystemModel, scenario: ConcreteScenario, targets: Iter
     path lists them (``scenario._chain_samples`` of the trace; for a task ``_response_samples`` with
     the jobs still open at the horizon, their value ``horizon − release``)."""
     sim = IntSimulator.of(model, scenario, max_events, (scenario.horizon,))
-    unit = sim.unit
     horizon = sim.base.ticks(scenario.horizon)
     sim.run_to(horizon)
+    return samples_at(sim, model, targets, horizon)
+
+
+def samples_at(sim: IntSimulator, model: SystemModel, targets: Iterable[Target],
+               horizon: int) -> dict[Target, list[ResponseSample] | list[Sample]]:
+    """``target_samples`` of the run of ``sim`` (of ``model``) so far, up to ``horizon`` ticks (where
+    it has run to): a job still open there has the value ``horizon − release``."""
+    from .scenario import ResponseSample
+
+    unit = sim.unit
     chain_samples = _chain_samples_of(sim, model)
     out: dict[Target, list[ResponseSample] | list[Sample]] = {}
     for t in targets:
