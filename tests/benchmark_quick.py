@@ -25,6 +25,7 @@ GROUPS: dict[str, tuple[str, ...]] = {
     "processes": ("startup-python", "startup-help", "startup-check", "startup-analyze", "startup-analyze-waters",
                   "lsp-keystroke", "ros1-monitor"),
     "tightness": ("tightness",),
+    "live": ("ros2-glue", "trace-read"),
 }
 
 #: the runner's options of a group beyond ``--quick``: the tightness stage's memory run (under
