@@ -1,7 +1,9 @@
 """Shared test fixtures."""
 from __future__ import annotations
 
+import fcntl
 import os
+import tempfile
 from pathlib import Path
 
 import pytest
@@ -31,6 +33,23 @@ def write(tmp_path):
 
 def in_ci() -> bool:
     return os.environ.get("CI", "").lower() in ("1", "true", "yes")
+
+
+#: held by a test module that runs real ROS 1, ROS 2 or LTTng processes and measures their timing, for the
+#: whole module: pytest-xdist's workers are separate processes, and the generated ROS 2 nodes' real-time
+#: threads (SCHED_FIFO 97-99) or a ROS 1 system running beside another live run would change what it measures
+LIVE_LOCK = Path(tempfile.gettempdir()) / "verify-live-tests.lock"
+
+
+@pytest.fixture(scope="module")
+def live_processes_alone():
+    """Runs the module's live processes with no other test module's beside them (a file lock)."""
+    with open(LIVE_LOCK, "a+b") as handle:
+        fcntl.flock(handle, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(handle, fcntl.LOCK_UN)
 
 
 #: where the tightness log is written (git-ignored); the terminal summary shows it too

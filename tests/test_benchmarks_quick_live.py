@@ -10,6 +10,7 @@ from tests.benchmark_quick import run_group
 
 
 @pytest.mark.slow
+@pytest.mark.usefixtures("live_processes_alone")
 def test_quick_mode_live_tool_stages(tmp_path, capsys):
     by_stage, table = run_group("live", tmp_path, capsys)
     for r in by_stage.get("trace-read", []):  # (unavailable without LTTng: a failure under CI, in run_group)

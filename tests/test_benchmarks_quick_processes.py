@@ -9,6 +9,7 @@ from tests.benchmark_quick import run_group
 
 
 @pytest.mark.slow
+@pytest.mark.usefixtures("live_processes_alone")
 def test_quick_mode_process_stages(tmp_path, capsys):
     by_stage, table = run_group("processes", tmp_path, capsys)
     assert all(r["result"]["exit"] == 0 for name in ("startup-python", "startup-help", "startup-check",

@@ -28,7 +28,7 @@ from verify.timing import analyze
 from . import rosrun
 from .conftest import EXAMPLES
 
-pytestmark = pytest.mark.slow
+pytestmark = [pytest.mark.slow, pytest.mark.usefixtures("live_processes_alone")]
 
 NAVIGATION = EXAMPLES / "navigation"
 MODEL = "navigation-ros.vfy"  # (its connections have the middleware's delay: TCPROS on loopback)
@@ -253,7 +253,10 @@ def test_verify_trace_reads_the_job_records_and_recomputes_the_monitors_chains(l
     for index, chain in enumerate(doc["chains"]):
         seen = chain_observations(model, jobs, index)["data_age"]
         assert chain["data_age"]["count"] == len(seen), chain["chain"]
-        assert Fraction(chain["data_age"]["max_s"]) == Fraction(max(seen), 10**9), chain["chain"]
+        # job records say when a writer's output left, not when it arrived: a reader job that starts within
+        # the connection delay is taken to hold the newer stamp (specs/trace.md §3), so the measured data
+        # age is at most the carried stamps' (equal when no job starts while a message is on its way)
+        assert Fraction(chain["data_age"]["max_s"]) <= Fraction(max(seen), 10**9), chain["chain"]
         assert Fraction(chain["data_age"]["min_s"]) == Fraction(min(seen), 10**9), chain["chain"]
 
 

@@ -31,7 +31,7 @@ from verify.timing import analyze
 from . import ros2run
 from .conftest import EXAMPLES
 
-pytestmark = pytest.mark.slow
+pytestmark = [pytest.mark.slow, pytest.mark.usefixtures("live_processes_alone")]
 
 NAVIGATION = EXAMPLES / "navigation"
 MODEL = "navigation-ros.vfy"
@@ -280,7 +280,9 @@ def test_a_too_tight_spec_changes_only_the_parameter_file_and_is_reported(live):
     assert monitor["bound_ns"] == 1_000_000 and monitor["violations"] == monitor["count"] > 0
     heard = [v for v in live["heard_tight"]["violations"] if (v["chain"], v["metric"]) == ("reactive", "reaction_time")]
     assert heard and all(v["value_ns"] > v["bound_ns"] == 1_000_000 for v in heard)
-    assert len(heard) == monitor["violations"]
+    # (a subscriber hears what was published while it was connected: not the last violations of a run that
+    # ends, nor, under load, every one of its first; never one the monitor did not count)
+    assert len(heard) <= monitor["violations"]
 
 
 # ------------------------------------------------------------------ executors, compounds, sporadic releases

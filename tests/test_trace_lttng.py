@@ -56,6 +56,8 @@ system S {
 #: program runs at a real-time priority where it may, so the machine's other work does not preempt it)
 SLACK_US = 1000
 
+pytestmark = pytest.mark.usefixtures("live_processes_alone")
+
 
 @pytest.fixture(scope="module")
 def program(tmp_path_factory):
@@ -87,13 +89,15 @@ def test_burned_times_calibrate_to_those_times(program, tmp_path, capsys):
 
 
 def test_one_overrun_job_gives_exactly_one_located_error(program, tmp_path, capsys):
-    trace = _record(program, tmp_path, [1500] * 5 + [8000] + [1500] * 5)  # (2.5 ms below the wcet: room)
+    # a 100 ms timer, a 20 ms wcet: the other jobs (1.5 ms) keep 18 ms of room for a stall of the machine
+    trace = lttnglive.record(program, ["100000", "1000", ",".join(map(str, [1500] * 5 + [40000] + [1500] * 5))],
+                             tmp_path / "trace", realtime=True)
     model = tmp_path / "m.vfy"
-    model.write_text(MODEL, encoding="utf-8")
+    model.write_text(MODEL.replace("wcet 4 ms", "wcet 20 ms").replace("timer 20 ms", "timer 100 ms"), encoding="utf-8")
     assert main(["trace", str(model), str(trace)]) == 1
     err = capsys.readouterr().err
     assert err.count("error[") == 1 and "error[E801]" in err and f"{model}:6:10" in err
-    assert "1 of 11 jobs above the wcet: job 6: 8." in err
+    assert "1 of 11 jobs above the wcet: job 6: 40." in err
 
 
 def test_the_trace_pairs_both_callbacks_and_measures_the_chain(program, tmp_path):
