@@ -52,9 +52,10 @@ system S {
   }
 }
 """
-#: how much longer than its burn a job may measure (the publish and end events after the spin; the
-#: program runs at a real-time priority where it may, so the machine's other work does not preempt it)
-SLACK_US = 1000
+#: how much longer than its burn a job may measure: the publish and end events after the spin. The program
+#: runs at a real-time priority where it may, so the machine's other work does not preempt it, but a
+#: virtual machine's CPU can still stall for a few ms (1.7 ms and more seen here)
+SLACK_US = 3000
 
 pytestmark = pytest.mark.usefixtures("live_processes_alone")
 
@@ -89,11 +90,12 @@ def test_burned_times_calibrate_to_those_times(program, tmp_path, capsys):
 
 
 def test_one_overrun_job_gives_exactly_one_located_error(program, tmp_path, capsys):
-    # a 100 ms timer, a 20 ms wcet: the other jobs (1.5 ms) keep 18 ms of room for a stall of the machine
+    # a 100 ms timer, 20 ms wcets: the other jobs (1.5 ms, the listener's 1 ms) keep 18 ms of room for a stall
     trace = lttnglive.record(program, ["100000", "1000", ",".join(map(str, [1500] * 5 + [40000] + [1500] * 5))],
                              tmp_path / "trace", realtime=True)
     model = tmp_path / "m.vfy"
-    model.write_text(MODEL.replace("wcet 4 ms", "wcet 20 ms").replace("timer 20 ms", "timer 100 ms"), encoding="utf-8")
+    model.write_text(MODEL.replace("wcet 4 ms", "wcet 20 ms").replace("wcet 2 ms", "wcet 20 ms")
+                     .replace("timer 20 ms", "timer 100 ms"), encoding="utf-8")
     assert main(["trace", str(model), str(trace)]) == 1
     err = capsys.readouterr().err
     assert err.count("error[") == 1 and "error[E801]" in err and f"{model}:6:10" in err
