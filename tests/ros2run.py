@@ -78,8 +78,9 @@ except OSError:
 stalls, due, n = [], time.time_ns(), 0
 while True:
     due += 1_000_000
-    if due > time.time_ns():
-        time.sleep((due - time.time_ns()) / 1e9 if due > time.time_ns() else 0)
+    left = due - time.time_ns()
+    if left > 0:
+        time.sleep(left / 1e9)
     woken = time.time_ns()
     if woken - due > 1_000_000:
         stalls.append([due, woken])

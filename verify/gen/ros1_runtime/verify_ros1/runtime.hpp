@@ -949,8 +949,8 @@ inline int Component::run() {
   }
   await_connections();
   const Nanos start = agree_on_start();
-  while (now_ns() < start && ros::ok() && !stop_requested()) {
-    ros::WallDuration(static_cast<double>(std::min<Nanos>(start - now_ns(), kSecond / 100)) / 1e9).sleep();
+  for (Nanos left = start - now_ns(); left > 0 && ros::ok() && !stop_requested(); left = start - now_ns()) {
+    ros::WallDuration(static_cast<double>(std::min<Nanos>(left, kSecond / 100)) / 1e9).sleep();
   }
   std::vector<std::thread> threads;
   for (auto& executor : executors_) {
