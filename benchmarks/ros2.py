@@ -80,7 +80,22 @@ system Pipeline {
 
 
 def python() -> str:
+    """The interpreter of the ROS 2 wheels' environment (``.ros2/``; ``VERIFY_ROS2_PYTHON`` names another)."""
     return os.environ.get("VERIFY_ROS2_PYTHON") or str(ROOT / ".ros2" / "bin" / "python")
+
+
+#: what the ROS 2 stages and live tests import: rclpy and the message packages they use
+PROBE = "import rclpy, std_msgs.msg, sensor_msgs.msg, geometry_msgs.msg, nav_msgs.msg"
+
+
+def missing() -> str | None:
+    """Why the ROS 2 wheels cannot be used here, or None when ``python()`` imports all of ``PROBE``."""
+    try:
+        ok = subprocess.run([python(), "-c", PROBE], capture_output=True, timeout=60).returncode == 0
+    except (OSError, subprocess.TimeoutExpired):
+        ok = False
+    return None if ok else f"ROS 2 wheels missing: {python()} cannot import rclpy and the messages " \
+                           "(scripts/install-tools installs them into .ros2/)"
 
 
 def pipeline_text(n_tasks: int, seed: int, **_: object) -> str:
@@ -105,13 +120,9 @@ def hops(jobs: list[dict]) -> list[int]:
 
 
 def register(stage: Callable[..., Callable], error: type[Exception], unavailable: dict[str, str]) -> None:
-    probe = "import rclpy, std_msgs.msg"
-    try:
-        ok = subprocess.run([python(), "-c", probe], capture_output=True, timeout=60).returncode == 0
-    except (OSError, subprocess.TimeoutExpired):
-        ok = False
-    if not ok:
-        unavailable["ros2-glue"] = f"ROS 2 wheels missing: {python()} (scripts/install-tools makes .ros2/)"
+    reason = missing()
+    if reason:
+        unavailable["ros2-glue"] = reason
         return
     project = OUT / "ros2-pipeline"
 

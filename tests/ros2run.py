@@ -11,26 +11,19 @@ from pathlib import Path
 
 import pytest
 
-from .conftest import ROOT, in_ci
+from benchmarks.ros2 import missing, python
+
+from .conftest import in_ci
 
 #: how long a run may take beyond its duration (start-up, discovery, the agreed start, shutdown; on a
 #: loaded machine importing rclpy in every process alone takes seconds)
 GRACE_S = 120
 
 
-def python() -> str:
-    return os.environ.get("VERIFY_ROS2_PYTHON") or str(ROOT / ".ros2" / "bin" / "python")
-
-
 def require_ros2() -> str:
     """The ROS 2 interpreter; skips (fails under CI) unless it imports rclpy and the messages."""
-    probe = "import rclpy, std_msgs.msg, sensor_msgs.msg, geometry_msgs.msg, nav_msgs.msg"
-    try:
-        ok = subprocess.run([python(), "-c", probe], capture_output=True, timeout=60).returncode == 0
-    except (OSError, subprocess.TimeoutExpired):
-        ok = False
-    if not ok:
-        message = f"ROS 2 wheels missing: {python()} cannot import rclpy (scripts/install-tools installs them)"
+    message = missing()
+    if message:
         if in_ci():
             pytest.fail(message)
         pytest.skip(message)

@@ -3,9 +3,9 @@ from __future__ import annotations
 
 import json
 
-from .rendering import diagnostics_json
 from ..synth.report import SCHEMA, to_json
 from . import Output, Report
+from .diagnostics_json import with_diagnostics
 
 
 def render(report: Report) -> Output:
@@ -16,5 +16,5 @@ def render(report: Report) -> Output:
     else:
         doc = (to_json(report.result, report.file) if report.result is not None
                else {"schema": SCHEMA, "file": report.file, "status": "invalid"})
-        doc["diagnostics"] = diagnostics_json(report.diagnostics)["diagnostics"]
+        return with_diagnostics(doc, report)
     return Output(json.dumps(doc, indent=2) + "\n")

@@ -2,11 +2,8 @@
 ``verify.diagnostics/1`` items."""
 from __future__ import annotations
 
-import json
-
-from .rendering import diagnostics_json
 from . import Output, Report
-from .diagnostics_json import render as diagnostics
+from .diagnostics_json import render as diagnostics, with_diagnostics
 
 
 def render(report: Report) -> Output:
@@ -14,6 +11,4 @@ def render(report: Report) -> Output:
         return diagnostics(report)
     from ..trace.report import to_json
 
-    doc = to_json(report.result)
-    doc["diagnostics"] = diagnostics_json(report.diagnostics)["diagnostics"]
-    return Output(json.dumps(doc, indent=2) + "\n")
+    return with_diagnostics(to_json(report.result), report)
