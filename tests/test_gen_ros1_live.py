@@ -242,8 +242,9 @@ def test_no_observed_latency_exceeds_the_analysis_bound(live):
 
 def test_verify_trace_reads_the_job_records_and_recomputes_the_monitors_chains(live, capsys):
     """`verify trace` on the run's recording (the /verify/jobs records among the recorder's lines): every
-    task paired with its node's records, its jobs counted as recorded, and each chain's data ages, from
-    the jobs alone, those the stamps the nodes carried give (specs/timing.md §4)."""
+    task paired with its node's records, its jobs counted as recorded, and each chain's data age,
+    reaction time and jitter, from what each job's record says it read (specs/trace.md §3), those the
+    stamps the nodes carried give, and what the monitors summed up: count, least and greatest, to the ns."""
     model, jobs = live["model"], rosrun.jobs(live["records"])
     code = main(["trace", str(live["model_dir"] / MODEL), str(live["base"] / "run.jsonl"), "--format", "json"])
     doc = json.loads(capsys.readouterr().out)
@@ -252,12 +253,14 @@ def test_verify_trace_reads_the_job_records_and_recomputes_the_monitors_chains(l
         assert task["jobs"] == len(_by_task(jobs, *_node(model, task["task"])))
     for index, chain in enumerate(doc["chains"]):
         seen = chain_observations(model, jobs, index)["data_age"]
-        assert chain["data_age"]["count"] == len(seen), chain["chain"]
-        # job records say when a writer's output left, not when it arrived: a reader job that starts within
-        # the connection delay is taken to hold the newer stamp (specs/trace.md §3), so the measured data
-        # age is at most the carried stamps' (equal when no job starts while a message is on its way)
-        assert Fraction(chain["data_age"]["max_s"]) <= Fraction(max(seen), 10**9), chain["chain"]
-        assert Fraction(chain["data_age"]["min_s"]) == Fraction(min(seen), 10**9), chain["chain"]
+        monitor = _monitor(live, index)
+        assert chain["data_age"]["count"] == len(seen) == monitor["data_age"]["count"], chain["chain"]
+        for metric in ("data_age", "reaction_time"):
+            measured = [Fraction(chain[metric][f"{q}_s"]) * 10**9 for q in ("min", "max")]
+            assert measured == [monitor[metric]["min_ns"], monitor[metric]["max_ns"]], (chain["chain"], metric)
+            assert chain[metric]["count"] == monitor[metric]["count"], (chain["chain"], metric)
+        assert [Fraction(chain["data_age"][f"{q}_s"]) * 10**9 for q in ("min", "max")] == [min(seen), max(seen)]
+        assert Fraction(chain["jitter_s"]) * 10**9 == monitor["jitter"]["value_ns"], chain["chain"]
 
 
 def test_the_report_shows_the_navigation_examples_measurements_against_its_bounds(live, tmp_path):

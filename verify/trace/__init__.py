@@ -3,7 +3,7 @@
 One module per source of measurements, each giving a :class:`recording.Recording` (the callbacks it
 saw, identified as CARET identifies them, and their jobs): ``lttng`` (LTTng/CTF traces as
 ros2_tracing and CARET record them, read with babeltrace2's Python bindings) and ``jobrecords`` (the
-job records of the generated nodes). ``match`` pairs recorded callbacks with the model's tasks,
+job records of the generated ROS 1 and ROS 2 nodes). ``match`` pairs recorded callbacks with the model's tasks,
 ``metrics`` measures tasks and chains, ``findings`` turns measurements above the model into located
 diagnostics, ``calibrate`` writes measured execution times into the model.
 """

@@ -1,27 +1,38 @@
-"""The job records of the generated nodes (specs/codegen.md §3, ``trace`` launch argument): one JSON
-object per job — ``node``, ``task``, ``seq``, ``release``, ``start``, ``finish`` in nanoseconds — one a
-line, as published on ``/verify/jobs`` (specs/trace.md §1.2). A line may also be a recorder's
-``{"topic": "/verify/jobs", "data": "<the record>"}``; lines of other topics are skipped. A line that is
-no record is counted and the recording labelled partial. Read as a stream, line by line.
+"""The job records of the generated nodes, one JSON object a line (specs/trace.md §1.2), in either of the
+generators' formats, told apart line by line:
 
-A second record format (the ROS 2 generator's, when it lands) is one more ``read_*`` here or one more
-module beside this one giving a ``Recording``.
+- the ROS 1 nodes' (specs/codegen.md §3, launch argument ``trace``), as published on ``/verify/jobs``:
+  ``node`` (``/SYSTEM/INSTANCE``), ``task`` (its name), ``seq``, ``release``, ``start``, ``finish`` in
+  nanoseconds, and ``reads``: per in-port read, the number of the writer's job it read (0: a value
+  without one). A line may also be a recorder's ``{"topic": "/verify/jobs", "data": "<the record>"}``;
+  lines of other topics are skipped;
+- the ROS 2 nodes' (specs/codegen.md §9.4, ``TRACE_DIR/UNIT.jsonl``): ``unit`` (the process), ``task``
+  (``INSTANCE.TASK``), ``seq``, ``release``, ``start``, ``finish``, and ``reads``: per in-port, null or
+  the writer's ``[process, task, job number, message index]``.
+
+``seq`` and ``reads`` are optional (records without them are measured by inference, metrics.py). A
+line that is no record is counted and the recording labelled partial. Read as a stream, line by line;
+what is kept is a few numbers a job (``Jobs``), not the records.
 """
 from __future__ import annotations
 
 import json
 import os
+from typing import Any
 
 from ..core.fileaccess import open_regular
 from .recording import Callback, Jobs, Recording
 
-FIELDS = ("node", "task", "release", "start", "finish")
 #: the suffix that names a job-records file on the command line
 SUFFIXES = (".jsonl", ".ndjson")
 
 
 class NotRecords(Exception):
     """The file holds no job record: the message says what it holds instead."""
+
+
+class BadRecord(ValueError):
+    """A line that is no job record."""
 
 
 def read(paths: tuple[str, ...]) -> Recording:
@@ -41,6 +52,20 @@ def read(paths: tuple[str, ...]) -> Recording:
     return out
 
 
+def files_in(directory: str) -> tuple[str, ...]:
+    """The job-record files directly in ``directory`` (the ROS 2 nodes' ``TRACE_DIR``), in name order;
+    none when it is an LTTng trace (it holds a CTF ``metadata`` file somewhere below)."""
+    names = sorted(os.listdir(directory))
+    found = tuple(os.path.join(directory, n) for n in names if n.endswith(SUFFIXES)
+                  and os.path.isfile(os.path.join(directory, n)))
+    if not found:
+        return ()
+    for _root, _dirs, files in os.walk(directory):
+        if "metadata" in files:
+            return ()
+    return found
+
+
 def _line(raw: bytes, out: Recording, bad: list[str], where: str) -> None:
     if not raw.strip():
         return
@@ -53,15 +78,26 @@ def _line(raw: bytes, out: Recording, bad: list[str], where: str) -> None:
                 return
             item = json.loads(item["data"])
         if not isinstance(item, dict):
-            raise ValueError("not an object")
-        node, task = item["node"], item["task"]
-        release, start, finish = (item[k] for k in ("release", "start", "finish"))
-        if not (isinstance(node, str) and isinstance(task, str)
-                and all(type(v) is int and v >= 0 for v in (release, start, finish)) and start <= finish):
-            raise ValueError("a field of the wrong type")
+            raise BadRecord("not an object")
+        _record(item, out)
     except (ValueError, KeyError, TypeError, RecursionError):
         bad.append(where)
-        return
+
+
+def _time(value: Any) -> int:
+    if type(value) is not int or value < 0:
+        raise BadRecord("a time that is no whole number of nanoseconds")
+    return value
+
+
+def _record(item: dict[str, Any], out: Recording) -> None:
+    ros2 = "unit" in item and "node" not in item
+    node, task = item["unit" if ros2 else "node"], item["task"]
+    release, start, finish = (_time(item[k]) for k in ("release", "start", "finish"))
+    seq = _time(item.get("seq", 0))
+    if not (isinstance(node, str) and isinstance(task, str) and start <= finish):
+        raise BadRecord("a field of the wrong type")
+    reads = _reads_ros2(item["reads"]) if ros2 and "reads" in item else _reads_ros1(item.get("reads"))
     key = f"{node}\t{task}"
     if key not in out.callbacks:
         out.callbacks[key] = Callback(key, node, "task", task=task, registered=len(out.callbacks))
@@ -69,3 +105,33 @@ def _line(raw: bytes, out: Recording, bad: list[str], where: str) -> None:
     jobs = out.jobs[key]
     jobs.add(start, finish, finish)
     jobs.releases.append(release)
+    jobs.seqs.append(seq)
+    if reads is not None:
+        if jobs.reads is None:
+            jobs.reads = {}
+        for port, writer, writer_seq in reads:
+            jobs.read(port, writer, writer_seq)
+
+
+def _reads_ros1(reads: Any) -> list[tuple[str, str, int]] | None:
+    """A ROS 1 record's reads: per in-port the writer's job number (the port's writer is the model's)."""
+    if reads is None:
+        return None
+    if not isinstance(reads, dict):
+        raise BadRecord("reads that are no object")
+    return [(str(port), "", _time(seq)) for port, seq in reads.items()]
+
+
+def _reads_ros2(reads: Any) -> list[tuple[str, str, int]]:
+    """A ROS 2 record's reads: per in-port null (no writer's job) or [process, task, job number, index]."""
+    if not isinstance(reads, dict):
+        raise BadRecord("reads that are no object")
+    out = []
+    for port, source in reads.items():
+        if source is None:
+            continue
+        if not (isinstance(source, list) and len(source) == 4 and all(isinstance(s, str) for s in source[:2])):
+            raise BadRecord("a read that is no [process, task, job, index]")
+        _time(source[3])
+        out.append((str(port), source[1], _time(source[2])))
+    return out

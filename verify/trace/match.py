@@ -9,7 +9,8 @@ model declares them, callbacks in the order they were registered (their construc
 their numbers agree (timers alike are paired by period first); when they do not, none of them is paired,
 and each is listed with the reason. Nothing is guessed.
 
-A job record names its node (``/SYSTEM/INSTANCE``) and its task: it is paired with that task.
+A job record names its node (``/SYSTEM/INSTANCE``) and its task, or (the ROS 2 nodes') its process and
+``INSTANCE.TASK``: it is paired with that task.
 """
 from __future__ import annotations
 
@@ -17,6 +18,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 from fractions import Fraction
 
+from ..gen.ros2 import unit_of
 from ..interop.caret.read import IGNORED_TOPICS
 from ..interop.caret.to_vfy import language_name
 from ..model.activations import DataTriggered, Periodic
@@ -128,7 +130,10 @@ def _pair_by_period(tasks: list[TaskModel], found: list[Callback]) -> dict[str, 
 
 
 def _match_records(model: SystemModel, recording: Recording) -> Matching:
+    """Job records by the names their generator gives: the ROS 1 nodes' (``/SYSTEM/INSTANCE``, task name),
+    the ROS 2 nodes' (process as ``verify gen ros2`` names it, ``INSTANCE.TASK``)."""
     by_name = {(f"/{model.name}/{t.instance}", t.name): t.id for t in model.tasks}
+    by_name.update({(unit_of(model, t), t.id): t.id for t in model.tasks})
     pairs: dict[str, str] = {}
     unmatched = []
     for c in recording.callbacks.values():

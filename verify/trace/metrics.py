@@ -7,10 +7,13 @@ as recorded, seconds as fractions; quantiles by nearest rank.
   greatest, and the mean period (last − first) / (n − 1); a timer callback's configured period;
 - a chain's **data age** and **reaction time** by specs/timing.md §4, on the jobs: a job of the
   chain's first task holds its own start as the stamp; a job of a later task holds the stamp of the
-  writer's latest job whose output left (its last publish, else its end) at or before the job started;
-  data age = end − stamp per job of the last task holding one; reaction time, per start s_j of the
-  first task, the end of the first job of the last task holding a stamp ≥ s_j, minus s_(j−1); jitter
-  = greatest − least data age.
+  writer's job it read — the one its record names where job records say what each job read, else
+  the writer's latest job whose output left (its last publish, else its end) at or before the job
+  started; data age = end − stamp per job of the last task holding one; reaction time, as the
+  generated nodes' monitors keep it, one per stamp newer than every one that reached the last task
+  before: the end of the first job holding it minus the newest of those earlier stamps (before any,
+  the first task's first start) — the worst of the stimuli it stands for; jitter = greatest − least
+  data age.
 """
 from __future__ import annotations
 
@@ -122,17 +125,19 @@ def _chain(model: SystemModel, chain: ChainModel, recording: Recording, matching
     previous = first
     for hop in chain.hops:
         reader = recording.jobs_of(matching.pairs[hop.reader])
-        stamps = _held(previous, stamps, reader)
+        read = reader.read_on(hop.link.target.split(".", 1)[1], hop.writer)
+        numbered = read is not None and any(previous.seqs)
+        stamps = _read(previous, stamps, read) if read is not None and numbered else _held(previous, stamps, reader)
         previous = reader
     last = previous
     ages = [end - s for end, s in zip(last.ends, stamps, strict=True) if s >= 0]
-    reactions = _reactions(first.starts, last.ends, stamps)
+    reactions = _reactions(first.starts[0] if len(first) else 0, last.ends, stamps)
     return ChainMeasure(chain.name, Distribution.of(ages), Distribution.of(reactions))
 
 
 def _held(writer: Jobs, writer_stamps: array[int], reader: Jobs) -> array[int]:
-    """The stamp each reader job holds: that of the writer's latest job whose output left at or before
-    the reader job started (−1: none yet)."""
+    """The stamp each reader job holds, inferred from the times: that of the writer's latest job whose
+    output left at or before the reader job started (−1: none yet)."""
     out = array("q")
     writes = writer.writes
     for start in reader.starts:
@@ -141,24 +146,33 @@ def _held(writer: Jobs, writer_stamps: array[int], reader: Jobs) -> array[int]:
     return out
 
 
-def _reactions(starts: Sequence[int], ends: Sequence[int], stamps: Sequence[int]) -> list[int]:
-    """Per start s_j of the first task (j ≥ 1): the end of the first job of the last task holding a
-    stamp ≥ s_j, minus s_(j−1)."""
-    held = sorted((s, e) for s, e in zip(stamps, ends, strict=True) if s >= 0)
-    if not held:
-        return []
-    # earliest[k]: the least end among the jobs holding the k-th smallest stamp or a larger one
-    earliest = [0] * len(held)
-    least = None
-    for k in range(len(held) - 1, -1, -1):
-        least = held[k][1] if least is None else min(least, held[k][1])
-        earliest[k] = least
-    keys = [s for s, _ in held]
+def _read(writer: Jobs, writer_stamps: array[int], read: array[int]) -> array[int]:
+    """The stamp each reader job holds, as recorded: that of the writer's job whose number it read
+    (−1: it read none, or a job not in the records)."""
+    seqs = writer.seqs
+    order: Sequence[int] = range(len(seqs))
+    if any(a >= b for a, b in zip(seqs, seqs[1:], strict=False)):  # (records out of order: sorted, as indices)
+        order = array("q", sorted(order, key=seqs.__getitem__))
+        seqs = array("q", (seqs[k] for k in order))
+    out = array("q")
+    for seq in read:
+        k = bisect.bisect_left(seqs, seq)
+        out.append(writer_stamps[order[k]] if seq > 0 and k < len(seqs) and seqs[k] == seq else -1)
+    return out
+
+
+def _reactions(first: int, ends: Sequence[int], stamps: Sequence[int]) -> list[int]:
+    """One reaction per stamp newer than every stamp that reached the last task before (its jobs in the
+    order they ended): the end of the first job holding it minus the newest earlier stamp (before any:
+    ``first``, the first task's first start), as the generated nodes' monitors keep it (specs/codegen.md
+    §5). Each is the worst reaction of the stimuli between those two reads, so the greatest is timing
+    §4's reaction time."""
     out = []
-    for before, read in zip(starts, starts[1:], strict=False):
-        k = bisect.bisect_left(keys, read)
-        if k < len(held):
-            out.append(earliest[k] - before)
+    newest = first
+    for end, stamp in sorted(zip(ends, stamps, strict=True)):
+        if stamp > newest:
+            out.append(end - newest)
+            newest = stamp
     return out
 
 

@@ -51,11 +51,34 @@ class Jobs:
     ends: array[int] = field(default_factory=lambda: array("q"))
     writes: array[int] = field(default_factory=lambda: array("q"))
     releases: array[int] = field(default_factory=lambda: array("q"))  # job records only: when it was released
+    seqs: array[int] = field(default_factory=lambda: array("q"))  # job records only: each job's number
+    #: job records that hold what each job read: per ``PORT\tWRITER`` (WRITER the writing task, "" when
+    #: the record does not name it) the writer's job number each job read there, 0 for none; None: the
+    #: records do not say what was read
+    reads: dict[str, array[int]] | None = None
 
     def add(self, start: int, end: int, write: int) -> None:
         self.starts.append(start)
         self.ends.append(end)
         self.writes.append(write)
+
+    def read(self, port: str, writer: str, seq: int) -> None:
+        """The job added last read on ``port`` the output of ``writer``'s job number ``seq``."""
+        if self.reads is None:
+            self.reads = {}
+        column = self.reads.setdefault(f"{port}\t{writer}", array("q"))
+        column.extend(array("q", [0]) * (len(self) - 1 - len(column)))
+        column.append(seq)
+
+    def read_on(self, port: str, writer: str) -> array[int] | None:
+        """The writer's job number each job read on ``port`` (0: none), or None when the records do not
+        say what was read: ``writer``'s column, else the column of records that name no writer."""
+        if self.reads is None:
+            return None
+        column = self.reads.get(f"{port}\t{writer}", self.reads.get(f"{port}\t"))
+        out = array("q", column or ())
+        out.extend(array("q", [0]) * (len(self) - len(out)))
+        return out
 
     def __len__(self) -> int:
         return len(self.starts)

@@ -28,16 +28,19 @@ class TraceResult:
 
 
 def read_traces(paths: Sequence[str], sink: DiagnosticSink) -> Recording | None:
-    """The recording of ``paths``: LTTng trace directories, job-record files (``.jsonl``), or bags (ROS 1
-    ``.bag`` files, ROS 2 bag directories); None after E806 when they cannot be read."""
+    """The recording of ``paths``: LTTng trace directories, job-record files (``.jsonl``) or directories
+    holding them, or bags (ROS 1 ``.bag`` files, ROS 2 bag directories); None after E806 when they
+    cannot be read."""
     from ..core.fileaccess import Refused
     from . import bags, jobrecords, lttng
 
     given = tuple(paths)
     where = Span(given[0] if given else "<command line>", 1, 1, 1, 1)
-    records = [p for p in given if not os.path.isdir(p)]
     kinds = {bags.is_bag(p) for p in given}
     try:
+        if kinds != {True}:  # (a directory of job records, as the ROS 2 nodes write them, is its files)
+            given = tuple(f for p in given for f in _record_files(p))
+        records = [p for p in given if not os.path.isdir(p)]
         if kinds == {True}:
             return bags.read(given)
         if True in kinds:
@@ -73,6 +76,13 @@ def read_traces(paths: Sequence[str], sink: DiagnosticSink) -> Recording | None:
         sink.emit("E806", f"{', '.join(given)} cannot be read: {err.strerror or err}", where, "cannot be read",
                   help="name an existing trace directory or job-record file")
     return None
+
+
+def _record_files(path: str) -> tuple[str, ...]:
+    """``path``, or the job-record files of the directory ``path`` when it is one of those."""
+    from . import jobrecords
+
+    return (jobrecords.files_in(path) if os.path.isdir(path) else ()) or (path,)
 
 
 def trace_system(model: SystemModel, project: Project, recording: Recording, *,
