@@ -78,11 +78,119 @@ def test_the_command_reports_and_calibrates_the_caret_trace(tmp_path, capsys):
     diff = capsys.readouterr().out
     assert "-    wcet 200 us  // completed\n" in diff and "+    wcet 941 us  // completed\n" in diff  # 783 us + 20 %
     assert "+    bcet 329 us  // completed\n" in diff  # 329.575 us, down
+    # the /chatter delays, 363.889 us .. 681.328 us: down, and up after 20 %
+    assert "+  connect talker.chatter -> listener.chatter delay 363 us .. 818 us\n" in diff
     assert model.read_text(encoding="utf-8") == before  # (--diff writes nothing)
     assert main(["trace", str(model), str(TRACE), "--calibrate", "--in-place"]) == 0
     capsys.readouterr()
     assert main(["trace", str(model), str(TRACE)]) == 0  # calibrated: the measurements agree with the model
-    assert "E801" not in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "E801" not in err and "E807" not in err
+
+
+#: the /chatter messages of the CARET trace, publish (`rcl_publish` of the /chatter publisher) to receipt
+#: (the listener's `dispatch_subscription_callback` with the source stamp `dds_bind_addr_to_stamp` bound
+#: to the published message), read by hand from babeltrace2's text: 05:29:52.288811360 published,
+#: stamp 1631078992288815446, dispatched 05:29:52.289222206 (410.846 us); in order of receipt
+CHATTER_DELAYS_NS = [681328, 363889, 410846, 400715, 481753]
+
+
+def test_the_caret_trace_links_each_chatter_message_to_its_receipt():
+    require_bindings()
+    result = _traced(COMPLETED, [str(TRACE)])
+    ((key, link),) = result.recording.links.items()  # (/parameter_events and /rosout are left out)
+    assert key == ("/chatter", "/talker", "/listener") and list(link.delays) == CHATTER_DELAYS_NS
+    assert not result.recording.partial
+    (c,) = result.delays.connections
+    assert c.connection == "talker.chatter -> listener.chatter" and c.topics == ("/chatter",)
+    assert (c.delays.count, c.delays.min, c.delays.p50, c.delays.max) == (
+        5, Fraction(363889, 10**9), Fraction(410846, 10**9), Fraction(681328, 10**9))
+    # completed.vfy gives the connection no delay: every message took longer than the 0 it assumes
+    (found,) = [d for d in result.diagnostics if d.code == "E807"]
+    assert found.severity.value == "warning" and found.span.line == 33 and "681.328 us" in found.message
+
+
+def test_calibrating_replaces_a_delay_in_place_and_keeps_its_comment(tmp_path, capsys):
+    require_bindings()
+    model = tmp_path / "m.vfy"
+    connect = "connect talker.chatter -> listener.chatter"
+    model.write_text(COMPLETED.read_text(encoding="utf-8").replace(connect, connect + " delay 1 ms  // guess"),
+                     encoding="utf-8")
+    assert main(["trace", str(model), str(TRACE)]) == 1  # (E801; no E807: 681 us is within 1 ms)
+    assert "E807" not in capsys.readouterr().err
+    assert main(["trace", str(model), str(TRACE), "--calibrate", "--margin", "0", "--in-place"]) == 0
+    assert "connection talker.chatter -> listener.chatter: delay 1 ms -> 363 us .. 682 us" in capsys.readouterr().err
+    text = model.read_text(encoding="utf-8")
+    assert "  connect talker.chatter -> listener.chatter delay 363 us .. 682 us  // guess\n" in text
+    assert main(["trace", str(model), str(TRACE)]) == 0
+
+
+def _linking_reader(take: bool, dispatch: bool):
+    """A talker publishing /chatter and a listener subscribed to it, registered as ros2_tracing and CARET
+    record them (handles are made up)."""
+    from verify.trace.lttng_events import Reader
+
+    reader = Reader()
+    talker, listener = reader.process(1), reader.process(2)
+    reader.on_rcl_node_init(talker, 0, 1, 0x10, "talker", "/")
+    reader.on_rcl_publisher_init(talker, 0, 1, 0x11, 0x10, "/chatter")
+    reader.on_rcl_node_init(listener, 0, 2, 0x20, "listener", "/")
+    reader.on_rcl_subscription_init(listener, 0, 2, 0x21, 0x20, 0x22, "/chatter")
+    reader.on_rclcpp_subscription_init(listener, 0, 2, 0x21, 0x23)
+    reader.on_rclcpp_subscription_callback_added(listener, 0, 2, 0x23, 0x24)
+
+    def message(published: int, stamp: int, received: int | None) -> None:
+        reader.on_rcl_publish(talker, published, 1, 0x11, 0x99)
+        reader.on_rmw_publish(talker, published + 5, 1, 0x99, stamp)
+        if received is not None and take:
+            reader.on_rmw_take(listener, received, 2, 0x22, stamp, 1)
+        if received is not None and dispatch:
+            reader.on_dispatch_subscription_callback(listener, received + 7, 2, 0x24, stamp)
+
+    return reader, message
+
+
+@pytest.mark.parametrize("take, dispatch", [(True, False), (False, True), (True, True)])
+def test_a_receipt_is_linked_to_its_publish_by_the_source_timestamp(take, dispatch):
+    reader, message = _linking_reader(take, dispatch)
+    message(1000, 77, 1300)
+    message(2000, 78, 2100)
+    recording = reader.recording(("t",))
+    link = recording.links[("/chatter", "/talker", "/listener")]
+    first = 0 if take else 7  # (rmw_take and the dispatch of one message: one receipt, the first)
+    assert list(link.delays) == [300 + first, 100 + first] and not recording.partial
+
+
+def test_a_receipt_without_its_publish_and_a_publish_never_received_are_counted_as_partial():
+    reader, message = _linking_reader(True, False)
+    reader.on_rmw_take(reader.process(2), 500, 2, 0x22, 11, 1)  # (published before the trace began)
+    message(1000, 77, 1300)
+    message(2000, 78, None)  # (lost)
+    message(3000, 79, 3200)
+    message(4000, 80, None)  # (on its way when the trace ended: not counted)
+    recording = reader.recording(("t",))
+    assert list(recording.links[("/chatter", "/talker", "/listener")].delays) == [300, 200]
+    assert recording.partial == [
+        "message(s) published and not received by any subscription in the trace (lost, or received without a "
+        "trace event): 1 of `/chatter`",
+        "message(s) received without their publish in the trace (published before it began, or by a process not "
+        "traced): 1 of `/chatter`"]
+
+
+def test_a_link_of_nodes_the_model_does_not_connect_is_listed_not_guessed():
+    from verify.trace.delays import measure_delays
+
+    reader, message = _linking_reader(True, False)
+    message(1000, 77, 1300)
+    loaded = verify.load(str(COMPLETED))
+    model = loaded.system(None)
+    recording = reader.recording(("t",))
+    assert measure_delays(model, recording).connections[0].delays.max == Fraction(300, 10**9)
+    other = verify.load_text(MODEL, "m.vfy").system(None)
+    delays = measure_delays(other, recording)
+    assert delays.connections == () and delays.unpaired == (
+        ("`/chatter` from node `/talker` to node `/listener` (1 messages)",
+         "the model has no connection from an instance `talker` to an instance `listener`"),)
 
 
 # ------------------------------------------------------------------ job records: known answers
@@ -228,7 +336,7 @@ def test_a_callback_running_on_two_threads_at_once_gives_two_jobs_in_start_order
     reader.on_rclcpp_timer_link_node(p, 0, 1, 0x20, 0x10)
     reader.on_callback_start(p, 100, 1, 0x30)
     reader.on_callback_start(p, 200, 2, 0x30)
-    reader.on_rcl_publish(p, 250, 2, 0x40)
+    reader.on_rcl_publish(p, 250, 2, 0x40, 0x50)
     reader.on_callback_end(p, 400, 2, 0x30)
     reader.on_callback_end(p, 500, 1, 0x30)
     recording = reader.recording(("t",))

@@ -5,7 +5,7 @@ TRACE is an LTTng trace directory (ros2_tracing, CARET), a file of the generated
 The measurements go to standard output, the findings (E801–E806) to standard error; ``--format
 json|sarif`` prints one document instead.
 
-``--calibrate`` writes the measured execution times into the model (``--margin``, default 20 %):
+``--calibrate`` writes the measured execution times and connection delays into the model (``--margin``, default 20 %):
 without ``-o``/``--in-place`` the calibrated file goes to standard output (``--diff``: a unified diff);
 the model is changed only with ``--in-place``.
 
@@ -50,9 +50,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--tolerance", metavar="PERCENT", type=_percent, default=Fraction(1, 100),
                    help="how far a timer's mean measured period may be off the model (default 1)")
     p.add_argument("--calibrate", action="store_true",
-                   help="write the measured execution times (bcet, wcet) into the model")
+                   help="write the measured execution times (bcet, wcet) and connection delays into the model")
     p.add_argument("--margin", metavar="PERCENT", type=_percent, default=None,
-                   help="with --calibrate: the margin on the greatest measured execution time (default 20)")
+                   help="with --calibrate: the margin on the greatest measured execution time and delay (default 20)")
     where = p.add_mutually_exclusive_group()
     where.add_argument("-o", "--output", metavar="OUT", help="with --calibrate: write the calibrated file to OUT")
     where.add_argument("--diff", action="store_true", help="with --calibrate: print a unified diff instead")
@@ -93,16 +93,18 @@ def _calibrate(args: argparse.Namespace, loaded: api.LoadResult, system: SystemM
     root = loaded.project.root_module
     assert root is not None, "a loaded model has its root module"
     source = loaded.sources[loaded.project.root]
-    done = calibrate(root, source, system, traced.measured, DEFAULT_MARGIN if args.margin is None else args.margin)
+    done = calibrate(root, source, system, traced.measured, DEFAULT_MARGIN if args.margin is None else args.margin,
+                     traced.delays)
     check = api.load(loaded.project.root, root=args.root, include=tuple(args.include or ()),
                      overlay={loaded.project.root: done.text})
     if not check.ok:  # (never written: an edit that does not load is a bug)
         raise RuntimeError("the calibrated model does not load: " + "; ".join(d.message for d in check.diagnostics))
     for c in done.changes:
-        to_stderr(f"{c.component}.{c.task}: {c.what} {fmt_time(c.old) if c.old is not None else '(none)'} -> "
-                  f"{fmt_time(c.new)}")
-    for component in done.elsewhere:
-        to_stderr(f"note: component `{component}` is not in {args.file} (or its task is on one line): not calibrated")
+        new = f"{fmt_time(c.new_min)} .. {fmt_time(c.new)}" if c.new_min is not None else fmt_time(c.new)
+        to_stderr(f"{c.subject}: {c.what} {fmt_time(c.old) if c.old is not None else '(none)'} -> {new}")
+    for what in done.elsewhere:
+        named = what if what.startswith("connection ") else f"component `{what}`"
+        to_stderr(f"note: {named} is not in {args.file} (or its task is on one line): not calibrated")
     if args.diff:
         print(unified_diff(source.text, done.text, args.file).replace("(synthesized)", "(calibrated)"), end="")
         return EXIT_OK

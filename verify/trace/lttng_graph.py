@@ -83,7 +83,7 @@ class _Classes:
         wanted = USED.get(name)
         handler = self.reader.handlers.get(name)
         payload = _members(nb, nb.event_class_borrow_payload_field_class_const(cls), self.getters)
-        fields = tuple(payload.get(f, (0, None)) for f in wanted or ())
+        fields = tuple(_field(payload, f) for f in wanted or ())
         if wanted is None or any(g is None for _, g in fields) \
                 or nb.stream_class_borrow_default_clock_class_const(stream_class) is None:
             name = name if wanted is None else f"{name} (without ros2_tracing's fields or a clock)"
@@ -91,6 +91,11 @@ class _Classes:
         pid = context.get("vpid", (0, None))
         tid = context.get("vtid", (0, None))
         return (handler, name, fields, pid if pid[1] else None, tid if tid[1] else None)
+
+
+def _field(payload: dict[str, tuple[int, Getter | None]], wanted: str) -> tuple[int, Getter | None]:
+    """The payload member ``wanted`` names (``"a|b"``: the first of them the event has)."""
+    return next((payload[name] for name in wanted.split("|") if name in payload), (0, None))
 
 
 def run(traces: Sequence[str], reader: Reader) -> None:
