@@ -1,9 +1,9 @@
 """`trace-read` stage: `verify trace`'s LTTng reader (``verify.trace.lttng.read``) on a trace of n events
 recorded here by Debian's LTTng from ``tests/trace/ros2_events.c --fast`` (a talker's and a listener's
-callbacks back to back, the talker's message linked to its take: seven `ros2` events a job pair). The recording is made untimed, once per size, in
-``benchmarks/out/trace-v2-N`` (the instance's generator; v2: with the message links); the row times the reading alone and gives the
-reading process's CPU time beside the wall-clock time (on a loaded machine they differ). The goal: 10⁷
-events in at most 60 s.
+callbacks back to back, the talker's message linked to its take: seven `ros2` events a job pair). The
+recording is made untimed, once per size, in ``benchmarks/out/trace-v2-N`` (the instance's generator;
+v2: with the message links); the row times the reading alone and gives the reading process's CPU time
+beside the wall-clock time (on a loaded machine they differ). The goal: 10⁷ events in at most 60 s.
 """
 from __future__ import annotations
 
@@ -72,7 +72,8 @@ def register(stage: Callable[..., Callable], error: type[Exception], unavailable
         return
 
     @stage("trace-read", "verify.trace.lttng.read of an LTTng trace of n events (ros2_events --fast, recorded "
-           "untimed): the babeltrace2 graph, the callbacks' jobs and the messages' links; cpu_s is the reading process's CPU time",
+           "untimed): the babeltrace2 graph, the callbacks' jobs and the messages' links; cpu_s is the reading "
+           "process's CPU time",
            sizes=(1_000_000, 10_000_000), quick_sizes=(10_000,), generator=trace_instance)
     def trace_read(inst) -> dict:
         from verify.trace import lttng
