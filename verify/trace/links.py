@@ -12,7 +12,7 @@ publishing node, subscribing node) an array of delays, 8 bytes a message.
 """
 from __future__ import annotations
 
-from collections import Counter
+from collections import Counter, deque
 
 from .recording import Link, Recording
 
@@ -24,6 +24,7 @@ class Linker:
     def __init__(self) -> None:
         # topic -> source timestamp -> (publishing node, publish time, received yet), oldest first
         self.pending: dict[str, dict[int, tuple[str, int, bool]]] = {}
+        self.order: dict[str, deque[int]] = {}  # topic -> the source timestamps waiting, oldest first
         self.last_taken: dict[tuple[int, int], int] = {}  # (process, subscription) -> source timestamp
         self.links: dict[tuple[str, str, str], Link] = {}
         self.unreceived: Counter[str] = Counter()  # topic -> publishes given up before any receipt
@@ -34,9 +35,12 @@ class Linker:
         waiting = self.pending.get(topic)
         if waiting is None:
             waiting = self.pending[topic] = {}
+            self.order[topic] = deque()
+        order = self.order[topic]
         waiting[stamp] = (node, at, False)
-        if len(waiting) > WINDOW:
-            given_up = waiting.pop(next(iter(waiting)))
+        order.append(stamp)
+        if len(order) > WINDOW:
+            given_up = waiting.pop(order.popleft())
             if not given_up[2]:
                 self.unreceived[topic] += 1
 

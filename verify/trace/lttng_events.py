@@ -40,6 +40,9 @@ USED: dict[str, tuple[str, ...]] = {
     "ros2:rmw_take": ("rmw_subscription_handle", "source_timestamp", "taken"),
     "ros2:dispatch_subscription_callback": ("callback", "source_timestamp|source_stamp"),
 }
+#: what a reader's cache of the publishers and subscriptions linked holds for one not seen yet
+_UNSEEN: tuple[str, str] = ("", "")
+_UNSEEN_SUBSCRIPTION: tuple[str, str, tuple[int, int]] = ("", "", (0, 0))
 #: where Debian installs the bindings for the system interpreter
 SYSTEM_PYTHON = "/usr/bin/python3"
 
@@ -105,6 +108,10 @@ class _Process:
     publishers: dict[int, tuple[int, str]] = field(default_factory=dict)  # rcl handle -> (node, topic)
     publishing: dict[int, tuple[str, str, int, int]] = field(default_factory=dict)  # thread -> (topic, node,
     # message, time) of its last publish still waiting for its source timestamp
+    linked: dict[int, tuple[str, str] | None] = field(default_factory=dict)  # publisher -> (topic, node) of
+    # a publisher whose messages are linked (None: not linked), as first published
+    receiving: dict[int | None, tuple[str, str, tuple[int, int]] | None] = field(default_factory=dict)
+    # rcl subscription -> (topic, node, key) of a subscription whose receipts are linked, as first received
     rclcpp_subscriptions: dict[int, int] = field(default_factory=dict)  # rclcpp subscription -> rcl handle
     subscription_callbacks: dict[int, int] = field(default_factory=dict)  # callback -> rclcpp subscription
     symbols: dict[int, str] = field(default_factory=dict)  # callback -> symbol
@@ -151,11 +158,13 @@ class Reader:
 
     def on_rcl_publisher_init(self, p: _Process, at: int, tid: int, handle: int, node: int, topic: str) -> None:
         p.publishers[handle] = (node, topic)
+        p.linked.pop(handle, None)  # (an address used again)
 
     def on_rcl_subscription_init(self, p: _Process, at: int, tid: int, handle: int, node: int, rmw: int,
                                  topic: str) -> None:
         p.subscriptions[handle] = (node, topic)
         p.rmw_subscriptions[rmw] = handle
+        p.receiving.pop(handle, None)  # (an address used again)
 
     def on_rclcpp_subscription_init(self, p: _Process, at: int, tid: int, handle: int, subscription: int) -> None:
         p.rclcpp_subscriptions[subscription] = handle
@@ -184,11 +193,12 @@ class Reader:
         jobs.add(start, at, wrote if wrote > start else at)
 
     def on_rcl_publish(self, p: _Process, at: int, tid: int, publisher: int, message: int) -> None:
-        topic = p.publishers.get(publisher)
-        node = p.nodes.get(topic[0]) if topic is not None else None
-        if topic is not None and node is not None and topic[1] not in IGNORED_TOPICS:
-            p.publishing[tid] = (topic[1], node, message, at)
-        else:
+        linked = p.linked.get(publisher, _UNSEEN)
+        if linked is _UNSEEN:
+            linked = p.linked[publisher] = _linked_topic(p, publisher)
+        if linked is not None:
+            p.publishing[tid] = (linked[0], linked[1], message, at)
+        elif p.publishing:
             p.publishing.pop(tid, None)
         callback = p.running.get(tid)
         if callback is None:
@@ -219,10 +229,11 @@ class Reader:
         self._received(p, p.rclcpp_subscriptions.get(subscription) if subscription is not None else None, stamp, at)
 
     def _received(self, p: _Process, handle: int | None, stamp: int, at: int) -> None:
-        found = p.subscriptions.get(handle) if handle is not None else None
-        node = p.nodes.get(found[0]) if found is not None else None
-        if handle is not None and found is not None and node is not None and found[1] not in IGNORED_TOPICS:
-            self.linker.received(found[1], node, (id(p), handle), stamp, at)
+        linked = p.receiving.get(handle, _UNSEEN_SUBSCRIPTION)
+        if linked is _UNSEEN_SUBSCRIPTION:
+            linked = p.receiving[handle] = _linked_subscription(p, handle)
+        if linked is not None:
+            self.linker.received(linked[0], linked[1], linked[2], stamp, at)
 
     # ------------------------------------------------------------ the result
 
@@ -252,6 +263,26 @@ class Reader:
                                    "(left out)")
         self.linker.finish(out, {topic for p in self.processes.values() for _, topic in p.subscriptions.values()})
         return out
+
+
+def _linked_topic(p: _Process, publisher: int) -> tuple[str, str] | None:
+    """(topic, node) of a registered publisher whose messages are linked (None: unknown, or of a topic
+    left out)."""
+    topic = p.publishers.get(publisher)
+    node = p.nodes.get(topic[0]) if topic is not None else None
+    if topic is None or node is None or topic[1] in IGNORED_TOPICS:
+        return None
+    return topic[1], node
+
+
+def _linked_subscription(p: _Process, handle: int | None) -> tuple[str, str, tuple[int, int]] | None:
+    """(topic, node, key) of a registered subscription whose receipts are linked (None: unknown, or of
+    a topic left out)."""
+    found = p.subscriptions.get(handle) if handle is not None else None
+    node = p.nodes.get(found[0]) if found is not None else None
+    if handle is None or found is None or node is None or found[1] in IGNORED_TOPICS:
+        return None
+    return found[1], node, (id(p), handle)
 
 
 def _in_start_order(jobs: Jobs) -> Jobs:
