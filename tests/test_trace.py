@@ -193,6 +193,57 @@ def test_a_link_of_nodes_the_model_does_not_connect_is_listed_not_guessed():
          "the model has no connection from an instance `talker` to an instance `listener`"),)
 
 
+IMPORTED = EXAMPLES / "caret-talker-listener" / "imported.vfy"
+
+
+def test_a_model_without_wcets_as_imported_is_calibrated_and_keeps_its_other_gaps(tmp_path, capsys):
+    """`verify import caret` writes no wcet, priority or core: the model does not load (E217, E213,
+    E214), yet a trace calibrates it — through a stand-in that fills those gaps to pair and measure."""
+    require_bindings()
+    assert main(["trace", str(IMPORTED), str(TRACE)]) == 2  # (not calibrating: it does not load)
+    assert "error[E217]" in capsys.readouterr().err
+    out = tmp_path / "calibrated.vfy"
+    assert main(["trace", str(IMPORTED), str(TRACE), "--calibrate", "-o", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert "Talker.timer_callback_0: wcet (none) -> 941 us" in err and "E213, E214" in err
+    text = out.read_text(encoding="utf-8")
+    assert ("    produces chatter\n    bcet 329 us  // measured\n    wcet 941 us  // measured\n  }\n" in text
+            and "    reads chatter\n    bcet 157 us  // measured\n    wcet 552 us  // measured\n  }\n" in text)
+    assert "  connect talker.chatter -> listener.chatter delay 363 us .. 818 us\n" in text
+    before = IMPORTED.read_text(encoding="utf-8")
+    assert text.count("\n") == before.count("\n") + 4 and "priority 1" not in text and "calibration_core" not in text
+    again = verify.load(str(out))
+    assert {d.code for d in again.diagnostics if d.severity.value == "error"} == {"E213", "E214"}
+
+
+def test_the_stand_in_fills_every_gap_and_nothing_else():
+    from verify.core.diagnostics import DiagnosticSink as Sink
+    from verify.core.source import SourceFile
+    from verify.frontend.parse import parse_text
+    from verify.trace.standin import only_gaps, stand_in_text
+
+    text = ("component C {\n  task T {\n    bcet 2 ms\n  }\n  task U { }\n}\n"
+            "system S {\n  core calibration_core\n  executor e single_threaded on calibration_core priority 1\n"
+            "  instance a : C {\n    task T timer 10 ms\n    task U executor e timer 20 ms\n  }\n}\n")
+    assert only_gaps(verify.load_text(text, "m.vfy").diagnostics)
+    module = parse_text(text, "m.vfy", Sink())
+    filled = stand_in_text(module, SourceFile("m.vfy", text))
+    assert "task T { wcet 2 ms }" not in filled and "    bcet 2 ms\n   wcet 2 ms }" in filled  # (T's bcet)
+    assert "task U {  wcet 1 us }" in filled  # (U on one line)
+    assert "system S { core calibration_core2 \n" in filled and "task T priority 1 on calibration_core2 timer" in filled
+    assert "task U executor e timer 20 ms" in filled  # (a callback needs neither)
+    assert verify.load_text(filled, "m.vfy").ok
+
+
+def test_a_model_with_other_errors_is_not_calibrated(tmp_path, capsys):
+    require_bindings()
+    model = tmp_path / "m.vfy"
+    model.write_text(IMPORTED.read_text(encoding="utf-8").replace("reads chatter", "reads chatterx"), encoding="utf-8")
+    assert main(["trace", str(model), str(TRACE), "--calibrate", "--in-place"]) == 2
+    assert "chatterx" in capsys.readouterr().err
+    assert "chatterx" in model.read_text(encoding="utf-8") and "measured" not in model.read_text(encoding="utf-8")
+
+
 # ------------------------------------------------------------------ job records: known answers
 
 MODEL = """\
