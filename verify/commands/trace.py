@@ -2,7 +2,7 @@
 
 TRACE is an LTTng trace directory (ros2_tracing, CARET), a file of the generated nodes' job records
 (``.jsonl``), or a bag (ROS 1 ``.bag``, ROS 2 bag directory); several of one kind are read as one run.
-The measurements go to standard output, the findings (E801–E806) to standard error; ``--format
+The measurements go to standard output, the findings (E801–E807) to standard error; ``--format
 json|sarif`` prints one document instead.
 
 ``--calibrate`` writes the measured execution times and connection delays into the model (``--margin``, default 20 %):
@@ -10,7 +10,7 @@ without ``-o``/``--in-place`` the calibrated file goes to standard output (``--d
 the model is changed only with ``--in-place``. A model that does not load only for want of `wcet`s,
 priorities or cores (an imported one) is calibrated through a stand-in (``verify.trace.standin``).
 
-Exit codes: 0 the measurements agree with the model (alarms E803 may be shown); 1 a measurement
+Exit codes: 0 the measurements agree with the model (alarms E803, E807 may be shown); 1 a measurement
 contradicts it (E801 execution time above the wcet, E802 period off the model, E804 a spec exceeded);
 2 invalid input or usage (a model that does not load, a trace that cannot be read: E806); 70 internal error.
 """

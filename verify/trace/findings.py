@@ -7,10 +7,12 @@
 - E804 (error): a chain's measured reaction time, data age or jitter above its spec; at the spec;
 - E803 (warning, an alarm): a measured latency above its bound but within its spec — the bound rests on
   an assumption the robot broke, and the message names it: a task of the chain above its ``wcet``, a
-  timer off its period, else the connections' delays and the executors' order the model assumed;
+  timer off its period, a connection above its ``delay``, else the connections' delays and the
+  executors' order the model assumed;
 - E805 (warning): a task of the model without a callback in the trace, or a callback of an instance of
   the model without a task (listed, never guessed); at the task, or the instance;
-- E806: a trace that cannot be read (error), or that is read in part (warning: what was read stands).
+- E806: a trace that cannot be read (error), or that is read in part (warning: what was read stands);
+- E807 (warning, an alarm; ``delays.py``): a connection's measured delay above its ``delay``.
 """
 from __future__ import annotations
 
