@@ -116,10 +116,14 @@ def test_calibrating_replaces_a_delay_in_place_and_keeps_its_comment(tmp_path, c
     connect = "connect talker.chatter -> listener.chatter"
     model.write_text(COMPLETED.read_text(encoding="utf-8").replace(connect, connect + " delay 1 ms  // guess"),
                      encoding="utf-8")
-    assert main(["trace", str(model), str(TRACE)]) == 1  # (E801; no E807: 681 us is within 1 ms)
-    assert "E807" not in capsys.readouterr().err
+    assert main(["trace", str(model), str(TRACE)]) == 1  # (E801)
+    err = capsys.readouterr().err  # (`delay 1 ms` is 1 ms exactly: every message was faster, none slower)
+    assert ("warning[E807]: connection `talker.chatter -> listener.chatter`: a message took only 363.889 us from "
+            "its publish to its receipt in the trace, below its delay's minimum 1 ms") in err
+    assert err.count("[E807]") == 1
     assert main(["trace", str(model), str(TRACE), "--calibrate", "--margin", "0", "--in-place"]) == 0
-    assert "connection talker.chatter -> listener.chatter: delay 1 ms -> 363 us .. 682 us" in capsys.readouterr().err
+    assert ("connection talker.chatter -> listener.chatter: delay 1 ms -> 363 us .. 682 us"
+            in capsys.readouterr().err)
     text = model.read_text(encoding="utf-8")
     assert "  connect talker.chatter -> listener.chatter delay 363 us .. 682 us  // guess\n" in text
     assert main(["trace", str(model), str(TRACE)]) == 0

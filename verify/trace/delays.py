@@ -1,7 +1,8 @@
 """Connection delays measured from the messages of a trace (specs/trace.md §3, §4): each link of the
 recording (topic, publishing node, subscribing node: ``recording.Link``) paired with the model's
 connection between the nodes' instances, its delays (publish → receipt) against the connection's
-``delay`` range, and E807 where a message took longer than the range's maximum.
+``delay`` range, and E807 where a message took longer than the range's maximum, or less than its
+minimum.
 
 A link is paired with the connection from an out-port of the publishing node's instance to an in-port
 of the subscribing node's instance (instances named as ``verify import caret`` names nodes); when there
@@ -103,23 +104,32 @@ def connection_syntax(project: Project, system: str, source: str, target: str) -
 
 
 def delay_findings(model: SystemModel, delays: Delays, project: Project, sink: DiagnosticSink) -> None:
-    """E807 for every connection whose measured delay is above its modelled maximum."""
+    """E807 for every connection a message of which took longer than its modelled maximum, or less than
+    its minimum."""
     for c in delays.connections:
-        if c.delays.max <= c.delay_max:
-            continue
-        syntax = connection_syntax(project, model.name, c.source, c.target)
-        span = next((lk.span for lk in model.links if (lk.source, lk.target) == (c.source, c.target)), model.span)
-        if syntax is not None and syntax.delay_max is not None and syntax.delay_min is not None:
-            span = syntax.delay_min.span.to(syntax.delay_max.span)
-        said = (f"its delay's maximum {fmt_time(c.delay_max)}" if c.delay_max
-                else "the zero delay the model takes for a connection without `delay`")
-        sink.emit("E807", f"connection `{c.connection}`: a message took {fmt_time(c.delays.max)} from its publish to "
-                  f"its receipt in the trace, above {said}: the bounds assume no message takes longer", span,
-                  "measured above this", severity=Severity.WARNING,
-                  notes=[f"measured over {c.delays.count} messages of {', '.join(c.topics)}: min "
-                         f"{fmt_time(c.delays.min)}, p50 {fmt_time(c.delays.p50)}, p99 {fmt_time(c.delays.p99)}, max "
-                         f"{fmt_time(c.delays.max)}",
-                         "a receipt is when the subscriber's executor took the message: the time it waited there "
-                         "while the executor ran other callbacks counts too"],
-                  help="give the connection a delay that covers the measured one (`verify trace --calibrate` "
-                       "writes it), or find what holds its messages up")
+        if c.delays.max > c.delay_max:
+            said = (f"above its delay's maximum {fmt_time(c.delay_max)}" if c.delay_max
+                    else "above the zero delay the model takes for a connection without `delay`")
+            _delay_finding(model, project, c, f"a message took {fmt_time(c.delays.max)} from its publish to its "
+                           f"receipt in the trace, {said}: the bounds assume no message takes longer",
+                           "a receipt is when the subscriber's executor took the message: the time it waited "
+                           "there while the executor ran other callbacks counts too", sink)
+        if c.delays.min < c.delay_min:
+            _delay_finding(model, project, c, f"a message took only {fmt_time(c.delays.min)} from its publish to "
+                           f"its receipt in the trace, below its delay's minimum {fmt_time(c.delay_min)}: the bounds "
+                           "assume no message is faster", "a receipt is at or after the message became readable: "
+                           "the message was at least this fast", sink)
+
+
+def _delay_finding(model: SystemModel, project: Project, c: ConnectionMeasure, message: str, why: str,
+                   sink: DiagnosticSink) -> None:
+    syntax = connection_syntax(project, model.name, c.source, c.target)
+    span = next((lk.span for lk in model.links if (lk.source, lk.target) == (c.source, c.target)), model.span)
+    if syntax is not None and syntax.delay_max is not None and syntax.delay_min is not None:
+        span = syntax.delay_min.span.to(syntax.delay_max.span)
+    sink.emit("E807", f"connection `{c.connection}`: {message}", span, "measured outside this",
+              severity=Severity.WARNING,
+              notes=[f"measured over {c.delays.count} messages of {', '.join(c.topics)}: min {fmt_time(c.delays.min)}, "
+                     f"p50 {fmt_time(c.delays.p50)}, p99 {fmt_time(c.delays.p99)}, max {fmt_time(c.delays.max)}", why],
+              help="give the connection a delay that covers the measured one (`verify trace --calibrate` "
+                   "writes it), or find what holds its messages up")
