@@ -108,6 +108,10 @@ def test_the_caret_trace_links_each_chatter_message_to_its_receipt():
     # completed.vfy gives the connection no delay: every message took longer than the 0 it assumes
     (found,) = [d for d in result.diagnostics if d.code == "E807"]
     assert found.severity.value == "warning" and found.span.line == 33 and "681.328 us" in found.message
+    # and the chain's alarms name it among the assumptions that broke
+    alarms = [d.message for d in result.diagnostics if d.code == "E803"]
+    assert alarms and all("a message of `talker.chatter -> listener.chatter` took 681.328 us, above its delay 0 ms"
+                          in m for m in alarms)
 
 
 def test_calibrating_replaces_a_delay_in_place_and_keeps_its_comment(tmp_path, capsys):
