@@ -67,12 +67,19 @@ def test_the_command_reports_and_calibrates_the_caret_trace(tmp_path, capsys):
     assert main(["trace", str(model), str(TRACE)]) == 1  # (E801: above the wcet)
     out, err = capsys.readouterr()
     assert "timer callback (period 1 s) of node `/talker`" in out and "error[E801]" in err
+    assert ("  talker.chatter -> listener.chatter: 5 messages, 363.889 us / 410.846 us / 681.328 us / 681.328 us in "
+            "[0 ms, 0 ms] above the delay\n") in out and "warning[E807]" in err
     assert main(["trace", str(model), str(TRACE), "--format", "json"]) == 1
     doc = json.loads(capsys.readouterr().out)
     assert doc["schema"] == "verify.trace/1" and {t["task"] for t in doc["tasks"]} == {
         "talker.timer_callback_0", "listener.subscription_callback_0"}
+    assert doc["connections"] == [{"connection": "talker.chatter -> listener.chatter", "topics": ["/chatter"],
+                                   "delay": {"count": 5, "min_s": "363889/1000000000", "p50_s": "205423/500000000",
+                                             "p99_s": "42583/62500000", "max_s": "42583/62500000"},
+                                   "delay_min_s": "0", "delay_max_s": "0"}]  # (681.328 us = 42583/62500000 s)
     assert main(["trace", str(model), str(TRACE), "--format", "sarif"]) == 1
-    assert json.loads(capsys.readouterr().out)["version"] == "2.1.0"
+    sarif = json.loads(capsys.readouterr().out)
+    assert sarif["version"] == "2.1.0" and "E807" in {r["ruleId"] for r in sarif["runs"][0]["results"]}
     before = model.read_text(encoding="utf-8")
     assert main(["trace", str(model), str(TRACE), "--calibrate", "--diff"]) == 0
     diff = capsys.readouterr().out

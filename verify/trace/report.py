@@ -83,7 +83,8 @@ def _connection_lines(result: TraceResult) -> list[str]:
     if delays.connections:
         lines += ["", "connections (delay from publish to receipt min / p50 / p99 / max against the model's delay):"]
     for c in delays.connections:
-        ok = "above the delay" if c.delays.max > c.delay_max else "ok"
+        ok = ("above the delay" if c.delays.max > c.delay_max else "below the delay" if c.delays.min < c.delay_min
+              else "ok")
         lines.append(f"  {c.connection}: {c.delays.count} messages, {_words(c.delays)} in [{fmt_time(c.delay_min)}, "
                      f"{fmt_time(c.delay_max)}] {ok}")
     for what, reason in delays.unpaired:
