@@ -192,6 +192,17 @@ def test_a_receipt_without_its_publish_and_a_publish_never_received_are_counted_
         "traced): 1 of `/chatter`"]
 
 
+def test_receipts_of_a_topic_whose_publishes_carry_no_source_timestamp_are_no_partial_trace():
+    """ros2_tracing before Jazzy: `rmw_publish` without its `timestamp` (ignored), `rmw_take` with one."""
+    reader, _ = _linking_reader(True, False)
+    talker, listener = reader.process(1), reader.process(2)
+    for k in range(3):
+        reader.on_rcl_publish(talker, 1000 * k, 1, 0x11, 0x99)
+        reader.on_rmw_take(listener, 1000 * k + 300, 2, 0x22, 50 + k, 1)
+    recording = reader.recording(("t",))
+    assert recording.links == {} and recording.partial == []
+
+
 def test_a_link_of_nodes_the_model_does_not_connect_is_listed_not_guessed():
     from verify.trace.delays import measure_delays
 

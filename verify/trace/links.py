@@ -65,9 +65,9 @@ class Linker:
 
     def finish(self, out: Recording, subscribed: set[str]) -> None:
         """Hand the links to ``out``, and label it partial for the messages that could not be linked: a
-        receipt without its publish, a publish of a topic subscribed in the trace that no subscription
-        received while later ones were (those after the topic's last receipt were on their way when the
-        trace ended)."""
+        receipt without its publish (on a topic whose publishes are stamped), a publish of a topic
+        subscribed in the trace that no subscription received while later ones were (those after the
+        topic's last receipt were on their way when the trace ended)."""
         out.links.update(self.links)
         unreceived = Counter(self.unreceived)
         for topic, waiting in self.pending.items():
@@ -77,7 +77,9 @@ class Linker:
         if lost:
             out.partial.append("message(s) published and not received by any subscription in the trace (lost, or "
                                "received without a trace event): " + ", ".join(f"{n} of `{t}`" for t, n in lost))
-        if self.unpublished:
+        # (a topic none of whose publishes has a source timestamp in the trace cannot be linked: ros2_tracing
+        # before Jazzy without CARET, or a publisher not traced; its receipts are no sign of a trace in part)
+        unpublished = sorted((t, n) for t, n in self.unpublished.items() if t in self.pending)
+        if unpublished:
             out.partial.append("message(s) received without their publish in the trace (published before it began, "
-                               "or by a process not traced): "
-                               + ", ".join(f"{n} of `{t}`" for t, n in sorted(self.unpublished.items())))
+                               "or by a process not traced): " + ", ".join(f"{n} of `{t}`" for t, n in unpublished))
