@@ -192,6 +192,24 @@ def test_a_receipt_without_its_publish_and_a_publish_never_received_are_counted_
         "traced): 1 of `/chatter`"]
 
 
+def test_publishes_given_up_count_as_lost_only_when_later_ones_were_received(monkeypatch):
+    from verify.trace import links
+
+    monkeypatch.setattr(links, "WINDOW", 2)
+    reader, message = _linking_reader(True, False)
+    for k in range(5):  # (no receipt at all: the subscriber's takes are not traced, say)
+        message(1000 * k, 70 + k, None)
+    assert reader.recording(("t",)).partial == []
+    reader, message = _linking_reader(True, False)
+    message(0, 60, 100)
+    for k in range(1, 5):  # (lost, all but the last two given up; then one more received)
+        message(1000 * k, 70 + k, None)
+    message(9000, 99, 9100)
+    assert reader.recording(("t",)).partial == [
+        "message(s) published and not received by any subscription in the trace (lost, or received without a "
+        "trace event): 4 of `/chatter`"]
+
+
 def test_receipts_of_a_topic_whose_publishes_carry_no_source_timestamp_are_no_partial_trace():
     """ros2_tracing before Jazzy: `rmw_publish` without its `timestamp` (ignored), `rmw_take` with one."""
     reader, _ = _linking_reader(True, False)

@@ -27,7 +27,9 @@ class Linker:
         self.order: dict[str, deque[int]] = {}  # topic -> the source timestamps waiting, oldest first
         self.last_taken: dict[tuple[int, int], int] = {}  # (process, subscription) -> source timestamp
         self.links: dict[tuple[str, str, str], Link] = {}
-        self.unreceived: Counter[str] = Counter()  # topic -> publishes given up before any receipt
+        self.unreceived: Counter[str] = Counter()  # topic -> publishes not received though later ones were
+        self.given_up: dict[str, tuple[int, int]] = {}  # topic -> (how many publishes given up unreceived, when
+        # the last of them was published): lost once a later one is received
         self.unpublished: Counter[str] = Counter()  # topic -> receipts without their publish
         self.last_receipt: dict[str, int] = {}  # topic -> when its last linked message was received
 
@@ -41,8 +43,9 @@ class Linker:
         order.append(stamp)
         if len(order) > WINDOW:
             given_up = waiting.pop(order.popleft())
-            if not given_up[2]:
-                self.unreceived[topic] += 1
+            if not given_up[2]:  # (lost if a later message is received, as in ``finish``)
+                count, _ = self.given_up.get(topic, (0, 0))
+                self.given_up[topic] = (count + 1, given_up[1])
 
     def received(self, topic: str, node: str, subscription: tuple[int, int], stamp: int, at: int) -> None:
         if self.last_taken.get(subscription) == stamp:
@@ -62,6 +65,11 @@ class Linker:
             link = self.links[key] = Link(topic, publisher, node)
         link.delays.append(at - published)
         self.last_receipt[topic] = at
+        if self.given_up:
+            lost = self.given_up.get(topic)
+            if lost is not None and lost[1] < published:
+                self.unreceived[topic] += lost[0]
+                del self.given_up[topic]
 
     def finish(self, out: Recording, subscribed: set[str]) -> None:
         """Hand the links to ``out``, and label it partial for the messages that could not be linked: a
