@@ -1,9 +1,9 @@
 """`trace-read` stage: `verify trace`'s LTTng reader (``verify.trace.lttng.read``) on a trace of n events
 recorded here by Debian's LTTng from ``tests/trace/ros2_events.c --fast`` (a talker's and a listener's
-callbacks back to back: six `ros2` events a job pair). The recording is made untimed, once per size, in
-``benchmarks/out/trace-N`` (the instance's generator); the row times the reading alone and gives the
-reading process's CPU time beside the wall-clock time (on a loaded machine they differ). The goal: 10⁷
-events in at most 60 s.
+callbacks back to back, the talker's message linked to its take: seven `ros2` events a job pair). The
+recording is made untimed, once per size, in ``benchmarks/out/trace-v2-N`` (the instance's generator;
+v2: with the message links); the row times the reading alone and gives the reading process's CPU time
+beside the wall-clock time (on a loaded machine they differ). The goal: 10⁷ events in at most 60 s.
 """
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ from pathlib import Path
 
 OUT = Path(__file__).resolve().parent / "out"
 #: events before the first job (the registrations) and per talker-listener job pair
-SETUP_EVENTS, EVENTS_PER_PAIR = 10, 6
+SETUP_EVENTS, EVENTS_PER_PAIR = 11, 7
 
 MODEL = """\
 component Talker {
@@ -51,7 +51,7 @@ def trace_instance(n_events: int, seed: int, **_: object) -> str:
     """The model, headed by the path of a recording of about ``n_events`` events (made if missing)."""
     from . import lttnglive
 
-    target = OUT / f"trace-{n_events}"
+    target = OUT / f"trace-v2-{n_events}"
     if not (target / "done").exists():
         shutil.rmtree(target, ignore_errors=True)
         OUT.mkdir(parents=True, exist_ok=True)
@@ -72,7 +72,8 @@ def register(stage: Callable[..., Callable], error: type[Exception], unavailable
         return
 
     @stage("trace-read", "verify.trace.lttng.read of an LTTng trace of n events (ros2_events --fast, recorded "
-           "untimed): the babeltrace2 graph and the callbacks' jobs; cpu_s is the reading process's CPU time",
+           "untimed): the babeltrace2 graph, the callbacks' jobs and the messages' links; cpu_s is the reading "
+           "process's CPU time",
            sizes=(1_000_000, 10_000_000), quick_sizes=(10_000,), generator=trace_instance)
     def trace_read(inst) -> dict:
         from verify.trace import lttng
@@ -86,8 +87,10 @@ def register(stage: Callable[..., Callable], error: type[Exception], unavailable
             raise error(str(err), {}) from None
         after = resource.getrusage(resource.RUSAGE_CHILDREN)
         jobs = sum(len(j) for j in recording.jobs.values())
-        if recording.events < size or recording.partial or jobs * 3 < recording.events - SETUP_EVENTS:
-            raise error(f"{recording.events} events, {jobs} jobs, partial: {recording.partial}",
-                        {"events": recording.events})
+        links = sum(len(k.delays) for k in recording.links.values())
+        pairs = (recording.events - SETUP_EVENTS) // EVENTS_PER_PAIR
+        if recording.events < size or recording.partial or jobs != 2 * pairs or links != pairs:
+            raise error(f"{recording.events} events, {jobs} jobs, {links} messages linked, partial: "
+                        f"{recording.partial}", {"events": recording.events})
         cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
-        return {"events": recording.events, "jobs": jobs, "cpu_s": round(cpu, 2)}
+        return {"events": recording.events, "jobs": jobs, "links": links, "cpu_s": round(cpu, 2)}

@@ -42,6 +42,7 @@ class Block:
     rlimit: str | None = None
     limit: str | None = None
     target: str = "ros1"  # (``command=gen``: the target, ``target=ros2``)
+    trace: str | None = None  # (``command=trace``: a trace of the repository, ``trace=tests/data/...``)
 
 
 @dataclass(frozen=True)
@@ -68,7 +69,7 @@ def _blocks(body: str) -> tuple[Block, ...]:
         attrs = dict(item.split("=", 1) for item in match.group(1).split())
         blocks.append(Block(attrs.get("file", "main.vfy"), match.group(2), attrs.get("encoding", "utf-8"),
                             attrs.get("command", "check"), attrs.get("rlimit"), attrs.get("limit"),
-                            attrs.get("target", "ros1")))
+                            attrs.get("target", "ros1"), attrs.get("trace")))
     return tuple(blocks)
 
 
@@ -146,12 +147,18 @@ def gen_diagnostics(model, directory: Path, name: str):
 
 
 def trace_diagnostics(section: Section, directory: Path, result, model) -> list:
-    """What `verify trace main.vfy TRACE...` reports, its traces the example's other files."""
+    """What `verify trace main.vfy TRACE...` reports, its traces the example's other files, or the trace
+    of the repository its model block names (``trace=``: an LTTng trace, which no text block holds)."""
     from verify.core.diagnostics import DiagnosticSink
     from verify.trace.run import read_traces, trace_system
 
+    stored = [str(ROOT / b.trace) for b in section.blocks if b.trace]
+    if stored:
+        from .test_trace import require_bindings
+
+        require_bindings()
     sink = DiagnosticSink()
-    recording = read_traces([str(directory / b.name) for b in section.blocks[1:]], sink)
+    recording = read_traces([str(directory / b.name) for b in section.blocks[1:]] + stored, sink)
     if recording is None:
         return sink.items
     return list(trace_system(model, result.project, recording).diagnostics)

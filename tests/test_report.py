@@ -111,7 +111,8 @@ def test_without_graphviz_the_page_holds_the_dot_text(tmp_path, monkeypatch):
 
 def test_measurements_are_shown_beside_the_bounds_and_load_in_a_browser(tmp_path):
     """`--trace`: CARET's recorded talker and listener (tests/data/caret-traces/) beside their model: a box
-    plot per task over its [bcet, wcet] and per chain metric against its bound and spec."""
+    plot per task over its [bcet, wcet], per connection over its delay range, and per chain metric against
+    its bound and spec."""
     from .test_trace import COMPLETED, TRACE, require_bindings
 
     require_bindings()
@@ -119,9 +120,12 @@ def test_measurements_are_shown_beside_the_bounds_and_load_in_a_browser(tmp_path
     assert main(["report", str(COMPLETED), "-o", str(out), "--trace", str(TRACE)]) == 0
     page = out.read_text(encoding="utf-8")
     section = page.split('<div id="measured">')[1]
-    assert section.count('<g class="measured"') == 4 and section.count('class="model"') == 2
+    # two tasks and the connection over their model's band; the chain's two metrics against bound and spec
+    assert section.count('<g class="measured"') == 5 and section.count('class="model"') == 3
     assert 'class="bound"' in section and 'class="spec"' in section
     assert "max 783.352 us" in section and "error[E801]" in section
+    assert "talker.chatter -&gt; listener.chatter" in section and "max 681.328 us" in section
+    assert "warning[E807]" in section
     done = chromium(tmp_path, out, "--dump-dom")
     assert done.returncode == 0 and console_messages(done.stderr) == []
     assert 'id="measured"' in done.stdout

@@ -67,22 +67,225 @@ def test_the_command_reports_and_calibrates_the_caret_trace(tmp_path, capsys):
     assert main(["trace", str(model), str(TRACE)]) == 1  # (E801: above the wcet)
     out, err = capsys.readouterr()
     assert "timer callback (period 1 s) of node `/talker`" in out and "error[E801]" in err
+    assert ("  talker.chatter -> listener.chatter: 5 messages, 363.889 us / 410.846 us / 681.328 us / 681.328 us in "
+            "[0 ms, 0 ms] above the delay\n") in out and "warning[E807]" in err
     assert main(["trace", str(model), str(TRACE), "--format", "json"]) == 1
     doc = json.loads(capsys.readouterr().out)
     assert doc["schema"] == "verify.trace/1" and {t["task"] for t in doc["tasks"]} == {
         "talker.timer_callback_0", "listener.subscription_callback_0"}
+    assert doc["connections"] == [{"connection": "talker.chatter -> listener.chatter", "topics": ["/chatter"],
+                                   "delay": {"count": 5, "min_s": "363889/1000000000", "p50_s": "205423/500000000",
+                                             "p99_s": "42583/62500000", "max_s": "42583/62500000"},
+                                   "delay_min_s": "0", "delay_max_s": "0"}]  # (681.328 us = 42583/62500000 s)
     assert main(["trace", str(model), str(TRACE), "--format", "sarif"]) == 1
-    assert json.loads(capsys.readouterr().out)["version"] == "2.1.0"
+    sarif = json.loads(capsys.readouterr().out)
+    assert sarif["version"] == "2.1.0" and "E807" in {r["ruleId"] for r in sarif["runs"][0]["results"]}
     before = model.read_text(encoding="utf-8")
     assert main(["trace", str(model), str(TRACE), "--calibrate", "--diff"]) == 0
     diff = capsys.readouterr().out
     assert "-    wcet 200 us  // completed\n" in diff and "+    wcet 941 us  // completed\n" in diff  # 783 us + 20 %
     assert "+    bcet 329 us  // completed\n" in diff  # 329.575 us, down
+    # the /chatter delays, 363.889 us .. 681.328 us: down, and up after 20 %
+    assert "+  connect talker.chatter -> listener.chatter delay 363 us .. 818 us\n" in diff
     assert model.read_text(encoding="utf-8") == before  # (--diff writes nothing)
     assert main(["trace", str(model), str(TRACE), "--calibrate", "--in-place"]) == 0
     capsys.readouterr()
     assert main(["trace", str(model), str(TRACE)]) == 0  # calibrated: the measurements agree with the model
-    assert "E801" not in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "E801" not in err and "E807" not in err
+
+
+#: the /chatter messages of the CARET trace, publish (`rcl_publish` of the /chatter publisher) to receipt
+#: (the listener's `dispatch_subscription_callback` with the source stamp `dds_bind_addr_to_stamp` bound
+#: to the published message), read by hand from babeltrace2's text: 05:29:52.288811360 published,
+#: stamp 1631078992288815446, dispatched 05:29:52.289222206 (410.846 us); in order of receipt
+CHATTER_DELAYS_NS = [681328, 363889, 410846, 400715, 481753]
+
+
+def test_the_caret_trace_links_each_chatter_message_to_its_receipt():
+    require_bindings()
+    result = _traced(COMPLETED, [str(TRACE)])
+    ((key, link),) = result.recording.links.items()  # (/parameter_events and /rosout are left out)
+    assert key == ("/chatter", "/talker", "/listener") and list(link.delays) == CHATTER_DELAYS_NS
+    assert not result.recording.partial
+    (c,) = result.delays.connections
+    assert c.connection == "talker.chatter -> listener.chatter" and c.topics == ("/chatter",)
+    assert (c.delays.count, c.delays.min, c.delays.p50, c.delays.max) == (
+        5, Fraction(363889, 10**9), Fraction(410846, 10**9), Fraction(681328, 10**9))
+    # completed.vfy gives the connection no delay: every message took longer than the 0 it assumes
+    (found,) = [d for d in result.diagnostics if d.code == "E807"]
+    assert found.severity.value == "warning" and found.span.line == 33 and "681.328 us" in found.message
+    # and the chain's alarms name it among the assumptions that broke
+    alarms = [d.message for d in result.diagnostics if d.code == "E803"]
+    assert alarms and all("a message of `talker.chatter -> listener.chatter` took 681.328 us, above its delay 0 ms"
+                          in m for m in alarms)
+
+
+def test_calibrating_replaces_a_delay_in_place_and_keeps_its_comment(tmp_path, capsys):
+    require_bindings()
+    model = tmp_path / "m.vfy"
+    connect = "connect talker.chatter -> listener.chatter"
+    model.write_text(COMPLETED.read_text(encoding="utf-8").replace(connect, connect + " delay 1 ms  // guess"),
+                     encoding="utf-8")
+    assert main(["trace", str(model), str(TRACE)]) == 1  # (E801)
+    err = capsys.readouterr().err  # (`delay 1 ms` is 1 ms exactly: every message was faster, none slower)
+    assert ("warning[E807]: connection `talker.chatter -> listener.chatter`: a message took only 363.889 us from "
+            "its publish to its receipt in the trace, below its delay's minimum 1 ms") in err
+    assert err.count("[E807]") == 1
+    assert main(["trace", str(model), str(TRACE), "--calibrate", "--margin", "0", "--in-place"]) == 0
+    assert ("connection talker.chatter -> listener.chatter: delay 1 ms -> 363 us .. 682 us"
+            in capsys.readouterr().err)
+    text = model.read_text(encoding="utf-8")
+    assert "  connect talker.chatter -> listener.chatter delay 363 us .. 682 us  // guess\n" in text
+    assert main(["trace", str(model), str(TRACE)]) == 0
+
+
+def _linking_reader(take: bool, dispatch: bool):
+    """A talker publishing /chatter and a listener subscribed to it, registered as ros2_tracing and CARET
+    record them (handles are made up)."""
+    from verify.trace.lttng_events import Reader
+
+    reader = Reader()
+    talker, listener = reader.process(1), reader.process(2)
+    reader.on_rcl_node_init(talker, 0, 1, 0x10, "talker", "/")
+    reader.on_rcl_publisher_init(talker, 0, 1, 0x11, 0x10, "/chatter")
+    reader.on_rcl_node_init(listener, 0, 2, 0x20, "listener", "/")
+    reader.on_rcl_subscription_init(listener, 0, 2, 0x21, 0x20, 0x22, "/chatter")
+    reader.on_rclcpp_subscription_init(listener, 0, 2, 0x21, 0x23)
+    reader.on_rclcpp_subscription_callback_added(listener, 0, 2, 0x23, 0x24)
+
+    def message(published: int, stamp: int, received: int | None) -> None:
+        reader.on_rcl_publish(talker, published, 1, 0x11, 0x99)
+        reader.on_rmw_publish(talker, published + 5, 1, 0x99, stamp)
+        if received is not None and take:
+            reader.on_rmw_take(listener, received, 2, 0x22, stamp, 1)
+        if received is not None and dispatch:
+            reader.on_dispatch_subscription_callback(listener, received + 7, 2, 0x24, stamp)
+
+    return reader, message
+
+
+@pytest.mark.parametrize("take, dispatch", [(True, False), (False, True), (True, True)])
+def test_a_receipt_is_linked_to_its_publish_by_the_source_timestamp(take, dispatch):
+    reader, message = _linking_reader(take, dispatch)
+    message(1000, 77, 1300)
+    message(2000, 78, 2100)
+    recording = reader.recording(("t",))
+    link = recording.links[("/chatter", "/talker", "/listener")]
+    first = 0 if take else 7  # (rmw_take and the dispatch of one message: one receipt, the first)
+    assert list(link.delays) == [300 + first, 100 + first] and not recording.partial
+
+
+def test_a_receipt_without_its_publish_and_a_publish_never_received_are_counted_as_partial():
+    reader, message = _linking_reader(True, False)
+    reader.on_rmw_take(reader.process(2), 500, 2, 0x22, 11, 1)  # (published before the trace began)
+    message(1000, 77, 1300)
+    message(2000, 78, None)  # (lost)
+    message(3000, 79, 3200)
+    message(4000, 80, None)  # (on its way when the trace ended: not counted)
+    recording = reader.recording(("t",))
+    assert list(recording.links[("/chatter", "/talker", "/listener")].delays) == [300, 200]
+    assert recording.partial == [
+        "message(s) published and not received by any subscription in the trace (lost, or received without a "
+        "trace event): 1 of `/chatter`",
+        "message(s) received without their publish in the trace (published before it began, or by a process not "
+        "traced): 1 of `/chatter`"]
+
+
+def test_publishes_given_up_count_as_lost_only_when_later_ones_were_received(monkeypatch):
+    from verify.trace import links
+
+    monkeypatch.setattr(links, "WINDOW", 2)
+    reader, message = _linking_reader(True, False)
+    for k in range(5):  # (no receipt at all: the subscriber's takes are not traced, say)
+        message(1000 * k, 70 + k, None)
+    assert reader.recording(("t",)).partial == []
+    reader, message = _linking_reader(True, False)
+    message(0, 60, 100)
+    for k in range(1, 5):  # (lost, all but the last two given up; then one more received)
+        message(1000 * k, 70 + k, None)
+    message(9000, 99, 9100)
+    assert reader.recording(("t",)).partial == [
+        "message(s) published and not received by any subscription in the trace (lost, or received without a "
+        "trace event): 4 of `/chatter`"]
+
+
+def test_receipts_of_a_topic_whose_publishes_carry_no_source_timestamp_are_no_partial_trace():
+    """ros2_tracing before Jazzy: `rmw_publish` without its `timestamp` (ignored), `rmw_take` with one."""
+    reader, _ = _linking_reader(True, False)
+    talker, listener = reader.process(1), reader.process(2)
+    for k in range(3):
+        reader.on_rcl_publish(talker, 1000 * k, 1, 0x11, 0x99)
+        reader.on_rmw_take(listener, 1000 * k + 300, 2, 0x22, 50 + k, 1)
+    recording = reader.recording(("t",))
+    assert recording.links == {} and recording.partial == []
+
+
+def test_a_link_of_nodes_the_model_does_not_connect_is_listed_not_guessed():
+    from verify.trace.delays import measure_delays
+
+    reader, message = _linking_reader(True, False)
+    message(1000, 77, 1300)
+    loaded = verify.load(str(COMPLETED))
+    model = loaded.system(None)
+    recording = reader.recording(("t",))
+    assert measure_delays(model, recording).connections[0].delays.max == Fraction(300, 10**9)
+    other = verify.load_text(MODEL, "m.vfy").system(None)
+    delays = measure_delays(other, recording)
+    assert delays.connections == () and delays.unpaired == (
+        ("`/chatter` from node `/talker` to node `/listener` (1 messages)",
+         "the model has no connection from an instance `talker` to an instance `listener`"),)
+
+
+IMPORTED = EXAMPLES / "caret-talker-listener" / "imported.vfy"
+
+
+def test_a_model_without_wcets_as_imported_is_calibrated_and_keeps_its_other_gaps(tmp_path, capsys):
+    """`verify import caret` writes no wcet, priority or core: the model does not load (E217, E213,
+    E214), yet a trace calibrates it — through a stand-in that fills those gaps to pair and measure."""
+    require_bindings()
+    assert main(["trace", str(IMPORTED), str(TRACE)]) == 2  # (not calibrating: it does not load)
+    assert "error[E217]" in capsys.readouterr().err
+    out = tmp_path / "calibrated.vfy"
+    assert main(["trace", str(IMPORTED), str(TRACE), "--calibrate", "-o", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert "Talker.timer_callback_0: wcet (none) -> 941 us" in err and "E213, E214" in err
+    text = out.read_text(encoding="utf-8")
+    assert ("    produces chatter\n    bcet 329 us  // measured\n    wcet 941 us  // measured\n  }\n" in text
+            and "    reads chatter\n    bcet 157 us  // measured\n    wcet 552 us  // measured\n  }\n" in text)
+    assert "  connect talker.chatter -> listener.chatter delay 363 us .. 818 us\n" in text
+    before = IMPORTED.read_text(encoding="utf-8")
+    assert text.count("\n") == before.count("\n") + 4 and "priority 1" not in text and "calibration_core" not in text
+    again = verify.load(str(out))
+    assert {d.code for d in again.diagnostics if d.severity.value == "error"} == {"E213", "E214"}
+
+
+def test_the_stand_in_fills_every_gap_and_nothing_else():
+    from verify.core.diagnostics import DiagnosticSink as Sink
+    from verify.core.source import SourceFile
+    from verify.frontend.parse import parse_text
+    from verify.trace.standin import only_gaps, stand_in_text
+
+    text = ("component C {\n  task T {\n    bcet 2 ms\n  }\n  task U { }\n}\n"
+            "system S {\n  core calibration_core\n  executor e single_threaded on calibration_core priority 1\n"
+            "  instance a : C {\n    task T timer 10 ms\n    task U executor e timer 20 ms\n  }\n}\n")
+    assert only_gaps(verify.load_text(text, "m.vfy").diagnostics)
+    module = parse_text(text, "m.vfy", Sink())
+    filled = stand_in_text(module, SourceFile("m.vfy", text))
+    assert "task T { wcet 2 ms }" not in filled and "    bcet 2 ms\n   wcet 2 ms }" in filled  # (T's bcet)
+    assert "task U {  wcet 1 us }" in filled  # (U on one line)
+    assert "system S { core calibration_core2 \n" in filled and "task T priority 1 on calibration_core2 timer" in filled
+    assert "task U executor e timer 20 ms" in filled  # (a callback needs neither)
+    assert verify.load_text(filled, "m.vfy").ok
+
+
+def test_a_model_with_other_errors_is_not_calibrated(tmp_path, capsys):
+    require_bindings()
+    model = tmp_path / "m.vfy"
+    model.write_text(IMPORTED.read_text(encoding="utf-8").replace("reads chatter", "reads chatterx"), encoding="utf-8")
+    assert main(["trace", str(model), str(TRACE), "--calibrate", "--in-place"]) == 2
+    assert "chatterx" in capsys.readouterr().err
+    assert "chatterx" in model.read_text(encoding="utf-8") and "measured" not in model.read_text(encoding="utf-8")
 
 
 # ------------------------------------------------------------------ job records: known answers
@@ -228,7 +431,7 @@ def test_a_callback_running_on_two_threads_at_once_gives_two_jobs_in_start_order
     reader.on_rclcpp_timer_link_node(p, 0, 1, 0x20, 0x10)
     reader.on_callback_start(p, 100, 1, 0x30)
     reader.on_callback_start(p, 200, 2, 0x30)
-    reader.on_rcl_publish(p, 250, 2, 0x40)
+    reader.on_rcl_publish(p, 250, 2, 0x40, 0x50)
     reader.on_callback_end(p, 400, 2, 0x30)
     reader.on_callback_end(p, 500, 1, 0x30)
     recording = reader.recording(("t",))

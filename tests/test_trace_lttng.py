@@ -1,7 +1,7 @@
 """`verify trace` on LTTng traces recorded here by the real tools (benchmarks/lttnglive.py): a small C
 program emitting the `ros2` provider's events with ros2_tracing's names and fields through Debian's
 liblttng-ust, recorded by Debian's LTTng in a session per test. Known answers: a talker whose jobs burn
-known times, a listener after each."""
+known times, a listener after each, taking the talker's message a known time after its publish."""
 from __future__ import annotations
 
 import re
@@ -71,9 +71,9 @@ def program(tmp_path_factory):
     return lttnglive.build(tmp_path_factory.mktemp("ros2_events"))
 
 
-def _record(program: Path, tmp_path: Path, burns_us: list[int]) -> Path:
-    return lttnglive.record(program, ["20000", "1000", ",".join(map(str, burns_us))], tmp_path / "trace",
-                            realtime=True)
+def _record(program: Path, tmp_path: Path, burns_us: list[int], delay_us: int = 0) -> Path:
+    return lttnglive.record(program, ["20000", "1000", ",".join(map(str, burns_us)), str(delay_us)],
+                            tmp_path / "trace", realtime=True)
 
 
 def test_burned_times_calibrate_to_those_times(program, tmp_path, capsys):
@@ -84,7 +84,9 @@ def test_burned_times_calibrate_to_those_times(program, tmp_path, capsys):
     text = model.read_text(encoding="utf-8")
     times = {k: int(v) for k, v in re.findall(r"(bcet|wcet) (\d+) us", text)[:2]}  # the talker's
     assert 2000 <= times["bcet"] <= 2000 + SLACK_US and 3500 <= times["wcet"] <= 3500 + SLACK_US
-    assert text.count(" us") == 4 and "timer 20 ms" in text  # (both tasks calibrated; nothing else changed)
+    # (both tasks and the connection calibrated; nothing else changed)
+    assert text.count(" us") == 6 and "timer 20 ms" in text
+    assert re.search(r"connect talker.chatter -> listener.chatter delay \d+ us \.\. \d+ us\n", text)
     capsys.readouterr()
     assert main(["trace", str(model), str(trace)]) == 0  # the calibrated model agrees with its trace
 
@@ -116,7 +118,34 @@ def test_the_trace_pairs_both_callbacks_and_measures_the_chain(program, tmp_path
     chain = result.measured.chains[0]
     # data age: the listener's end − the talker's start = 2 ms burnt + 1 ms burnt (+ the events between)
     assert chain.data_age is not None and chain.data_age.count == 4
+    # each publish linked to its take (rmw_publish's timestamp, rmw_take's), right after it
+    ((key, link),) = recording.links.items()
+    assert key == ("/chatter", "/talker", "/listener") and len(link.delays) == 4
+    assert all(0 < d <= SLACK_US * 1000 for d in link.delays)
+    (c,) = result.delays.connections
+    assert c.connection == "talker.chatter -> listener.chatter" and c.delays.count == 4
     assert Fraction(3, 1000) <= chain.data_age.min <= chain.data_age.max <= Fraction(3000 + SLACK_US, 10**6)
+
+
+def test_messages_taken_a_known_time_after_their_publish_calibrate_the_connections_delay(program, tmp_path, capsys):
+    trace = _record(program, tmp_path, [1000] * 5, delay_us=2500)
+    model = tmp_path / "m.vfy"
+    model.write_text(MODEL.replace("connect talker.chatter -> listener.chatter",
+                                   "connect talker.chatter -> listener.chatter delay 0 ms .. 1 ms  // guessed"),
+                     encoding="utf-8")
+    assert main(["trace", str(model), str(trace)]) == 0
+    err = capsys.readouterr().err
+    assert "warning[E807]: connection `talker.chatter -> listener.chatter`" in err and f"{model}:28:52" in err
+    assert main(["trace", str(model), str(trace), "--calibrate", "--margin", "0", "--in-place"]) == 0
+    capsys.readouterr()
+    found = re.search(r"connect talker.chatter -> listener.chatter delay (\d+) us \.\. (\d+) us  // guessed\n",
+                      model.read_text(encoding="utf-8"))
+    assert found is not None  # (the range replaced, the comment kept)
+    low, high = int(found[1]), int(found[2])
+    # publish → take: the 2.5 ms burnt between them, and the two events after the publish
+    assert 2500 <= low <= high <= 2500 + SLACK_US
+    assert main(["trace", str(model), str(trace)]) == 0
+    assert "E807" not in capsys.readouterr().err
 
 
 def test_a_truncated_recording_is_read_in_part(program, tmp_path, capsys):

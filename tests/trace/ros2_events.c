@@ -1,12 +1,16 @@
 /* A talker and a listener as ROS 2 records them, without ROS: the `ros2` provider's events
  * (ros2_tp.h: ros2_tracing's names and fields) of a node `/talker` whose timer callback runs every
  * PERIOD_US and burns the given times, publishing `/chatter` each time, and a node `/listener` whose
- * subscription callback then burns LISTENER_US. For tests/test_trace_lttng.py and the benchmark.
+ * subscription callback takes the message DELAY_US (default 0) after its publish and then burns
+ * LISTENER_US. A message is linked as ros2_tracing links it: `rmw_publish` gives the published message
+ * its source timestamp, and `rmw_take` carries it. For tests/test_trace_lttng.py and the benchmark.
  *
- *   ros2_events PERIOD_US LISTENER_US BURN_US[,BURN_US...]   a job every period, burning those times
+ *   ros2_events PERIOD_US LISTENER_US BURN_US[,BURN_US...] [DELAY_US]   a job every period, burning those
+ *                                                                         times
  *   ros2_events --fast N                                     N jobs of each, back to back, no burning
  *
- * Times are burnt by spinning on CLOCK_MONOTONIC (LTTng's clock): a job's start-to-end is its burn.
+ * Times are burnt by spinning on CLOCK_MONOTONIC (LTTng's clock): a job's start-to-end is its burn, and
+ * a message's publish-to-take is at least DELAY_US.
  */
 #define TRACEPOINT_DEFINE
 #define TRACEPOINT_CREATE_PROBES
@@ -17,8 +21,8 @@
 #include <string.h>
 #include <time.h>
 
-static const char NODE_T[1], RMW_T[1], NODE_L[1], RMW_L[1], TIMER[1], TIMER_CB[1], PUB[1], SUB[1], RMW_SUB[1],
-    SUB_CPP[1], SUB_CB[1], MESSAGE[1];
+static const char NODE_T[1], RMW_T[1], NODE_L[1], RMW_L[1], TIMER[1], TIMER_CB[1], PUB[1], RMW_PUB[1], SUB[1],
+    RMW_SUB[1], SUB_CPP[1], SUB_CB[1], MESSAGE[1], TAKEN[1];
 
 static long long now_ns(void) {
   struct timespec t;
@@ -44,6 +48,7 @@ static void registrations(long long period_us) {
   tracepoint(ros2, rclcpp_timer_callback_added, TIMER, TIMER_CB);
   tracepoint(ros2, rclcpp_callback_register, TIMER_CB, "demo::Talker::Talker()::{lambda()#1}");
   tracepoint(ros2, rclcpp_timer_link_node, TIMER, NODE_T);
+  tracepoint(ros2, rcl_publisher_init, PUB, NODE_T, RMW_PUB, "/chatter", 10);
   tracepoint(ros2, rcl_node_init, NODE_L, RMW_L, "listener", "/");
   tracepoint(ros2, rcl_subscription_init, SUB, NODE_L, RMW_SUB, "/chatter", 10);
   tracepoint(ros2, rclcpp_subscription_init, SUB, SUB_CPP);
@@ -51,12 +56,25 @@ static void registrations(long long period_us) {
   tracepoint(ros2, rclcpp_callback_register, SUB_CB, "demo::Listener::Listener()::{lambda(msg)#1}");
 }
 
-static void job(long long talker_us, long long listener_us) {
+/* as DDS stamps a sample: the wall clock, here made strictly increasing (each message its own stamp) */
+static long long source_timestamp(void) {
+  static long long last;
+  struct timespec t;
+  clock_gettime(CLOCK_REALTIME, &t);
+  const long long now = (long long)t.tv_sec * 1000000000LL + t.tv_nsec;
+  last = now > last ? now : last + 1;
+  return last;
+}
+
+static void job(long long talker_us, long long listener_us, long long delay_us) {
   tracepoint(ros2, callback_start, TIMER_CB, 0);
   burn_us(talker_us);
   tracepoint(ros2, rcl_publish, PUB, MESSAGE);
+  const long long stamp = source_timestamp();
+  tracepoint(ros2, rmw_publish, RMW_PUB, MESSAGE, stamp);
   tracepoint(ros2, callback_end, TIMER_CB);
-  tracepoint(ros2, rmw_take, RMW_SUB, MESSAGE, now_ns(), 1);
+  burn_us(delay_us);
+  tracepoint(ros2, rmw_take, RMW_SUB, TAKEN, stamp, 1);
   tracepoint(ros2, callback_start, SUB_CB, 0);
   burn_us(listener_us);
   tracepoint(ros2, callback_end, SUB_CB);
@@ -67,20 +85,20 @@ int main(int argc, char **argv) {
     const long long n = atoll(argv[2]);
     registrations(1000);
     for (long long k = 0; k < n; ++k) {
-      job(0, 0);
+      job(0, 0, 0);
     }
     return 0;
   }
-  if (argc != 4) {
-    fprintf(stderr, "usage: ros2_events PERIOD_US LISTENER_US BURN_US[,BURN_US...] | --fast N\n");
+  if (argc != 4 && argc != 5) {
+    fprintf(stderr, "usage: ros2_events PERIOD_US LISTENER_US BURN_US[,BURN_US...] [DELAY_US] | --fast N\n");
     return 2;
   }
-  const long long period_us = atoll(argv[1]), listener_us = atoll(argv[2]);
+  const long long period_us = atoll(argv[1]), listener_us = atoll(argv[2]), delay_us = argc == 5 ? atoll(argv[4]) : 0;
   registrations(period_us);
   long long next = now_ns() + period_us * 1000LL;
   for (char *item = strtok(argv[3], ","); item != NULL; item = strtok(NULL, ",")) {
     sleep_until(next);
-    job(atoll(item), listener_us);
+    job(atoll(item), listener_us, delay_us);
     next += period_us * 1000LL;
   }
   return 0;

@@ -1,5 +1,6 @@
 /* Tracepoints of the `ros2` provider with the names, fields and field types ros2_tracing's
- * tracetools defines (tracetools/tp_call.h), for tests/ros2_events.c: the events `verify trace` reads. */
+ * tracetools defines (tracetools/tp_call.h; rmw_publish with its source `timestamp`, as since Jazzy), for
+ * tests/ros2_events.c: the events `verify trace` reads. */
 #undef TRACEPOINT_PROVIDER
 #define TRACEPOINT_PROVIDER ros2
 
@@ -20,6 +21,15 @@ TRACEPOINT_EVENT(ros2, rcl_node_init,
             ctf_integer_hex(const void *, rmw_handle, rmw_handle_arg)
             ctf_string(node_name, node_name_arg)
             ctf_string(namespace, namespace_arg)))
+
+TRACEPOINT_EVENT(ros2, rcl_publisher_init,
+  TP_ARGS(const void *, publisher_handle_arg, const void *, node_handle_arg, const void *, rmw_publisher_handle_arg,
+          const char *, topic_name_arg, const size_t, queue_depth_arg),
+  TP_FIELDS(ctf_integer_hex(const void *, publisher_handle, publisher_handle_arg)
+            ctf_integer_hex(const void *, node_handle, node_handle_arg)
+            ctf_integer_hex(const void *, rmw_publisher_handle, rmw_publisher_handle_arg)
+            ctf_string(topic_name, topic_name_arg)
+            ctf_integer(const size_t, queue_depth, queue_depth_arg)))
 
 TRACEPOINT_EVENT(ros2, rcl_subscription_init,
   TP_ARGS(const void *, subscription_handle_arg, const void *, node_handle_arg,
@@ -73,6 +83,12 @@ TRACEPOINT_EVENT(ros2, rcl_publish,
   TP_ARGS(const void *, publisher_handle_arg, const void *, message_arg),
   TP_FIELDS(ctf_integer_hex(const void *, publisher_handle, publisher_handle_arg)
             ctf_integer_hex(const void *, message, message_arg)))
+
+TRACEPOINT_EVENT(ros2, rmw_publish,
+  TP_ARGS(const void *, rmw_publisher_handle_arg, const void *, message_arg, int64_t, timestamp_arg),
+  TP_FIELDS(ctf_integer_hex(const void *, rmw_publisher_handle, rmw_publisher_handle_arg)
+            ctf_integer_hex(const void *, message, message_arg)
+            ctf_integer(int64_t, timestamp, timestamp_arg)))
 
 TRACEPOINT_EVENT(ros2, rmw_take,
   TP_ARGS(const void *, rmw_subscription_handle_arg, const void *, message_arg, int64_t, source_timestamp_arg,

@@ -110,6 +110,7 @@ _ALL = [
     Code("E804", "measured latency above its spec"),
     Code("E805", "task or callback not found in the trace", Severity.WARNING),
     Code("E806", "trace cannot be read"),
+    Code("E807", "measured connection delay outside the model's", Severity.WARNING),
 ]
 
 CODES: dict[str, Code] = {c.code: c for c in _ALL}

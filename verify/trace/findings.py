@@ -7,10 +7,12 @@
 - E804 (error): a chain's measured reaction time, data age or jitter above its spec; at the spec;
 - E803 (warning, an alarm): a measured latency above its bound but within its spec — the bound rests on
   an assumption the robot broke, and the message names it: a task of the chain above its ``wcet``, a
-  timer off its period, else the connections' delays and the executors' order the model assumed;
+  timer off its period, a connection above its ``delay``, else the connections' delays and the
+  executors' order the model assumed;
 - E805 (warning): a task of the model without a callback in the trace, or a callback of an instance of
   the model without a task (listed, never guessed); at the task, or the instance;
-- E806: a trace that cannot be read (error), or that is read in part (warning: what was read stands).
+- E806: a trace that cannot be read (error), or that is read in part (warning: what was read stands);
+- E807 (warning, an alarm; ``delays.py``): a connection's measured delay above its ``delay``.
 """
 from __future__ import annotations
 
@@ -27,6 +29,7 @@ from ..core.source import NO_SPAN, Span
 from ..timing import AnalysisResult
 from ..model.units import fmt_time
 from .match import Matching
+from .delays import Delays
 from .metrics import Distribution, Measurements, TaskMeasure
 from .recording import Recording
 
@@ -52,8 +55,9 @@ class Where:
 
 def findings(model: SystemModel, analysis: AnalysisResult, recording: Recording, matching: Matching,
              measured: Measurements, project: Project, sink: DiagnosticSink,
-             tolerance: Fraction = PERIOD_TOLERANCE) -> None:
+             tolerance: Fraction = PERIOD_TOLERANCE, delays: Delays | None = None) -> None:
     where = Where(project)
+    delays = delays or Delays((), ())
     _reading(recording, sink)
     _unmatched(model, recording, matching, where, sink)
     for m in measured.tasks:
@@ -65,9 +69,9 @@ def findings(model: SystemModel, analysis: AnalysisResult, recording: Recording,
         for kind, got, bound in (("reaction_time", c.reaction_time, bounds.reaction_time.worst),
                                  ("data_age", c.data_age, bounds.data_age.worst)):
             if got is not None:
-                _latency(model, chain, kind, got.max, bound, getattr(chain, kind), measured, sink)
+                _latency(model, chain, kind, got.max, bound, getattr(chain, kind), measured, delays, sink)
         if c.jitter is not None:
-            _latency(model, chain, "jitter", c.jitter, bounds.jitter, chain.jitter, measured, sink)
+            _latency(model, chain, "jitter", c.jitter, bounds.jitter, chain.jitter, measured, delays, sink)
 
 
 def _reading(recording: Recording, sink: DiagnosticSink) -> None:
@@ -128,21 +132,22 @@ def _period(model: SystemModel, m: TaskMeasure, sink: DiagnosticSink, tolerance:
 
 
 def _latency(model: SystemModel, chain: ChainModel, kind: str, got: Fraction, bound: Fraction | None,
-             spec: Fraction | None, measured: Measurements, sink: DiagnosticSink) -> None:
+             spec: Fraction | None, measured: Measurements, delays: Delays, sink: DiagnosticSink) -> None:
     word = kind.replace("_", " ")
     if spec is not None and got > spec:
         sink.emit("E804", f"chain `{chain.name}`: the measured {word} {fmt_time(got)} is above its spec "
                   f"{fmt_time(spec)}", chain.spec_span(kind, chain.span), "violated on the robot",
-                  notes=[_broken(model, chain, measured)],
+                  notes=[_broken(model, chain, measured, delays)],
                   help="the robot misses this spec: change the system (`synth`), or the spec")
     elif bound is not None and got > bound:
         sink.emit("E803", f"chain `{chain.name}`: the measured {word} {fmt_time(got)} is above its bound "
-                  f"{fmt_time(bound)} — an assumption of the bound broke: {_broken(model, chain, measured)}",
+                  f"{fmt_time(bound)} — an assumption of the bound broke: {_broken(model, chain, measured, delays)}",
                   chain.spec_span(kind, chain.span), "above the bound",
-                  help="correct the assumption named (`verify trace --calibrate` writes measured execution times)")
+                  help="correct the assumption named (`verify trace --calibrate` writes measured execution times and "
+                       "delays)")
 
 
-def _broken(model: SystemModel, chain: ChainModel, measured: Measurements) -> str:
+def _broken(model: SystemModel, chain: ChainModel, measured: Measurements, delays: Delays) -> str:
     """The assumption of a chain's bound that the measurements contradict, in words."""
     said = []
     for task_id in chain.tasks:
@@ -156,11 +161,16 @@ def _broken(model: SystemModel, chain: ChainModel, measured: Measurements) -> st
                 and m.intervals.max > task.activation.period * (1 + PERIOD_TOLERANCE):
             said.append(f"the timer of `{task_id}` waited up to {fmt_time(m.intervals.max)} between jobs, its "
                         f"period is {fmt_time(task.activation.period)}")
+    for h in chain.hops:
+        c = delays.of(h.link.source, h.link.target)
+        if c is not None and c.delays.max > c.delay_max:
+            said.append(f"a message of `{c.connection}` took {fmt_time(c.delays.max)}, above its delay "
+                        f"{fmt_time(c.delay_max)}")
     if said:
         return "; ".join(said)
-    delays = ", ".join(f"`{h.link.source} -> {h.link.target}` ≤ {fmt_time(h.link.delay_max)}" for h in chain.hops)
+    words = ", ".join(f"`{h.link.source} -> {h.link.target}` ≤ {fmt_time(h.link.delay_max)}" for h in chain.hops)
     return ("every task of the chain stayed within its wcet and period, so the connections took longer than their "
-            f"delays ({delays}) or the executor ran the callbacks in another order than the model assumed")
+            f"delays ({words}) or the executor ran the callbacks in another order than the model assumed")
 
 
 def distribution_words(d: Distribution | None) -> str:

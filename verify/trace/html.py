@@ -78,6 +78,9 @@ def section(result: TraceResult) -> str:
         rows.append(f"<tr><td><b>{_e(m.task)}</b><br><span class=\"meta\">{_e(m.callback)}</span></td>"
                     f"<td>execution time</td><td>{_e(_words(m.execution))}</td>"
                     f"<td>{box_plot(m.execution, (t.bcet, t.wcet), [], m.task)}</td></tr>")
+    for k in result.delays.connections:
+        rows.append(f"<tr><td><b>{_e(k.connection)}</b></td><td>delay</td><td>{_e(_words(k.delays))}</td>"
+                    f"<td>{box_plot(k.delays, (k.delay_min, k.delay_max), [], k.connection)}</td></tr>")
     for c in result.measured.chains:
         bounds = result.analysis.chain(c.chain)
         specs = {s.kind: s.spec for s in bounds.specs}
@@ -92,6 +95,6 @@ def section(result: TraceResult) -> str:
     findings = "".join(f"<li>{_e(d.severity.value)}[{_e(d.code)}]: {_e(d.message)}</li>" for d in result.diagnostics)
     return (f'<div id="measured"><p class="meta">{_e(rec.events)} events ({_e(rec.source)}) from '
             f"{_e(', '.join(rec.paths))}. Box: median to 99th percentile; whiskers: least to greatest; band: the "
-            "model's [bcet, wcet]; lines: the analysis' bound (dashed) and the spec.</p>"
+            "model's [bcet, wcet] (a connection's delay range); lines: the analysis' bound (dashed) and the spec.</p>"
             f"{partial}<table><tr><th>task or chain</th><th>metric</th><th>measured</th><th>against the model</th></tr>"
             + "".join(rows) + "</table>" + (f"<ul>{findings}</ul>" if findings else "") + "</div>")

@@ -14,6 +14,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from types import ModuleType
 
+from ..interop.caret.read import IGNORED_TOPICS
+from .links import Linker
 from .recording import Callback, Jobs, Recording
 
 #: the events read, with the fields each handler takes (ros2_tracing's names; CARET records the same)
@@ -22,14 +24,25 @@ USED: dict[str, tuple[str, ...]] = {
     "ros2:rcl_timer_init": ("timer_handle", "period"),
     "ros2:rclcpp_timer_callback_added": ("timer_handle", "callback"),
     "ros2:rclcpp_timer_link_node": ("timer_handle", "node_handle"),
-    "ros2:rcl_subscription_init": ("subscription_handle", "node_handle", "topic_name"),
+    "ros2:rcl_publisher_init": ("publisher_handle", "node_handle", "topic_name"),
+    "ros2:rcl_subscription_init": ("subscription_handle", "node_handle", "rmw_subscription_handle", "topic_name"),
     "ros2:rclcpp_subscription_init": ("subscription_handle", "subscription"),
     "ros2:rclcpp_subscription_callback_added": ("subscription", "callback"),
     "ros2:rclcpp_callback_register": ("callback", "symbol"),
     "ros2:callback_start": ("callback",),
     "ros2:callback_end": ("callback",),
-    "ros2:rcl_publish": ("publisher_handle",),
+    "ros2:rcl_publish": ("publisher_handle", "message"),
+    # a publish's source timestamp: ros2_tracing's (since Jazzy), CARET's
+    "ros2:rmw_publish": ("message", "timestamp"),
+    "ros2_caret:dds_bind_addr_to_stamp": ("addr", "source_stamp"),
+    # a receipt, with the source timestamp of the message taken: ros2_tracing's, CARET's (whose field is
+    # `source_stamp` in its early traces, `source_timestamp` later: "a|b" takes the one the event has)
+    "ros2:rmw_take": ("rmw_subscription_handle", "source_timestamp", "taken"),
+    "ros2:dispatch_subscription_callback": ("callback", "source_timestamp|source_stamp"),
 }
+#: what a reader's cache of the publishers and subscriptions linked holds for one not seen yet
+_UNSEEN: tuple[str, str] = ("", "")
+_UNSEEN_SUBSCRIPTION: tuple[str, str, tuple[int, int]] = ("", "", (0, 0))
 #: where Debian installs the bindings for the system interpreter
 SYSTEM_PYTHON = "/usr/bin/python3"
 
@@ -91,6 +104,14 @@ class _Process:
     timer_nodes: dict[int, int] = field(default_factory=dict)  # timer handle -> node handle
     timer_callbacks: dict[int, int] = field(default_factory=dict)  # callback -> timer handle
     subscriptions: dict[int, tuple[int, str]] = field(default_factory=dict)  # rcl handle -> (node, topic)
+    rmw_subscriptions: dict[int, int] = field(default_factory=dict)  # rmw handle -> rcl handle
+    publishers: dict[int, tuple[int, str]] = field(default_factory=dict)  # rcl handle -> (node, topic)
+    publishing: dict[int, tuple[str, str, int, int]] = field(default_factory=dict)  # thread -> (topic, node,
+    # message, time) of its last publish still waiting for its source timestamp
+    linked: dict[int, tuple[str, str] | None] = field(default_factory=dict)  # publisher -> (topic, node) of
+    # a publisher whose messages are linked (None: not linked), as first published
+    receiving: dict[int | None, tuple[str, str, tuple[int, int]] | None] = field(default_factory=dict)
+    # rcl subscription -> (topic, node, key) of a subscription whose receipts are linked, as first received
     rclcpp_subscriptions: dict[int, int] = field(default_factory=dict)  # rclcpp subscription -> rcl handle
     subscription_callbacks: dict[int, int] = field(default_factory=dict)  # callback -> rclcpp subscription
     symbols: dict[int, str] = field(default_factory=dict)  # callback -> symbol
@@ -104,6 +125,7 @@ class _Process:
 class Reader:
     def __init__(self) -> None:
         self.processes: dict[int, _Process] = {}
+        self.linker = Linker()
         self.events = 0
         self.ignored: dict[str, int] = {}
         self.handlers: dict[str, Callable[..., None]] = {name: getattr(self, "on_" + name.split(":", 1)[1])
@@ -134,8 +156,15 @@ class Reader:
     def on_rclcpp_timer_link_node(self, p: _Process, at: int, tid: int, timer: int, node: int) -> None:
         p.timer_nodes[timer] = node
 
-    def on_rcl_subscription_init(self, p: _Process, at: int, tid: int, handle: int, node: int, topic: str) -> None:
+    def on_rcl_publisher_init(self, p: _Process, at: int, tid: int, handle: int, node: int, topic: str) -> None:
+        p.publishers[handle] = (node, topic)
+        p.linked.pop(handle, None)  # (an address used again)
+
+    def on_rcl_subscription_init(self, p: _Process, at: int, tid: int, handle: int, node: int, rmw: int,
+                                 topic: str) -> None:
         p.subscriptions[handle] = (node, topic)
+        p.rmw_subscriptions[rmw] = handle
+        p.receiving.pop(handle, None)  # (an address used again)
 
     def on_rclcpp_subscription_init(self, p: _Process, at: int, tid: int, handle: int, subscription: int) -> None:
         p.rclcpp_subscriptions[subscription] = handle
@@ -163,13 +192,48 @@ class Reader:
         start, wrote = started
         jobs.add(start, at, wrote if wrote > start else at)
 
-    def on_rcl_publish(self, p: _Process, at: int, tid: int, publisher: int) -> None:
+    def on_rcl_publish(self, p: _Process, at: int, tid: int, publisher: int, message: int) -> None:
+        linked = p.linked.get(publisher, _UNSEEN)
+        if linked is _UNSEEN:
+            linked = p.linked[publisher] = _linked_topic(p, publisher)
+        if linked is not None:
+            p.publishing[tid] = (linked[0], linked[1], message, at)
+        elif p.publishing:
+            p.publishing.pop(tid, None)
         callback = p.running.get(tid)
         if callback is None:
             return
         started = p.open.get((callback, tid))
         if started is not None:
             p.open[(callback, tid)] = (started[0], at)
+
+    def on_rmw_publish(self, p: _Process, at: int, tid: int, message: int, stamp: int) -> None:
+        self._stamped(p, tid, message, stamp)
+
+    def on_dds_bind_addr_to_stamp(self, p: _Process, at: int, tid: int, message: int, stamp: int) -> None:
+        self._stamped(p, tid, message, stamp)
+
+    def _stamped(self, p: _Process, tid: int, message: int, stamp: int) -> None:
+        """The source timestamp of the message last published on thread ``tid``, if it is that message."""
+        waiting = p.publishing.get(tid)
+        if waiting is not None and waiting[2] == message:
+            del p.publishing[tid]
+            self.linker.published(waiting[0], waiting[1], stamp, waiting[3])
+
+    def on_rmw_take(self, p: _Process, at: int, tid: int, rmw: int, stamp: int, taken: int) -> None:
+        if taken:
+            self._received(p, p.rmw_subscriptions.get(rmw), stamp, at)
+
+    def on_dispatch_subscription_callback(self, p: _Process, at: int, tid: int, callback: int, stamp: int) -> None:
+        subscription = p.subscription_callbacks.get(callback)
+        self._received(p, p.rclcpp_subscriptions.get(subscription) if subscription is not None else None, stamp, at)
+
+    def _received(self, p: _Process, handle: int | None, stamp: int, at: int) -> None:
+        linked = p.receiving.get(handle, _UNSEEN_SUBSCRIPTION)
+        if linked is _UNSEEN_SUBSCRIPTION:
+            linked = p.receiving[handle] = _linked_subscription(p, handle)
+        if linked is not None:
+            self.linker.received(linked[0], linked[1], linked[2], stamp, at)
 
     # ------------------------------------------------------------ the result
 
@@ -197,7 +261,28 @@ class Reader:
             if unfinished:
                 out.partial.append(f"{unfinished} job(s) of process {pid} started but did not end before the trace did "
                                    "(left out)")
+        self.linker.finish(out, {topic for p in self.processes.values() for _, topic in p.subscriptions.values()})
         return out
+
+
+def _linked_topic(p: _Process, publisher: int) -> tuple[str, str] | None:
+    """(topic, node) of a registered publisher whose messages are linked (None: unknown, or of a topic
+    left out)."""
+    topic = p.publishers.get(publisher)
+    node = p.nodes.get(topic[0]) if topic is not None else None
+    if topic is None or node is None or topic[1] in IGNORED_TOPICS:
+        return None
+    return topic[1], node
+
+
+def _linked_subscription(p: _Process, handle: int | None) -> tuple[str, str, tuple[int, int]] | None:
+    """(topic, node, key) of a registered subscription whose receipts are linked (None: unknown, or of
+    a topic left out)."""
+    found = p.subscriptions.get(handle) if handle is not None else None
+    node = p.nodes.get(found[0]) if found is not None else None
+    if handle is None or found is None or node is None or found[1] in IGNORED_TOPICS:
+        return None
+    return found[1], node, (id(p), handle)
 
 
 def _in_start_order(jobs: Jobs) -> Jobs:

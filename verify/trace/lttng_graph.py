@@ -83,7 +83,7 @@ class _Classes:
         wanted = USED.get(name)
         handler = self.reader.handlers.get(name)
         payload = _members(nb, nb.event_class_borrow_payload_field_class_const(cls), self.getters)
-        fields = tuple(payload.get(f, (0, None)) for f in wanted or ())
+        fields = tuple(_field(payload, f) for f in wanted or ())
         if wanted is None or any(g is None for _, g in fields) \
                 or nb.stream_class_borrow_default_clock_class_const(stream_class) is None:
             name = name if wanted is None else f"{name} (without ros2_tracing's fields or a clock)"
@@ -91,6 +91,11 @@ class _Classes:
         pid = context.get("vpid", (0, None))
         tid = context.get("vtid", (0, None))
         return (handler, name, fields, pid if pid[1] else None, tid if tid[1] else None)
+
+
+def _field(payload: dict[str, tuple[int, Getter | None]], wanted: str) -> tuple[int, Getter | None]:
+    """The payload member ``wanted`` names (``"a|b"``: the first of them the event has)."""
+    return next((payload[name] for name in wanted.split("|") if name in payload), (0, None))
 
 
 def run(traces: Sequence[str], reader: Reader) -> None:
@@ -144,7 +149,7 @@ def _consumer(nb: Any, classes: _Classes, reader: Reader, stop: type[Exception])
     clock, ns_from_origin = nb.message_event_borrow_default_clock_snapshot_const, nb.clock_snapshot_get_ns_from_origin
     payload_of, context_of = nb.event_borrow_payload_field_const, nb.event_borrow_common_context_field_const
     member, put = nb.field_structure_borrow_member_field_by_index_const, nb.message_put_ref
-    process, ignore, known = reader.process, reader.ignore, classes.known
+    process, processes, ignore, known = reader.process, reader.processes, reader.ignore, classes.known
 
     def consume(iterator: Any) -> None:
         status, messages = get_range(iterator)
@@ -168,15 +173,21 @@ def _consumer(nb: Any, classes: _Classes, reader: Reader, stop: type[Exception])
                     continue
                 _, at = ns_from_origin(clock(m))
                 payload = payload_of(event)
-                if len(fields) == 1:  # (callback_start, callback_end, rcl_publish: most events)
-                    (i, g), = fields
-                    values = (g(member(payload, i)),)
-                else:
-                    values = tuple(g(member(payload, i)) for i, g in fields)
                 context = context_of(event) if pid is not None or tid is not None else None
                 p = pid[1](member(context, pid[0])) if pid is not None else 0
                 t = tid[1](member(context, tid[0])) if tid is not None else 0
-                handler(process(p), at, t, *values)
+                q = processes.get(p) or process(p)
+                if len(fields) == 1:  # (callback_start, callback_end: most events)
+                    (i, g), = fields
+                    handler(q, at, t, g(member(payload, i)))
+                elif len(fields) == 2:  # (rcl_publish, rmw_publish, a dispatch)
+                    (i, g), (j, h) = fields
+                    handler(q, at, t, g(member(payload, i)), h(member(payload, j)))
+                elif len(fields) == 3:  # (rmw_take)
+                    (i, g), (j, h), (k, f) = fields
+                    handler(q, at, t, g(member(payload, i)), h(member(payload, j)), f(member(payload, k)))
+                else:
+                    handler(q, at, t, *[g(member(payload, i)) for i, g in fields])
         finally:
             reader.events += count
             for m in messages:

@@ -85,10 +85,23 @@ class Jobs:
 
 
 @dataclass
+class Link:
+    """The messages of one topic from one publishing node to one subscribing node, each linked from its
+    publish to its receipt by its source timestamp (specs/trace.md §1.1): ``delays``, receipt − publish
+    in nanoseconds, in the order they were received (8 bytes a message)."""
+
+    topic: str
+    publisher: str  # node, "/ns/name"
+    subscriber: str  # node
+    delays: array[int] = field(default_factory=lambda: array("q"))
+
+
+@dataclass
 class Recording:
-    """One trace (or several of one run) as read: its callbacks by key, their jobs, and what the reader
-    could not use. ``partial`` says why the recording is incomplete (a truncated trace, a job without
-    its end); ``ignored`` counts the events of kinds the reader does not use, by name."""
+    """One trace (or several of one run) as read: its callbacks by key, their jobs, what the reader could
+    not use, and the messages linked from publish to receipt (``links``, LTTng traces only). ``partial``
+    says why the recording is incomplete (a truncated trace, a job without its end, a message not
+    linked); ``ignored`` counts the events of kinds the reader does not use, by name."""
 
     paths: tuple[str, ...]
     source: str  # "lttng" | "job records" | "bag"
@@ -97,6 +110,7 @@ class Recording:
     events: int = 0
     ignored: Counter[str] = field(default_factory=Counter)
     partial: list[str] = field(default_factory=list)
+    links: dict[tuple[str, str, str], Link] = field(default_factory=dict)  # (topic, publisher, subscriber)
 
     def jobs_of(self, key: str) -> Jobs:
         return self.jobs.get(key) or Jobs()

@@ -69,11 +69,27 @@ def to_text(result: TraceResult) -> str:
             s = spec.get("jitter")
             lines.append(f"  {c.chain} jitter: {fmt_time(c.jitter)}; bound {fmt_time(b.jitter)}"
                          + (f", spec {fmt_time(s)}" if s is not None else ""))
+    lines += _connection_lines(result)
     unpaired = len(result.matching.tasks_unmatched) + len(result.matching.callbacks_unmatched)
     if unpaired:
         lines += ["", f"not paired: {len(result.matching.tasks_unmatched)} task(s), "
                       f"{len(result.matching.callbacks_unmatched)} callback(s) (E805 says which)"]
     return "\n".join(lines) + "\n"
+
+
+def _connection_lines(result: TraceResult) -> list[str]:
+    delays = result.delays
+    lines = []
+    if delays.connections:
+        lines += ["", "connections (delay from publish to receipt min / p50 / p99 / max against the model's delay):"]
+    for c in delays.connections:
+        ok = ("above the delay" if c.delays.max > c.delay_max else "below the delay" if c.delays.min < c.delay_min
+              else "ok")
+        lines.append(f"  {c.connection}: {c.delays.count} messages, {_words(c.delays)} in [{fmt_time(c.delay_min)}, "
+                     f"{fmt_time(c.delay_max)}] {ok}")
+    for what, reason in delays.unpaired:
+        lines.append(f"  messages of {what}: not paired with a connection ({reason})")
+    return lines
 
 
 def to_json(result: TraceResult) -> dict[str, Any]:
@@ -98,7 +114,11 @@ def to_json(result: TraceResult) -> dict[str, Any]:
                                "jitter_s": _q(model.chain(c.chain).jitter)},
                     "specs": {s.kind + "_s": _q(s.spec) for s in model.chain(c.chain).specs}}
                    for c in result.measured.chains],
+        "connections": [{"connection": c.connection, "topics": list(c.topics), "delay": _dist(c.delays),
+                         "delay_min_s": _q(c.delay_min), "delay_max_s": _q(c.delay_max)}
+                        for c in result.delays.connections],
         "unpaired": {"tasks": [{"task": t, "reason": r} for t, r in result.matching.tasks_unmatched],
+                     "links": [{"messages": what, "reason": r} for what, r in result.delays.unpaired],
                      "callbacks": [{"callback": rec.callbacks[k].describe(), "reason": r}
                                    for k, r in result.matching.callbacks_unmatched]},
     }

@@ -11,6 +11,7 @@ from ..frontend.loader import Project
 from ..model.system import SystemModel
 from ..core.source import Span
 from ..timing import AnalysisResult, analyze
+from .delays import Delays, delay_findings, measure_delays
 from .findings import PERIOD_TOLERANCE, findings
 from .match import Matching, match
 from .metrics import Measurements, measure
@@ -25,6 +26,7 @@ class TraceResult:
     measured: Measurements
     analysis: AnalysisResult
     diagnostics: tuple[Diagnostic, ...]
+    delays: Delays = Delays((), ())  # the connections' measured delays (LTTng traces with message links)
 
 
 def read_traces(paths: Sequence[str], sink: DiagnosticSink) -> Recording | None:
@@ -90,8 +92,10 @@ def trace_system(model: SystemModel, project: Project, recording: Recording, *,
     """The measurements of ``recording`` against ``model``, with the findings."""
     matching = match(model, recording)
     measured = measure(model, recording, matching)
+    delays = measure_delays(model, recording)
     analysis = analyze(model)
     sink = DiagnosticSink()
-    findings(model, analysis, recording, matching, measured, project, sink, tolerance)
+    findings(model, analysis, recording, matching, measured, project, sink, tolerance, delays)
+    delay_findings(model, delays, project, sink)
     return TraceResult(model.name, recording, matching, measured, analysis,
-                       tuple(sorted(sink.items, key=Diagnostic.sort_key)))
+                       tuple(sorted(sink.items, key=Diagnostic.sort_key)), delays)
