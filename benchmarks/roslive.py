@@ -53,7 +53,9 @@ def build(project: Path) -> str:
 
 
 def burn_execution_times(project: Path, wcet_ns: dict[str, int]) -> None:
-    """Fill every ``on_TASK`` of the user skeletons with a job that burns its execution time."""
+    """Fill every ``on_TASK`` of the user skeletons with a job that burns its execution time of its thread's
+    CPU time (``burn_cpu``: the thread's CPU clock, the quantity a WCET and the job records' ``cpu`` are;
+    not wall time, which would count what other threads took)."""
     for path in (project / "user").glob("*.hpp"):
         text = path.read_text(encoding="utf-8")
 

@@ -1,7 +1,8 @@
 """The generated ROS 1 nodes of the navigation example, built and run for real (issue: model to robot).
 
 The project of examples/navigation/navigation-ros.vfy (its message types bound to ROS messages) is
-generated, its skeletons filled with jobs that burn each task's worst-case execution time, built with
+generated, its skeletons filled with jobs that burn 80 % of each task's worst-case execution time of
+their thread's CPU time (`burn_cpu`, the thread's CPU clock: the quantity the job records' `cpu` is), built with
 CMake against Debian's ROS 1, and run for about 10 s on a private roscore with a recorder, a stock
 subscriber and `rosbag record` beside it. A bag of sensor_msgs/LaserScan made here drives the obstacle
 avoidance in its laser's place. From the recorded job records and messages the tests check the semantics the
@@ -244,13 +245,23 @@ def test_verify_trace_reads_the_job_records_and_recomputes_the_monitors_chains(l
     """`verify trace` on the run's recording (the /verify/jobs records among the recorder's lines): every
     task paired with its node's records, its jobs counted as recorded, and each chain's data age,
     reaction time and jitter, from what each job's record says it read (specs/trace.md §3), those the
-    stamps the nodes carried give, and what the monitors summed up: count, least and greatest, to the ns."""
+    stamps the nodes carried give, and what the monitors summed up: count, least and greatest, to the ns.
+    Each job's execution time is the CPU time its thread spent (its record's `cpu`): what the functional
+    code burnt of that clock (BURN_SHARE of the wcet) and the glue's own work, within what the job took
+    from start to finish."""
     model, jobs = live["model"], rosrun.jobs(live["records"])
     code = main(["trace", str(live["model_dir"] / MODEL), str(live["base"] / "run.jsonl"), "--format", "json"])
     doc = json.loads(capsys.readouterr().out)
+    # (E801 is no failure here: a few jobs of the 150 us and 500 us tasks, a first one among them, used tens
+    # to hundreds of us of CPU time more than their code burnt — page faults, interrupts and a virtual
+    # machine's stolen time are charged to the running thread — above the 20 % the model leaves)
     assert code in (0, 1) and doc["source"] == "job records" and not doc["unpaired"]["tasks"]
     for task in doc["tasks"]:
-        assert task["jobs"] == len(_by_task(jobs, *_node(model, task["task"])))
+        assert task["jobs"] == task["cpu_jobs"] == len(_by_task(jobs, *_node(model, task["task"])))
+        assert Fraction(task["execution"]["p50_s"]) <= model.task(task["task"]).wcet, task
+    burnt = {t.name: int(t.wcet * BURN_SHARE * 1_000_000_000) for t in model.tasks}
+    for job in jobs:  # (what the job burnt of its thread's CPU clock, within what it took)
+        assert burnt[job["task"]] <= job["cpu"] <= job["finish"] - job["start"], job
     for index, chain in enumerate(doc["chains"]):
         seen = chain_observations(model, jobs, index)["data_age"]
         monitor = _monitor(live, index)

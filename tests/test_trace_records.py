@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 from fractions import Fraction
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -28,24 +29,28 @@ def model(tmp_path: Path) -> Path:
     return path
 
 
-def _loop_jobs(n: int = 5) -> list[tuple[dict, dict]]:
+def _loop_jobs(n: int = 5, step: int = MS, cpu: tuple[int, int] | None = None) -> list[tuple[dict, dict]]:
     """(sensor job, control job) k = 1..n: the sensor every 10 ms for 1 ms; the control starts 1.5 ms after
     the sensor's start, 0.5 ms after its publish, while that message is still on its way (2 ms): it
-    reads the sensor's previous job (none the first time)."""
+    reads the sensor's previous job (none the first time); it ends ``step`` after its start. ``cpu``:
+    the CPU time each job's thread spent (sensor, control), in every record; None: no record says."""
     out = []
     for k in range(1, n + 1):
         t = (k - 1) * 10 * MS
-        out.append(({"seq": k, "release": t, "start": t, "finish": t + MS},
-                    {"seq": k, "release": t + MS, "start": t + 3 * MS // 2, "finish": t + 5 * MS // 2,
-                     "read": k - 1}))
+        times = {"cpu": cpu[0]} if cpu else {}
+        sensor = {"seq": k, "release": t, "start": t, "finish": t + MS, **times}
+        times = {"cpu": cpu[1]} if cpu else {}
+        control = {"seq": k, "release": t + MS, "start": t + 3 * MS // 2, "finish": t + 3 * MS // 2 + step,
+                   "read": k - 1, **times}
+        out.append((sensor, control))
     return out
 
 
-def _ros2(directory: Path, reads: bool = True) -> Path:
-    """The loop's jobs as the ROS 2 nodes write them: one file per process."""
+def _ros2(directory: Path, reads: bool = True, **jobs: Any) -> Path:
+    """The loop's jobs (``_loop_jobs(**jobs)``) as the ROS 2 nodes write them: one file per process."""
     directory.mkdir(exist_ok=True)
     sensor, control = [], []
-    for s, c in _loop_jobs():
+    for s, c in _loop_jobs(**jobs):
         sensor.append({"unit": "sensor_Sample", "task": "sensor.Sample", "event": s["seq"],
                        "writes": {"data": s["seq"]}, "reads": {}, "stamps": [], **s})
         job = {"unit": "control_Step", "task": "control.Step", "event": c["seq"], "writes": {}, "stamps": [],
@@ -58,11 +63,11 @@ def _ros2(directory: Path, reads: bool = True) -> Path:
     return directory
 
 
-def _ros1(path: Path, reads: bool = True) -> Path:
-    """The loop's jobs as a recorder of the ROS 1 nodes' /verify/jobs writes them (a port without a value
-    is not among the reads)."""
+def _ros1(path: Path, reads: bool = True, **jobs: Any) -> Path:
+    """The loop's jobs (``_loop_jobs(**jobs)``) as a recorder of the ROS 1 nodes' /verify/jobs writes them
+    (a port without a value is not among the reads)."""
     lines = []
-    for s, c in _loop_jobs():
+    for s, c in _loop_jobs(**jobs):
         lines.append({"node": "/Loop/sensor", "task": "Sample", "reads": {}, **s})
         job = {"node": "/Loop/control", "task": "Step", **{k: v for k, v in c.items() if k != "read"}}
         if reads:
@@ -170,3 +175,85 @@ def test_an_empty_directory_of_records_is_no_trace(model, tmp_path, capsys):
     assert main(["trace", str(model), str(trace)]) == 2
     err = capsys.readouterr().err
     assert "error[E806]" in err and "no job record in" in err and "Traceback" not in err
+
+
+# ------------------------------------------------------------------ execution time: the CPU time the records give
+
+def _where(write, tmp_path: Path) -> Path:
+    return tmp_path / ("trace" if write is _ros2 else "run.jsonl")
+
+
+@pytest.mark.parametrize("write", [_ros1, _ros2])
+def test_a_job_longer_than_its_wcet_from_start_to_finish_within_it_of_cpu_time_is_no_e801(model, tmp_path, write,
+                                                                                          capsys):
+    """The control's jobs take 1.5 ms from start to finish (its wcet: 1 ms) and 0.9 ms of its thread's CPU
+    time: its execution time is the CPU time, within the wcet; start to finish and release to finish
+    (2 ms) are reported beside it."""
+    trace = write(_where(write, tmp_path), step=3 * MS // 2, cpu=(MS // 2, 9 * MS // 10))
+    result = _traced(model, [str(trace)])
+    assert "E801" not in {d.code for d in result.diagnostics}
+    step = result.measured.task("control.Step")
+    assert step is not None and step.execution is not None and step.elapsed is not None and step.response
+    assert (step.cpu_jobs, step.execution.min, step.execution.max) == (5, Fraction(9, 10_000), Fraction(9, 10_000))
+    assert (step.elapsed.min, step.elapsed.max, step.response.max) == (Fraction(3, 2000), Fraction(3, 2000),
+                                                                       Fraction(1, 500))
+    assert main(["trace", str(model), str(trace), "--format", "json"]) == 0
+    (task,) = (t for t in json.loads(capsys.readouterr().out)["tasks"] if t["task"] == "control.Step")
+    assert (task["cpu_jobs"], task["execution"]["max_s"], task["elapsed"]["max_s"], task["response"]["max_s"]) == (
+        5, "9/10000", "3/2000", "1/500")
+    assert main(["trace", str(model), str(trace)]) == 0
+    out = capsys.readouterr().out
+    assert "execution time = the CPU time of the job's thread (5 of 5 jobs); start to finish 1.5 ms" in out
+
+
+@pytest.mark.parametrize("write", [_ros1, _ros2])
+def test_a_job_above_its_wcet_of_cpu_time_is_e801_at_the_wcet(model, tmp_path, write, capsys):
+    """The control's jobs take 1.2 ms of CPU time within 1.5 ms from start to finish: E801 names the CPU time."""
+    trace = write(_where(write, tmp_path), step=3 * MS // 2, cpu=(MS // 2, 6 * MS // 5))
+    assert main(["trace", str(model), str(trace)]) == 1
+    err = capsys.readouterr().err
+    assert err.count("error[E801]") == 1 and "loop.vfy:15:10" in err
+    assert "above its bound 2 ms — an assumption of the bound broke: task `control.Step` used 1.2 ms of CPU time" in err
+    assert "task `control.Step` used up to 1.2 ms of CPU time in the trace, above its wcet 1 ms" in err
+    assert "5 of 5 jobs above the wcet" in err and "(the CPU time each job's thread spent on it)" in err
+
+
+def test_records_without_cpu_are_measured_from_start_to_finish_and_with_it_by_it(model, tmp_path, capsys):
+    """One control record says no CPU time: its 1.5 ms from start to finish is its execution time (E801);
+    the others' CPU time (0.9 ms) is theirs."""
+    trace = _ros2(tmp_path / "trace", step=3 * MS // 2, cpu=(MS // 2, 9 * MS // 10))
+    control = trace / "control_Step.jsonl"
+    lines = control.read_text(encoding="utf-8").splitlines(keepends=True)
+    third = json.loads(lines[2])
+    del third["cpu"]
+    control.write_text("".join(lines[:2] + [json.dumps(third) + "\n"] + lines[3:]), encoding="utf-8")
+    result = _traced(model, [str(trace)])
+    step = result.measured.task("control.Step")
+    assert step is not None and step.execution is not None and step.cpu_jobs == 4
+    assert (step.execution.min, step.execution.max, step.overruns) == (Fraction(9, 10_000), Fraction(3, 2000),
+                                                                       ((2, Fraction(3, 2000)),))
+    (e801,) = (d for d in result.diagnostics if d.code == "E801")
+    assert "ran up to 1.5 ms in the trace" in e801.message
+    assert any("the CPU time its thread spent for 4 of them, end − start for the others" in n for n in e801.notes)
+
+
+def test_a_latency_above_its_bound_with_every_job_within_its_cpu_time_names_the_interference(model, tmp_path):
+    """The control's jobs take 1.5 ms from start to finish with 0.9 ms of CPU time (wcet 1 ms): the data age
+    above the analysis' bound (E803) is blamed on what took the CPU from them, not on a wcet."""
+    result = _traced(model, [str(_ros2(tmp_path / "trace", step=3 * MS // 2, cpu=(MS // 2, 9 * MS // 10)))])
+    alarms = [d.message for d in result.diagnostics if d.code == "E803"]
+    assert alarms and all("jobs of task `control.Step` took up to 1.5 ms from start to finish, above its wcet 1 ms, "
+                          "with at most 900 us of CPU time" in a for a in alarms), alarms
+    assert not any("ran" in a for a in alarms)
+
+
+@pytest.mark.parametrize("cpu", ['-1', '"900000"', '1.5', 'null'])
+def test_a_record_whose_cpu_is_no_whole_number_of_nanoseconds_is_left_out(model, tmp_path, capsys, cpu):
+    trace = _ros2(tmp_path / "trace")
+    with (trace / "control_Step.jsonl").open("a", encoding="utf-8") as fh:
+        fh.write('{"unit": "control_Step", "task": "control.Step", "seq": 6, "release": 1, "start": 2, "finish": 3, '
+                 f'"cpu": {cpu}}}\n')
+    assert main(["trace", str(model), str(trace)]) == 0
+    out, err = capsys.readouterr()
+    assert "PARTIAL: 1 line(s) are not job records" in out and "control_Step.jsonl:6" in out
+    assert "warning[E806]" in err and "Traceback" not in err

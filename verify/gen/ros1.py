@@ -243,6 +243,7 @@ def _job_method(comp: ComponentModel, task: TaskDecl) -> list[str]:
     lines.append("    {")
     lines.append("      std::lock_guard<std::mutex> lock(registers());")
     lines.append("      job.start = verify_ros1::now_ns();")
+    lines.append("      job.cpu_start = verify_ros1::thread_cpu_ns();")
     lines += [f"      port_{r.port}_.read(in_{r.port}, job);" for r in task.reads]
     lines.append("    }")
     lines.append("    job.hold();")
@@ -252,6 +253,7 @@ def _job_method(comp: ComponentModel, task: TaskDecl) -> list[str]:
         lines.append(f"    {_type(port.message_type)} out_{name}{{}};")
     args = [f"in_{r.port}" for r in task.reads] + [f"out_{p}" for p in task.produces]
     lines.append(f"    on_{task.name}({', '.join(args)});")
+    lines.append("    job.cpu = verify_ros1::thread_cpu_ns() - job.cpu_start;")
     lines.append("    job.finish = verify_ros1::now_ns();")
     lines += [f"    port_{p}_.write(out_{p}, job);" for p in task.produces]
     lines.append("  }")

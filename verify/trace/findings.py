@@ -1,14 +1,15 @@
 """Measurements held against the model, as located diagnostics (specs/trace.md §4).
 
-- E801 (error): a task's measured execution time above its ``wcet`` — the bounds do not hold for this
-  robot; at the ``wcet``;
+- E801 (error): a task's measured execution time (the CPU time its job records give, else end − start)
+  above its ``wcet`` — the bounds do not hold for this robot; at the ``wcet``;
 - E802 (error): a timer's period off the model — registered with another period, or its mean measured
   period off by more than the tolerance; at the activation;
 - E804 (error): a chain's measured reaction time, data age or jitter above its spec; at the spec;
 - E803 (warning, an alarm): a measured latency above its bound but within its spec — the bound rests on
   an assumption the robot broke, and the message names it: a task of the chain above its ``wcet``, a
-  timer off its period, a connection above its ``delay``, else the connections' delays and the
-  executors' order the model assumed;
+  timer off its period, a connection above its ``delay``, a task whose jobs took longer than the
+  ``wcet`` from start to finish within it of CPU time (other work took the CPU from them), else the
+  connections' delays and the executors' order the model assumed;
 - E805 (warning): a task of the model without a callback in the trace, or a callback of an instance of
   the model without a task (listed, never guessed); at the task, or the instance;
 - E806: a trace that cannot be read (error), or that is read in part (warning: what was read stands);
@@ -103,15 +104,26 @@ def _execution(model: SystemModel, m: TaskMeasure, where: Where, sink: Diagnosti
     syntax = where.task_syntax(task.component, task.name)
     span = syntax.wcet.span if syntax is not None and syntax.wcet is not None else task.definition_span
     above = ", ".join(f"job {k + 1}: {fmt_time(x)}" for k, x in m.overruns)
-    sink.emit("E801", f"task `{m.task}` ran up to {fmt_time(m.execution.max)} in the trace, above its wcet "
+    cpu = m.cpu_jobs == m.execution.count
+    ran, what = ("used up to", " of CPU time") if cpu else ("ran up to", "")
+    sink.emit("E801", f"task `{m.task}` {ran} {fmt_time(m.execution.max)}{what} in the trace, above its wcet "
               f"{fmt_time(task.wcet)}: the bounds do not hold for this robot", span, "measured above this",
               secondary=[Label(task.span, "the instance's task")],
-              notes=[f"measured over {m.execution.count} jobs: min {fmt_time(m.execution.min)}, p50 "
-                     f"{fmt_time(m.execution.p50)}, p99 {fmt_time(m.execution.p99)}, max "
+              notes=[f"measured over {m.execution.count} jobs{_measure_words(m)}: min {fmt_time(m.execution.min)}, "
+                     f"p50 {fmt_time(m.execution.p50)}, p99 {fmt_time(m.execution.p99)}, max "
                      f"{fmt_time(m.execution.max)}",
                      f"{m.overrun_count} of {m.execution.count} jobs above the wcet: {above}"
                      + (" …" if m.overrun_count > len(m.overruns) else "")],
               help="find why the job overran, or write the measured time: `verify trace --calibrate`")
+
+
+def _measure_words(m: TaskMeasure) -> str:
+    """What the execution times are, when some are CPU times (job records' `cpu`)."""
+    if not m.cpu_jobs or m.execution is None:
+        return ""
+    if m.cpu_jobs == m.execution.count:
+        return " (the CPU time each job's thread spent on it)"
+    return f" (the CPU time its thread spent for {m.cpu_jobs} of them, end − start for the others)"
 
 
 def _period(model: SystemModel, m: TaskMeasure, sink: DiagnosticSink, tolerance: Fraction) -> None:
@@ -156,7 +168,15 @@ def _broken(model: SystemModel, chain: ChainModel, measured: Measurements, delay
         if m is None or m.execution is None:
             continue
         if m.execution.max > task.wcet:
-            said.append(f"task `{task_id}` ran {fmt_time(m.execution.max)}, above its wcet {fmt_time(task.wcet)}")
+            ran = "used" if m.cpu_jobs == m.execution.count else "ran"
+            what = " of CPU time" if ran == "used" else ""
+            said.append(f"task `{task_id}` {ran} {fmt_time(m.execution.max)}{what}, above its wcet "
+                        f"{fmt_time(task.wcet)}")
+        elif m.cpu_jobs and m.elapsed is not None and m.elapsed.max > task.wcet:
+            said.append(f"jobs of task `{task_id}` took up to {fmt_time(m.elapsed.max)} from start to finish, "
+                        f"above its wcet {fmt_time(task.wcet)}, with at most {fmt_time(m.execution.max)} of CPU "
+                        "time: other threads (if not the model's tasks: the middleware's, other processes') "
+                        "took the CPU or the interpreter lock from them")
         if isinstance(task.activation, Periodic) and m.intervals is not None \
                 and m.intervals.max > task.activation.period * (1 + PERIOD_TOLERANCE):
             said.append(f"the timer of `{task_id}` waited up to {fmt_time(m.intervals.max)} between jobs, its "

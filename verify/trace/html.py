@@ -76,7 +76,7 @@ def section(result: TraceResult) -> str:
     for m in result.measured.tasks:
         t = result.analysis.task(m.task)
         rows.append(f"<tr><td><b>{_e(m.task)}</b><br><span class=\"meta\">{_e(m.callback)}</span></td>"
-                    f"<td>execution time</td><td>{_e(_words(m.execution))}</td>"
+                    f"<td>execution time{' (CPU)' if m.cpu_jobs else ''}</td><td>{_e(_words(m.execution))}</td>"
                     f"<td>{box_plot(m.execution, (t.bcet, t.wcet), [], m.task)}</td></tr>")
     for k in result.delays.connections:
         rows.append(f"<tr><td><b>{_e(k.connection)}</b></td><td>delay</td><td>{_e(_words(k.delays))}</td>"

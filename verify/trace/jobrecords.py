@@ -10,6 +10,8 @@ generators' formats, told apart line by line:
   (``INSTANCE.TASK``), ``seq``, ``release``, ``start``, ``finish``, and ``reads``: per in-port, null or
   the writer's ``[process, task, job number, message index]``.
 
+Both may hold ``cpu``: the CPU time the job's thread spent from its start to its finish (ns, the
+thread's CPU clock), the job's execution time; without it the execution time is finish − start.
 ``seq`` and ``reads`` are optional (records without them are measured by inference, metrics.py). A
 line that is no record is counted and the recording labelled partial. Read as a stream, line by line;
 what is kept is a few numbers a job (``Jobs``), not the records.
@@ -95,6 +97,7 @@ def _record(item: dict[str, Any], out: Recording) -> None:
     node, task = item["unit" if ros2 else "node"], item["task"]
     release, start, finish = (_time(item[k]) for k in ("release", "start", "finish"))
     seq = _time(item.get("seq", 0))
+    cpu = _time(item["cpu"]) if "cpu" in item else -1
     if not (isinstance(node, str) and isinstance(task, str) and start <= finish):
         raise BadRecord("a field of the wrong type")
     reads = _reads_ros2(item["reads"]) if ros2 and "reads" in item else _reads_ros1(item.get("reads"))
@@ -106,6 +109,7 @@ def _record(item: dict[str, Any], out: Recording) -> None:
     jobs.add(start, finish, finish)
     jobs.releases.append(release)
     jobs.seqs.append(seq)
+    jobs.cpus.append(cpu)
     if reads is not None:
         if jobs.reads is None:
             jobs.reads = {}

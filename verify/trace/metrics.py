@@ -1,8 +1,10 @@
 """What a recording measures of the model's tasks and chains (specs/trace.md §3). Exact: nanoseconds
 as recorded, seconds as fractions; quantiles by nearest rank.
 
-- a task's **execution time**: end − start of each job (what a callback's start and end events, or a
-  job record's start and finish, enclose: its response from start, preemptions included);
+- a task's **execution time**: per job, the CPU time its thread spent on it where its record gives
+  one (the generated nodes' ``cpu``), else end − start (what a callback's start and end events, or a
+  job record's start and finish, enclose: preemptions included); beside it, end − start (**elapsed**)
+  and, for job records, finish − release (**response**);
 - its **activation**: the time between consecutive starts (job records: releases), their least and
   greatest, and the mean period (last − first) / (n − 1); a timer callback's configured period;
 - a chain's **data age** and **reaction time** by specs/timing.md §4, on the jobs: a job of the
@@ -65,6 +67,9 @@ class TaskMeasure:
     configured_period: Fraction | None  # a timer callback's period as registered
     overruns: tuple[tuple[int, Fraction], ...] = ()  # (job index, execution time) above the wcet: the first few
     overrun_count: int = 0  # how many jobs ran longer than the wcet
+    cpu_jobs: int = 0  # how many jobs' execution times are the CPU time their thread spent (job records' `cpu`)
+    elapsed: Distribution | None = None  # end − start of each job (the execution time where no CPU time is given)
+    response: Distribution | None = None  # finish − release of each job (job records only)
 
 
 @dataclass(frozen=True)
@@ -93,25 +98,31 @@ SHOWN_OVERRUNS = 5
 
 
 def measure(model: SystemModel, recording: Recording, matching: Matching) -> Measurements:
-    tasks = []
-    for task in model.tasks:
-        key = matching.pairs.get(task.id)
-        if key is None:
-            continue
-        jobs = recording.jobs_of(key)
-        callback = recording.callbacks[key]
-        execution = [] if callback.kind == "topic" else [e - s for s, e in zip(jobs.starts, jobs.ends, strict=True)]
-        activations = jobs.releases if len(jobs.releases) == len(jobs) and len(jobs) else jobs.starts
-        intervals = [b - a for a, b in zip(activations, activations[1:], strict=False)]
-        mean = Fraction(activations[-1] - activations[0], (len(activations) - 1) * NS) if len(activations) > 1 else None
-        limit = task.wcet * NS
-        above = [(k, Fraction(x, NS)) for k, x in enumerate(execution) if x > limit]
-        configured = Fraction(callback.period_ns, NS) if callback.period_ns else None
-        tasks.append(TaskMeasure(task.id, callback.describe(), len(jobs), Distribution.of(execution),
-                                 Distribution.of(intervals), mean, configured, tuple(above[:SHOWN_OVERRUNS]),
-                                 len(above)))
+    tasks = tuple(_task(task.id, task.wcet, recording, key) for task in model.tasks
+                  if (key := matching.pairs.get(task.id)) is not None)
     chains = tuple(_chain(model, chain, recording, matching) for chain in model.chains)
-    return Measurements(tuple(tasks), chains)
+    return Measurements(tasks, chains)
+
+
+def _task(task_id: str, wcet: Fraction, recording: Recording, key: str) -> TaskMeasure:
+    """What the jobs of the callback ``key`` measure of the task ``task_id``."""
+    jobs = recording.jobs_of(key)
+    callback = recording.callbacks[key]
+    released = len(jobs.releases) == len(jobs) and len(jobs) > 0
+    activations = jobs.releases if released else jobs.starts
+    intervals = [b - a for a, b in zip(activations, activations[1:], strict=False)]
+    mean = Fraction(activations[-1] - activations[0], (len(activations) - 1) * NS) if len(activations) > 1 else None
+    configured = Fraction(callback.period_ns, NS) if callback.period_ns else None
+    if callback.kind == "topic":  # (a bag's: when messages were written, not how long jobs ran)
+        return TaskMeasure(task_id, callback.describe(), len(jobs), None, Distribution.of(intervals), mean, configured)
+    execution = jobs.execution_times()
+    limit = wcet * NS
+    above = [(k, Fraction(x, NS)) for k, x in enumerate(execution) if x > limit]
+    elapsed = [e - s for s, e in zip(jobs.starts, jobs.ends, strict=True)]
+    response = [e - r for r, e in zip(jobs.releases, jobs.ends, strict=True)] if released else []
+    return TaskMeasure(task_id, callback.describe(), len(jobs), Distribution.of(execution), Distribution.of(intervals),
+                       mean, configured, tuple(above[:SHOWN_OVERRUNS]), len(above), jobs.cpu_measured(),
+                       Distribution.of(elapsed), Distribution.of(response))
 
 
 def _chain(model: SystemModel, chain: ChainModel, recording: Recording, matching: Matching) -> ChainMeasure:

@@ -2,7 +2,8 @@
 (node, type, period or topic, symbol, construction order), and the jobs each ran (specs/trace.md §1).
 
 Times are whole nanoseconds (the trace's clock); a job is (start, end, write): ``write`` is when its
-last output left (a publish inside the job, else its end), for the hops of a chain.
+last output left (a publish inside the job, else its end), for the hops of a chain. Job records add
+the release, the job's number, what it read and the CPU time its thread spent on it.
 """
 from __future__ import annotations
 
@@ -52,6 +53,8 @@ class Jobs:
     writes: array[int] = field(default_factory=lambda: array("q"))
     releases: array[int] = field(default_factory=lambda: array("q"))  # job records only: when it was released
     seqs: array[int] = field(default_factory=lambda: array("q"))  # job records only: each job's number
+    #: job records only: the CPU time each job's thread spent on it (ns), −1 where its record says none
+    cpus: array[int] = field(default_factory=lambda: array("q"))
     #: job records that hold what each job read: per ``PORT\tWRITER`` (WRITER the writing task, "" when
     #: the record does not name it) the writer's job number each job read there, 0 for none; None: the
     #: records do not say what was read
@@ -79,6 +82,16 @@ class Jobs:
         out = array("q", column or ())
         out.extend(array("q", [0]) * (len(self) - len(out)))
         return out
+
+    def execution_times(self) -> list[int]:
+        """Each job's execution time: the CPU time its record gives, else end − start."""
+        if len(self.cpus) != len(self):
+            return [e - s for s, e in zip(self.starts, self.ends, strict=True)]
+        return [c if c >= 0 else e - s for s, e, c in zip(self.starts, self.ends, self.cpus, strict=True)]
+
+    def cpu_measured(self) -> int:
+        """How many jobs' execution times are CPU times."""
+        return sum(1 for c in self.cpus if c >= 0)
 
     def __len__(self) -> int:
         return len(self.starts)

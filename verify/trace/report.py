@@ -1,6 +1,7 @@
 """A trace's measurements as text and as JSON (schema ``verify.trace/1``): per task the measured
-execution time against [bcet, wcet] and the activation against the period; per chain the measured
-latencies against bound and spec; what was not paired."""
+execution time against [bcet, wcet] (the CPU time where job records give it, with start to finish and
+release to finish beside it) and the activation against the period; per chain the measured latencies
+against bound and spec; what was not paired."""
 from __future__ import annotations
 
 from fractions import Fraction
@@ -47,6 +48,10 @@ def to_text(result: TraceResult) -> str:
         lines.append(f"  {m.task}: {m.jobs} jobs, {_words(m.execution)} in [{fmt_time(t.bcet)}, {fmt_time(t.wcet)}]"
                      f" {ok}")
         lines.append(f"    {m.callback}")
+        if m.cpu_jobs:
+            lines.append(f"    execution time = the CPU time of the job's thread ({m.cpu_jobs} of {m.jobs} jobs); "
+                         f"start to finish {_words(m.elapsed)}"
+                         + (f"; response (release to finish) {_words(m.response)}" if m.response else ""))
         if m.mean_period is not None:
             gaps = m.intervals
             lines.append(f"    activation: mean period {fmt_time(m.mean_period)}"
@@ -105,7 +110,8 @@ def to_json(result: TraceResult) -> dict[str, Any]:
         "tasks": [{"task": m.task, "callback": m.callback, "jobs": m.jobs, "execution": _dist(m.execution),
                    "bcet_s": _q(model.task(m.task).bcet), "wcet_s": _q(model.task(m.task).wcet),
                    "intervals": _dist(m.intervals), "mean_period_s": _q(m.mean_period),
-                   "configured_period_s": _q(m.configured_period), "jobs_above_wcet": m.overrun_count}
+                   "configured_period_s": _q(m.configured_period), "jobs_above_wcet": m.overrun_count,
+                   "cpu_jobs": m.cpu_jobs, "elapsed": _dist(m.elapsed), "response": _dist(m.response)}
                   for m in result.measured.tasks],
         "chains": [{"chain": c.chain, "missing": c.missing, "reaction_time": _dist(c.reaction_time),
                     "data_age": _dist(c.data_age), "jitter_s": _q(c.jitter),

@@ -69,16 +69,18 @@ inline Nanos now_ns() {
   return static_cast<Nanos>(ts.tv_sec) * kSecond + ts.tv_nsec;
 }
 
+// The CPU time the calling thread has used, in ns (time it is preempted or blocked does not count).
+inline Nanos thread_cpu_ns() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<Nanos>(ts.tv_sec) * kSecond + ts.tv_nsec;
+}
+
 // Busy for `duration` ns of this thread's own CPU time (time it is preempted does not count): what a
 // job with that execution time does to the schedule. For tests and demonstrations.
 inline void burn_cpu(Nanos duration) {
-  auto cpu_now = [] {
-    timespec ts{};
-    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-    return static_cast<Nanos>(ts.tv_sec) * kSecond + ts.tv_nsec;
-  };
-  const Nanos end = cpu_now() + duration;
-  while (cpu_now() < end) {
+  const Nanos end = thread_cpu_ns() + duration;
+  while (thread_cpu_ns() < end) {
   }
 }
 
@@ -171,6 +173,8 @@ struct Job {
   Nanos release = 0;
   Nanos start = 0;
   Nanos finish = 0;
+  Nanos cpu_start = 0;  // the thread's CPU clock at the start
+  Nanos cpu = 0;        // the CPU time the job's thread spent from its start to its finish
   std::uint64_t event = 0;
   std::uint64_t trigger_seq = 0;
   std::vector<std::pair<std::string, const std::vector<Stamp>*>> inputs;  // stamps per in-port read
@@ -887,7 +891,8 @@ inline void Component::after_job(const Job& job) {
   std::ostringstream o;
   o << "{\"node\": " << json_string(name()) << ", \"task\": " << json_string(job.task->name) << ", \"seq\": "
     << job.seq << ", \"release\": " << job.release << ", \"start\": " << job.start << ", \"finish\": " << job.finish
-    << ", \"event\": " << job.event << ", \"trigger_seq\": " << job.trigger_seq << ", \"reads\": {";
+    << ", \"cpu\": " << job.cpu << ", \"event\": " << job.event << ", \"trigger_seq\": " << job.trigger_seq
+    << ", \"reads\": {";
   for (std::size_t i = 0; i < job.read_seqs.size(); ++i) {
     o << (i ? ", " : "") << json_string(job.read_seqs[i].first) << ": " << job.read_seqs[i].second;
   }

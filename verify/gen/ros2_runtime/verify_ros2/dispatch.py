@@ -30,6 +30,7 @@ class Job:
     release: int  # ns since the epoch
     start: int = 0
     finish: int = 0
+    cpu: int = 0  # the CPU time its thread spent from its start to its finish (ns, the thread's CPU clock)
 
 
 @dataclass(frozen=True)

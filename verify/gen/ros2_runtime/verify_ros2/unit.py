@@ -270,6 +270,7 @@ class Unit:
         spec = self.system.TASKS[job.task]
         with self.lock:
             job.start = now()
+            cpu = time.thread_time_ns()  # (a thread waiting for the interpreter lock uses no CPU time)
             read = [(p, self.registers[f"{inst}.{p}"]) for p in spec["reads"]]
             inputs = [Input(r.value, r.present) for _p, r in read]
             sources = {p: r.record for p, r in read}
@@ -283,13 +284,14 @@ class Unit:
             self.log.error(f"{job.task} job {job.seq} raised {type(err).__name__}: {err}; it writes nothing",
                            throttle_duration_sec=1.0)
             return
+        job.cpu = time.thread_time_ns() - cpu
         job.finish = now()
         writes = {p: self._publish(f"{inst}.{p}", o.value, job, stamps) for p, o in zip(spec["produces"], outputs)}
         self._monitor(job, stamps)
         if self.trace_dir:
             self.records.append({
                 "unit": self.name, "task": job.task, "seq": job.seq, "event": job.event, "release": job.release,
-                "start": job.start, "finish": job.finish, "writes": writes,
+                "start": job.start, "finish": job.finish, "cpu": job.cpu, "writes": writes,
                 "reads": {p: None if r is None else [r.writer, r.task, r.seq, r.index] for p, r in sources.items()},
                 "stamps": [[s.chain, s.position, s.origin, s.first] for s in stamps]})
 
