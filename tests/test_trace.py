@@ -11,9 +11,8 @@ import pytest
 
 import verify
 from verify.cli import main
-from verify.core.diagnostics import DiagnosticSink
-from verify.trace.run import read_traces, trace_system
 
+from .builders import traced
 from .conftest import EXAMPLES, in_ci
 
 TRACE = Path(__file__).parent / "data" / "caret-traces" / "talker_listener"
@@ -31,17 +30,9 @@ def require_bindings() -> None:
         pytest.skip("babeltrace2's Python bindings are not installed (scripts/install-tools)")
 
 
-def _traced(model_path: Path, traces: list[str]):
-    loaded = verify.load(str(model_path))
-    sink = DiagnosticSink()
-    recording = read_traces(traces, sink)
-    assert recording is not None, [d.message for d in sink.items]
-    return trace_system(loaded.system(None), loaded.project, recording)
-
-
 def test_the_caret_trace_gives_the_talkers_period_and_each_callbacks_execution_times():
     require_bindings()
-    result = _traced(COMPLETED, [str(TRACE)])
+    result = traced(COMPLETED, [str(TRACE)])
     assert result.matching.pairs.keys() == {"talker.timer_callback_0", "listener.subscription_callback_0"}
     assert result.matching.callbacks_left_out == 2  # (the nodes' /parameter_events subscriptions, as in CARET)
     talker = result.measured.task("talker.timer_callback_0")
@@ -104,7 +95,7 @@ CHATTER_DELAYS_NS = [681328, 363889, 410846, 400715, 481753]
 
 def test_the_caret_trace_links_each_chatter_message_to_its_receipt():
     require_bindings()
-    result = _traced(COMPLETED, [str(TRACE)])
+    result = traced(COMPLETED, [str(TRACE)])
     ((key, link),) = result.recording.links.items()  # (/parameter_events and /rosout are left out)
     assert key == ("/chatter", "/talker", "/listener") and list(link.delays) == CHATTER_DELAYS_NS
     assert not result.recording.partial
@@ -349,7 +340,7 @@ def test_a_chain_recomputed_from_job_records_follows_timing_section_4(tmp_path):
                      "finish": t + 3_000_000})
     path = tmp_path / "jobs.jsonl"
     path.write_text("".join(json.dumps(j) + "\n" for j in jobs), encoding="utf-8")
-    result = _traced(model, [str(path)])
+    result = traced(model, [str(path)])
     chain = result.measured.chains[0]
     assert chain.data_age is not None and chain.data_age.min == chain.data_age.max == Fraction(3, 1000)
     assert chain.reaction_time is not None and chain.reaction_time.max == Fraction(13, 1000)

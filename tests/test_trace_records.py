@@ -11,10 +11,9 @@ from typing import Any
 
 import pytest
 
-import verify
 from verify.cli import main
-from verify.core.diagnostics import DiagnosticSink
-from verify.trace.run import read_traces, trace_system
+
+from .builders import traced
 
 MS = 1_000_000
 SPECS = Path(__file__).parent.parent / "specs" / "diagnostics.md"
@@ -78,14 +77,6 @@ def _ros1(path: Path, reads: bool = True, **jobs: Any) -> Path:
     return path
 
 
-def _traced(model_path: Path, traces: list[str]):
-    loaded = verify.load(str(model_path))
-    sink = DiagnosticSink()
-    recording = read_traces(traces, sink)
-    assert recording is not None, [d.message for d in sink.items]
-    return trace_system(loaded.system(None), loaded.project, recording)
-
-
 def _chain(result):
     (chain,) = result.measured.chains
     assert chain.data_age is not None and chain.reaction_time is not None
@@ -103,7 +94,7 @@ def _recorded_reads_answer(result) -> None:
 
 
 def test_ros2_records_pair_by_process_and_task_and_their_reads_give_the_data_age(model, tmp_path):
-    result = _traced(model, [str(p) for p in sorted(_ros2(tmp_path / "trace").glob("*.jsonl"))])
+    result = traced(model, [str(p) for p in sorted(_ros2(tmp_path / "trace").glob("*.jsonl"))])
     assert result.matching.pairs == {"sensor.Sample": "sensor_Sample\tsensor.Sample",
                                      "control.Step": "control_Step\tcontrol.Step"}
     assert not result.matching.tasks_unmatched and not result.matching.callbacks_unmatched
@@ -114,7 +105,7 @@ def test_ros2_records_pair_by_process_and_task_and_their_reads_give_the_data_age
 
 
 def test_ros1_records_with_their_reads_give_the_same_answer(model, tmp_path):
-    _recorded_reads_answer(_traced(model, [str(_ros1(tmp_path / "run.jsonl"))]))
+    _recorded_reads_answer(traced(model, [str(_ros1(tmp_path / "run.jsonl"))]))
 
 
 @pytest.mark.parametrize("write", [_ros1, _ros2])
@@ -122,7 +113,7 @@ def test_records_without_reads_are_measured_by_the_write_times(model, tmp_path, 
     """Without reads, a job is taken to hold the writer's latest job that published before it started:
     here the newer one (the message in flight is not seen): data age 2.5 ms for every control job."""
     path = write(tmp_path / ("trace" if write is _ros2 else "run.jsonl"), reads=False)
-    chain = _chain(_traced(model, [str(path)]))
+    chain = _chain(traced(model, [str(path)]))
     assert (chain.data_age.count, chain.data_age.min, chain.data_age.max) == (5, Fraction(5, 2000), Fraction(5, 2000))
     assert (chain.reaction_time.count, chain.reaction_time.max) == (4, Fraction(25, 2000))
 
@@ -143,7 +134,7 @@ def test_a_read_of_a_job_not_in_the_records_holds_no_stamp(model, tmp_path):
     sensor = trace / "sensor_Sample.jsonl"
     lines = sensor.read_text(encoding="utf-8").splitlines(keepends=True)
     sensor.write_text("".join(lines[:2] + lines[3:]), encoding="utf-8")  # (sensor job 3 left out)
-    chain = _chain(_traced(model, [str(trace)]))
+    chain = _chain(traced(model, [str(trace)]))
     assert chain.data_age.count == 3  # (control job 4 read sensor job 3)
 
 
@@ -190,7 +181,7 @@ def test_a_job_longer_than_its_wcet_from_start_to_finish_within_it_of_cpu_time_i
     time: its execution time is the CPU time, within the wcet; start to finish and release to finish
     (2 ms) are reported beside it."""
     trace = write(_where(write, tmp_path), step=3 * MS // 2, cpu=(MS // 2, 9 * MS // 10))
-    result = _traced(model, [str(trace)])
+    result = traced(model, [str(trace)])
     assert "E801" not in {d.code for d in result.diagnostics}
     step = result.measured.task("control.Step")
     assert step is not None and step.execution is not None and step.elapsed is not None and step.response
@@ -227,7 +218,7 @@ def test_records_without_cpu_are_measured_from_start_to_finish_and_with_it_by_it
     third = json.loads(lines[2])
     del third["cpu"]
     control.write_text("".join(lines[:2] + [json.dumps(third) + "\n"] + lines[3:]), encoding="utf-8")
-    result = _traced(model, [str(trace)])
+    result = traced(model, [str(trace)])
     step = result.measured.task("control.Step")
     assert step is not None and step.execution is not None and step.cpu_jobs == 4
     assert (step.execution.min, step.execution.max, step.overruns) == (Fraction(9, 10_000), Fraction(3, 2000),
@@ -240,7 +231,7 @@ def test_records_without_cpu_are_measured_from_start_to_finish_and_with_it_by_it
 def test_a_latency_above_its_bound_with_every_job_within_its_cpu_time_names_the_interference(model, tmp_path):
     """The control's jobs take 1.5 ms from start to finish with 0.9 ms of CPU time (wcet 1 ms): the data age
     above the analysis' bound (E803) is blamed on what took the CPU from them, not on a wcet."""
-    result = _traced(model, [str(_ros2(tmp_path / "trace", step=3 * MS // 2, cpu=(MS // 2, 9 * MS // 10)))])
+    result = traced(model, [str(_ros2(tmp_path / "trace", step=3 * MS // 2, cpu=(MS // 2, 9 * MS // 10)))])
     alarms = [d.message for d in result.diagnostics if d.code == "E803"]
     assert alarms and all("jobs of task `control.Step` took up to 1.5 ms from start to finish, above its wcet 1 ms, "
                           "with at most 900 us of CPU time" in a for a in alarms), alarms
