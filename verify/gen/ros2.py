@@ -28,6 +28,7 @@ from collections.abc import Callable
 from importlib import resources
 
 from ..model.activations import DataTriggered, Periodic, SporadicSource
+from ..model.processes import process_of, processes
 from ..model.system import ComponentModel, ExecutorModel, MessageModel, SystemModel, TaskDecl, TaskModel
 from ..core.sanitize import comment, yaml_string
 from ..core.source import Span
@@ -68,20 +69,13 @@ def requirements() -> list[str]:
 
 
 def unit_of(model: SystemModel, task: TaskModel) -> str:
-    """The process running ``task``: its executor, its own (preemptive), its instance's (cooperative)."""
-    if task.executor is not None:
-        return ros2_name(task.executor)
-    if task.kind == "cooperative":
-        return ros2_name(task.instance)
-    return ros2_name(f"{task.instance}_{task.name}")
+    """The process running ``task`` (``verify.model.processes``), as the generated code names it."""
+    return ros2_name(process_of(task).label)
 
 
 def units(model: SystemModel) -> dict[str, list[TaskModel]]:
     """Every process and its tasks, in system order."""
-    out: dict[str, list[TaskModel]] = {}
-    for task in model.tasks:
-        out.setdefault(unit_of(model, task), []).append(task)
-    return out
+    return {ros2_name(process.label): tasks for process, tasks in processes(model).items()}
 
 
 def _executor(model: SystemModel, tasks: list[TaskModel]) -> ExecutorModel | None:
