@@ -28,7 +28,7 @@ from collections.abc import Callable
 from importlib import resources
 
 from ..model.activations import DataTriggered, Periodic, SporadicSource
-from ..model.processes import process_of, processes
+from ..model.processes import process_of, processes, subscriptions
 from ..model.system import ComponentModel, ExecutorModel, MessageModel, SystemModel, TaskDecl, TaskModel
 from ..core.sanitize import comment, yaml_string
 from ..core.source import Span
@@ -105,6 +105,25 @@ def differs(model: SystemModel) -> list[tuple[Span, str, str]]:
              "give it one core (`multi_threaded on CORE`: one worker, analysed as such), or split its callbacks "
              "over executors of their own (each becomes a process)")
             for ex in model.executors if ex.multi_threaded and len(ex.workers) > 1]
+
+
+def uncovered(model: SystemModel) -> list[tuple[Span, str, str]]:
+    """What the analysis does not charge (E605): without ``arrival_cost``, the work of the processes that
+    take arrivals (their in-ports' values and records, a sporadic task's releases by message), which
+    preempts the jobs of their cores (specs/codegen.md §9.5). One warning, on the system."""
+    if model.arrival_cost is not None:
+        return []
+    taking = [ros2_name(p.label) for p, tasks in processes(model).items()
+              if subscriptions(model, tasks) or any(isinstance(t.activation, SporadicSource) for t in tasks)]
+    if not taking:
+        return []
+    shown = ", ".join(f"`{name}`" for name in taking[:4]) + (f" and {len(taking) - 4} more" if len(taking) > 4 else "")
+    which = f"processes {shown} take" if len(taking) > 1 else f"process {shown} takes"
+    return [(model.span, f"system `{model.name}` declares no `arrival_cost`, but its {which} "
+             "arrivals: rclpy's work per message taken preempts the jobs of their cores, and the response times "
+             "`analyze` reports for their tasks do not include it",
+             "declare what a process spends per value it takes (`arrival_cost 600 us` in the system; the "
+             "`ros2-glue` benchmark measures it, specs/timing.md §6.6)")]
 
 
 def clashes(model: SystemModel) -> list[tuple[Span, Span, str]]:
