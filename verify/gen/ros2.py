@@ -118,12 +118,13 @@ def uncovered(model: SystemModel) -> list[tuple[Span, str, str]]:
     if not taking:
         return []
     shown = ", ".join(f"`{name}`" for name in taking[:4]) + (f" and {len(taking) - 4} more" if len(taking) > 4 else "")
-    which = f"processes {shown} take" if len(taking) > 1 else f"process {shown} takes"
-    return [(model.span, f"system `{model.name}` declares no `arrival_cost`, but its {which} "
-             "arrivals: rclpy's work per message taken preempts the jobs of their cores, and the response times "
-             "`analyze` reports for their tasks do not include it",
-             "declare what a process spends per value it takes (`arrival_cost 600 us` in the system; the "
-             "`ros2-glue` benchmark measures it, specs/timing.md §6.6)")]
+    which, whose = (f"processes {shown} take", "their cores") if len(taking) > 1 else (f"process {shown} takes",
+                                                                                       "its core")
+    return [(model.span, f"system `{model.name}` declares no `arrival_cost`, but its {which} arrivals: rclpy's "
+             f"work per message taken preempts the jobs of {whose}, and the response times `analyze` reports for "
+             "them do not include it",
+             "declare what a process spends per value it takes, e.g. `arrival_cost 3 ms` in the system (the "
+             "`ros2-glue` benchmark measures it on the machine, specs/timing.md §6.6)")]
 
 
 def clashes(model: SystemModel) -> list[tuple[Span, Span, str]]:
