@@ -174,7 +174,7 @@ def register(stage: Callable[..., Callable], error: type[Exception], unavailable
         OUT.mkdir(parents=True, exist_ok=True)
         model_file = OUT / "ros2-pipeline.vfy"
         model_file.write_text(PIPELINE, encoding="utf-8")
-        with contextlib.redirect_stdout(io.StringIO()):
+        with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
             if main(["gen", "ros2", str(model_file), "-o", str(project), "--force"]) != 0:
                 raise error("verify gen ros2 failed on the pipeline", {})
 
