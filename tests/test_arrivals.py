@@ -253,3 +253,12 @@ def test_gen_ros2_warns_without_the_declaration(tmp_path, capsys):
     (tmp_path / "s.vfy").write_text(PAIR.replace("ARRIVALS", "arrival_cost 1 ms"), "utf-8")
     assert main(["gen", "ros2", str(tmp_path / "s.vfy"), "-o", str(tmp_path / "out")]) == 0
     assert "E605" not in capsys.readouterr().err
+
+
+def test_the_other_commands_show_the_arrival_tasks(tmp_path, capsys):
+    (tmp_path / "s.vfy").write_text(PAIR.replace("ARRIVALS", "arrival_cost 1 ms"), "utf-8")
+    assert main(["report", "--budget", "20", "-o", str(tmp_path / "r.html"), str(tmp_path / "s.vfy")]) == 0
+    assert "filter.arrival[filter_Smooth]:data" in (tmp_path / "r.html").read_text("utf-8")
+    for command in (["analyze", "--explain"], ["graph", "--format", "dot"], ["prove", "--format", "json"]):
+        assert main([*command, str(tmp_path / "s.vfy")]) == 0, command
+    assert "arrival[filter_Log]:data" in capsys.readouterr().out
