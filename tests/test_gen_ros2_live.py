@@ -236,31 +236,20 @@ def observations(model, jobs: list[dict], chain) -> dict[str, list[int]]:
     return {"data_age": [(f - origin, origin, f) for f, origin, _ in held], "reaction_time": reactions, "held": held}
 
 
-def _platform_time(window: tuple[int, int], stalls: list[tuple[int, int]]) -> int:
-    """The time in ``window`` the platform took from every thread: the union of the stalls the probes saw
-    in it (ns; ``stalls`` sorted)."""
-    taken, covered = 0, window[0]
-    for a, b in stalls:
-        a, b = max(a, covered), min(b, window[1])
-        if b > a:
-            taken += b - a
-            covered = b
-    return taken
-
-
 def _responses_within_bounds(run, tasks) -> None:
-    """No response time (finish − release) of a job of ``tasks`` after the warm-up, less the time the
-    platform took in it (``_platform_time``: no analysis of the model covers it), exceeds the task's bound in
-    ``run["analysis"]``. (A job's window is short: every job counts, not only those the probes saw
-    unstalled, as for the chains' long windows.)"""
+    """No response time (finish − release) of a job of ``tasks`` after the warm-up whose window the probes
+    saw unstalled exceeds the task's bound in ``run["analysis"]`` (a stall delays a job by more than its own
+    length: the higher tasks released meanwhile; no analysis of the model covers it). A job's window is
+    short, so most are unstalled: at least a quarter of each task's must be (and one)."""
     begin = min(j["release"] for j in run["jobs"]) + WARM_UP_NS
     for task in tasks:
         jobs = [j for j in _by_task(run["jobs"], task) if j["release"] >= begin]
-        assert jobs, task
-        worst = max(j["finish"] - j["release"] - _platform_time((j["release"], j["finish"]), run["stalls"])
-                    for j in jobs)
+        kept = [j["finish"] - j["release"] for j in jobs
+                if not ros2run.overlaps((j["release"], j["finish"]), run["stalls"])]
+        stalled = len(jobs) - len(kept)
+        assert kept and len(kept) >= len(jobs) / 4, f"{task}: the platform stalled {stalled} of {len(jobs)}"
         bound = run["analysis"].task(task).response.wcrt
-        assert bound is not None and Fraction(worst, 1_000_000_000) <= bound, (task, worst, float(bound or 0))
+        assert bound is not None and Fraction(max(kept), 1_000_000_000) <= bound, (task, max(kept), float(bound or 0))
 
 
 def test_no_response_time_exceeds_the_analysis_bound(live):
