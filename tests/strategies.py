@@ -368,7 +368,10 @@ def valid_modules(draw) -> s.Module:
             order = draw(st.permutations(bindings))  # bindings may come in any order
             instances.append(s.Instance(s.Name(inst), s.Name(shape["name"]), inst_core, tuple(order)))
         chains = tuple(c for c in (draw(_chain(n, placed, links)) for n in chain_names) if c is not None)
-        systems.append(s.System(s.Name(sys_name), cores, tuple(instances), tuple(connections), chains))
+        costs = tuple(s.ArrivalCost(_time(Fraction(draw(st.integers(1, 40)), 10), draw))
+                      for _ in range(draw(st.integers(0, 1))))
+        systems.append(s.System(s.Name(sys_name), cores, tuple(instances), tuple(connections), chains,
+                                arrival_costs=costs))
     components = []
     for shape in shapes.values():
         tasks = []

@@ -20,6 +20,7 @@ from hypothesis import HealthCheck, find, given, settings
 from hypothesis import strategies as st
 
 import verify
+from verify.model.arrivals import with_arrivals
 from verify.prove.sim import Scenario, chain_latencies, random_scenario, simulate
 from verify.timing import analyze
 
@@ -30,10 +31,11 @@ TIGHTNESS: dict[str, list[Fraction]] = {kind: [] for kind in KINDS}
 
 
 @st.composite
-def systems(draw) -> str:
+def systems(draw, arrivals: bool = False) -> str:
     """A random, valid system as DSL text: one component per task (plus cooperative siblings), with
     fixed timer phases, explicit deadlines and user response-time bounds drawn sometimes. A user
-    bound is a promise, so it is drawn as the computed WCRT plus a slack (``promised_user_bounds``)."""
+    bound is a promise, so it is drawn as the computed WCRT plus a slack (``promised_user_bounds``).
+    With ``arrivals``, the system declares an ``arrival_cost`` (specs/timing.md §6.6)."""
     n = draw(st.integers(2, 6))
     cores = draw(st.integers(1, 2))
     components, bindings, connections, chains = [], [], [], []
@@ -107,7 +109,8 @@ def systems(draw) -> str:
                 break
             path.append(nxt)
         chains.append(f"  chain ch{c}: " + " -> ".join(f"i{t}.o" for t in path))
-    system = ["system S {"] + [f"  core c{c}" for c in range(cores)] + bindings + conn_lines + chains + ["}"]
+    cost = [f"  arrival_cost {_ms(Fraction(draw(st.integers(1, 8)), 4))}"] if arrivals else []
+    system = ["system S {"] + [f"  core c{c}" for c in range(cores)] + cost + bindings + conn_lines + chains + ["}"]
     template = "\n\n".join(components) + "\n\n" + "\n".join(system) + "\n"
 
     def render(bounds: dict[str, Fraction]) -> str:
@@ -158,6 +161,24 @@ def test_no_simulated_latency_beyond_the_analytic_bounds(text, seed):
         trace = simulate(model, scenario)
         assert bound_violations(model, trace) == [], text
         _record_tightness(model, analysis, trace)
+
+
+@pytest.mark.slow
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+@given(systems(arrivals=True), st.integers(0, 2**16))
+def test_no_simulated_latency_beyond_the_analytic_bounds_with_arrivals(text, seed):
+    """The same with an arrival cost: the simulators run the arrival tasks (``with_arrivals``) the
+    analysis charges (specs/timing.md §6.6)."""
+    result = verify.load_text(text, "random.vfy")
+    assert result.ok, [(d.code, d.message) for d in result.diagnostics] + [text]
+    model = with_arrivals(result.system())
+    analysis = analyze(model)
+    for run in range(3):
+        scenario = random_scenario(model, random.Random(f"{seed}/{run}"), Fraction(2))
+        if run == 0:
+            scenario = _slowest(scenario, model)
+        trace = simulate(model, scenario)
+        assert bound_violations(model, trace, analysis) == [], text
 
 
 @pytest.mark.slow

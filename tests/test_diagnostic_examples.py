@@ -133,7 +133,8 @@ def run_example(section: Section, directory: Path):
 def gen_diagnostics(model, directory: Path, name: str):
     """What `verify gen TARGET main.vfy -o out` reports for the example (its other blocks may lie in out/):
     (diagnostics, the files they show)."""
-    from verify.commands.gen import clashing_names, differing_semantics, refusals, unsupported_parts
+    from verify.commands.gen import (clashing_names, differing_semantics, refusals, uncovered_parts,
+                                     unsupported_parts)
     from verify.gen import target
     from verify.gen.tree import plan
 
@@ -143,7 +144,8 @@ def gen_diagnostics(model, directory: Path, name: str):
     if unsupported:
         return unsupported, {}
     out = str(directory / "out")
-    return refusals(plan(module.generate(model), out, force=False), out)
+    refused, files = refusals(plan(module.generate(model), out, force=False), out)
+    return refused + uncovered_parts(module, name, model), files
 
 
 def trace_diagnostics(section: Section, directory: Path, result, model) -> list:

@@ -1,16 +1,15 @@
 """The generated ROS 2 nodes of the navigation example, run for real on rclpy and Fast DDS (issue 35).
 
 The package of examples/navigation/navigation-ros.vfy (its message types bound to ROS messages) is
-generated with an execution-time margin on every task for the glue's own work (specs/codegen.md §9),
-its user modules filled with jobs that burn half of each task's modelled WCET, and run for 10 s by the
+generated with its user modules filled with jobs that burn half of each task's WCET, and the model given
+that half and an execution-time margin for the glue's own work (specs/codegen.md §9), and run for 10 s by the
 generated runner in the wheels' environment (.ros2/, scripts/install-tools), beside a hand-written
-rclpy subscriber. A variant whose spec is too tight, made by regenerating a copy (only its parameter
-file changes), runs at the same time on a ROS domain of its own. From the job records the tests check
-the semantics the analysis assumed (every k-th arrival, timer rates), that no chain latency exceeds
-the bound `analyze` gives, and that the monitors agree with a recomputation. (Response times of single
-jobs are not held to their bounds: in a process that also takes arrivals, the arrivals' Python work
-takes the interpreter lock from the running job, more than the model's margin covers; specs/codegen.md
-§9.5.)
+rclpy subscriber. The model declares what a process spends per value it takes (`arrival_cost`,
+specs/timing.md §6.6), so the analysis charges rclpy's work of taking arrivals to the tasks of their
+cores. A variant whose spec is too tight, made by regenerating a copy (only its parameter file
+changes), runs at the same time on a ROS domain of its own. From the job records the tests check the
+semantics the analysis assumed (every k-th arrival, timer rates), that no task's response time and no
+chain latency exceeds the bound `analyze` gives, and that the monitors agree with a recomputation.
 """
 from __future__ import annotations
 
@@ -38,11 +37,18 @@ MODEL = "navigation-ros.vfy"
 PACKAGE = "navigation_nodes"
 RUN_SECONDS = 10  # (after the agreed start: the runner's --duration)
 TIGHT_SECONDS = 4
-#: what each task's WCET gains in the model for the glue's own work (reading registers, serializing,
-#: the record, publishing: about 0.2 ms in the median, benchmarks/ros2glue.py) and for the interference
-#: of the middleware's threads and other real-time work on this shared machine (specs/codegen.md §9)
-MARGIN_US = 5000
+#: the share of each task's WCET (components.vfy) its functional code burns here; the model's WCET is that
+#: share and MARGIN_US
 BURN_SHARE = Fraction(1, 2)
+#: what each task's WCET gains in the model for the glue's own work per job (reading registers,
+#: serializing, the record, publishing: 0.1 ms at p99 and about 1.2 ms at most, the `ros2-glue` benchmark)
+#: and for the process's timer thread and the platform's other real-time work (specs/codegen.md §9.5); the
+#: work of taking arrivals is ARRIVAL_COST's
+MARGIN_US = 3000
+#: what a process spends per value it takes (value and record), above the jobs of its core (specs/timing.md
+#: §6.6): the `ros2-glue` benchmark's arrival cost on this machine (about 2.3 ms) and a quarter more for its
+#: spread between runs, rounded up to a whole ms
+ARRIVAL_COST = "arrival_cost 3 ms"
 #: the start of a run that the bounds are not held to: the first jobs of every process take Python's
 #: first pass through the glue's code paths (tens of ms, once)
 WARM_UP_NS = 1_000_000_000
@@ -77,7 +83,8 @@ with open(sys.argv[1], "w") as f:
 
 
 def _with_margin(components: Path) -> dict[str, int]:
-    """Add MARGIN_US to every WCET of the component library; the original WCETs (ns) by task name."""
+    """Make every WCET of the component library BURN_SHARE of it and MARGIN_US; the original WCETs (ns) by
+    task name."""
     text = components.read_text(encoding="utf-8")
     original: dict[str, int] = {}
     units = {"us": 1_000, "ms": 1_000_000, "s": 1_000_000_000}
@@ -86,11 +93,18 @@ def _with_margin(components: Path) -> dict[str, int]:
         wcet = re.search(r"wcet (\d+) (us|ms|s)\n", m.group(0))
         assert wcet is not None
         original[m.group(1)] = int(wcet.group(1)) * units[wcet.group(2)]
-        more = original[m.group(1)] // 1000 + MARGIN_US
+        more = int(original[m.group(1)] * BURN_SHARE) // 1000 + MARGIN_US
         return m.group(0).replace(wcet.group(0), f"wcet {more} us\n")
 
     components.write_text(re.sub(r"task (\w+)[^{]*\{.*?\n  \}", task, text, flags=re.S), encoding="utf-8")
     return original
+
+
+def _with_arrival_cost(text: str) -> str:
+    """The system of ``text`` with ARRIVAL_COST declared (after its first core)."""
+    core = re.search(r"\n  core [^\n]*\n", text)
+    assert core is not None
+    return text[:core.end()] + f"  {ARRIVAL_COST}\n" + text[core.end():]
 
 
 def _burn(project: Path, wcet_ns: dict[str, int]) -> None:
@@ -126,10 +140,11 @@ def live(tmp_path_factory):
     shutil.copytree(NAVIGATION, models)
     wcet = _with_margin(models / "components.vfy")
     project, tight = base / "nav", base / "tight"
+    text = _with_arrival_cost((models / MODEL).read_text(encoding="utf-8"))
+    (models / MODEL).write_text(text, encoding="utf-8")
     assert main(["gen", "ros2", str(models / MODEL), "-o", str(project)]) == 0
     _burn(project, wcet)
     shutil.copytree(project, tight)
-    text = (models / MODEL).read_text(encoding="utf-8")
     (models / "tight.vfy").write_text(text.replace("reaction_time <= 250 ms", "reaction_time <= 1 ms"), "utf-8")
     before = _files(tight)
     assert main(["gen", "ros2", str(models / "tight.vfy"), "-o", str(tight)]) == 0
@@ -222,6 +237,28 @@ def observations(model, jobs: list[dict], chain) -> dict[str, list[int]]:
     return {"data_age": [(f - origin, origin, f) for f, origin, _ in held], "reaction_time": reactions, "held": held}
 
 
+def _responses_within_bounds(run, tasks) -> None:
+    """No response time (finish − release) of a job of ``tasks`` after the warm-up whose window the probes
+    saw unstalled exceeds the task's bound in ``run["analysis"]`` (a stall delays a job by more than its own
+    length: the higher tasks released meanwhile; no analysis of the model covers it). A job's window is
+    short, so most are unstalled: at least a quarter of each task's must be (and one)."""
+    begin = min(j["release"] for j in run["jobs"]) + WARM_UP_NS
+    for task in tasks:
+        jobs = [j for j in _by_task(run["jobs"], task) if j["release"] >= begin]
+        kept = [j["finish"] - j["release"] for j in jobs
+                if not ros2run.overlaps((j["release"], j["finish"]), run["stalls"])]
+        stalled = len(jobs) - len(kept)
+        assert kept and len(kept) >= len(jobs) / 4, f"{task}: the platform stalled {stalled} of {len(jobs)}"
+        bound = run["analysis"].task(task).response.wcrt
+        assert bound is not None and Fraction(max(kept), 1_000_000_000) <= bound, (task, max(kept), float(bound or 0))
+
+
+def test_no_response_time_exceeds_the_analysis_bound(live):
+    """The analysis charges the processes' work of taking arrivals (``arrival_cost``) to the tasks of their
+    cores, so every task's measured response time stays within its bound."""
+    _responses_within_bounds(live, [t.id for t in live["model"].tasks])
+
+
 def test_no_chain_latency_exceeds_the_analysis_bound(live):
     model = live["model"]
     for chain in live["analysis"].chains:
@@ -289,8 +326,9 @@ def test_a_too_tight_spec_changes_only_the_parameter_file_and_is_reported(live):
 # ------------------------------------------------------------------ executors, compounds, sporadic releases
 
 #: two executors of the model: a single-threaded one running two timers and a sporadic callback (its
-#: process takes no arrival), a multi-threaded one on one core with an AND and an OR compound callback in
-#: a mutually exclusive and a reentrant group
+#: process takes the sporadic callback's releases), a multi-threaded one on one core with an AND and an OR
+#: compound's callback in a mutually exclusive and a reentrant group (its process takes their arrivals); the
+#: arrival cost as for the navigation system
 EXECUTORS = """\
 message Num = ros "std_msgs/Int64"
 
@@ -332,6 +370,7 @@ component Ext {
 system Exec {
   core c0
   core c1
+  arrival_cost 3 ms
   executor st single_threaded on c0 priority 5
   executor mt multi_threaded 2 threads on c1 priority 4
   instance s1 : Src {
@@ -430,13 +469,9 @@ def test_a_sporadic_callback_runs_when_released_from_outside(executors):
     assert [j["event"] for j in _by_task(executors["jobs"], "e.Kick")] == [1, 2, 3, 4, 5]
 
 
-def test_callbacks_of_an_executor_taking_no_arrival_stay_within_their_bounds(executors):
-    live = {"jobs": executors["jobs"], "stalls": executors["stalls"]}
-    for task in ("s1.Tick", "s2.Tick"):
-        jobs = _by_task(executors["jobs"], task)
-        worst = max(_unstalled(live, [(j["finish"] - j["release"], j["release"], j["finish"]) for j in jobs]))
-        bound = executors["analysis"].task(task).response.wcrt
-        assert Fraction(worst, 1_000_000_000) <= bound, (task, worst, float(bound))
+def test_every_callback_stays_within_its_bound(executors):
+    """Both executors' callbacks, the multi-threaded one's preempted by its process's arrivals (§6.6)."""
+    _responses_within_bounds(executors, ["s1.Tick", "s2.Tick", "e.Kick", "f.All", "f.Any"])
 
 
 # ------------------------------------------------------------------ the Autoware reference system

@@ -103,6 +103,7 @@ component A {
 }
 system S {
   core c policy fp
+  arrival_cost 500 us
   executor e events on c priority 2
   executor m multi_threaded 2 threads on d, f priority 2
   executor n multi_threaded 1 thread on g priority 2

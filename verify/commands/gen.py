@@ -5,7 +5,9 @@ skeletons, message types, build additions) are written once and never overwritte
 edited by hand, or a file in the way that the generator did not write, is never replaced (E601) unless
 ``--force`` is given; then nothing at all is written. A system with synthesis holes is refused (E218:
 run ``synth`` first), and so is one the target cannot run (E602) or whose names would become one in the
-generated code (E603). A write that fails midway reports what it wrote before the failure (E004).
+generated code (E603). What the generated code does that the analysis does not charge (E605, a warning:
+the ros2 target's processes taking arrivals while no ``arrival_cost`` is declared) is reported on
+standard error. A write that fails midway reports what it wrote before the failure (E004).
 
 Exit codes: 0 generated; 2 invalid input, holes, clashing names, a file in the way or a failed write;
 70 internal error.
@@ -97,6 +99,15 @@ def differing_semantics(module: ModuleType, name: str, system: SystemModel) -> l
     return sink.items
 
 
+def uncovered_parts(module: ModuleType, name: str, system: SystemModel) -> list[Diagnostic]:
+    """E605 (a warning) for every part of ``system`` whose timing target ``module``'s runtime makes depend on
+    what the model does not declare (specs/codegen.md §9.5 for ros2: the work of taking arrivals)."""
+    sink = DiagnosticSink()
+    for span, what, help in getattr(module, "uncovered", lambda _model: [])(system):
+        sink.emit("E605", what, span, f"not covered by the analysis on the {name} target", help=help)
+    return sink.items
+
+
 def clashing_names(module: ModuleType, system: SystemModel) -> list[Diagnostic]:
     """E603 for every name of ``system`` that becomes, in target ``module``'s code, the name of another
     (a class, a file, a parameter, a node): one would overwrite or hide the other."""
@@ -122,6 +133,7 @@ def run(args: argparse.Namespace) -> int:
     if unsupported:
         show_diagnostics(args, unsupported, result.sources)
         return EXIT_INVALID
+    cautions = uncovered_parts(module, args.target, system)
     directory = args.output
     if os.path.exists(directory) and not os.path.isdir(directory):
         return cannot_write(directory, NotADirectoryError(20, "not a directory"))
@@ -139,4 +151,6 @@ def run(args: argparse.Namespace) -> int:
         return cannot_write(getattr(err, "filename", None) or directory, err, written)
     show(render(RESULT, args.format, Report(RESULT, args.file, (), result.sources, outcome, system,
                                             {"directory": directory, "target": args.target})))
+    if cautions:  # (on standard error, whatever the format: standard output stays the result)
+        show(render("diagnostics", "text", Report("diagnostics", args.file, tuple(cautions), result.sources)))
     return EXIT_OK

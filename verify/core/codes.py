@@ -95,6 +95,7 @@ _ALL = [
     Code("E602", "system the code-generation target cannot run"),
     Code("E603", "names that become one in generated code"),
     Code("E604", "construct the target's runtime would run unlike the analysis"),
+    Code("E605", "generated code whose timing the analysis does not cover", Severity.WARNING),
     # E7xx: import and export of other tools' models
     Code("E701", "syntax error in an imported model"),
     Code("E702", "unresolved reference in an imported model", Severity.WARNING),

@@ -9,7 +9,7 @@ from typing import Literal, TypedDict, cast
 
 from ..core.construct import direct_constructor
 from ..core.ids import PortId, TaskId
-from ..core.source import Span
+from ..core.source import NO_SPAN, Span
 from ..model import syntax as s
 from ..model.activations import DataTriggered, Hole, HoleWhat, Periodic, SporadicSource
 from ..model.system import (
@@ -99,8 +99,11 @@ def build_system(scope: SystemScope) -> SystemModel:
     used = {p.message_type for p in ports}
     messages = tuple(MessageModel(name, *ros, m.span) for name, m in sorted(scope.messages.items())
                      if name in used and (ros := ros_message(m.ros)) is not None)
+    cost = system.arrival_costs[0] if system.arrival_costs else None
     model = SystemModel(system.name.text, cores, tuple(tasks), links, (), system.span, compounds, instances,
-                        components, ports, executors, groups, messages)
+                        components, ports, executors, groups, messages,
+                        quantity_seconds(cost.cost) if cost is not None else None,
+                        cost.span if cost is not None else NO_SPAN)
     chains = tuple(_chain_model(ch, model, scope) for ch in system.chains)
     return model.with_chains(chains)
 

@@ -313,6 +313,8 @@ def _print_system(p: _Printer, system: s.System) -> None:
         p.line(1, f"core {core.name}" + (f" policy {core.policy}" if core.policy else ""), core.span)
     for ex in system.executors:
         p.line(1, _executor(ex), ex.span)
+    for cost in system.arrival_costs:
+        p.line(1, f"arrival_cost {format_quantity(cost.cost)}", cost.span)
     for inst in system.instances:
         header = f"instance {inst.name} : {inst.component}" + (f" on {inst.core}" if inst.core else "")
         members = [(_binding(b), b.span) for b in inst.bindings]

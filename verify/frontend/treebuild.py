@@ -299,7 +299,11 @@ class TreeBuilder:
             self._span(start, end),
             rbrace,
             tuple(m for m in members if isinstance(m, s.Executor)),
+            tuple(m for m in members if isinstance(m, s.ArrivalCost)),
         )
+
+    def arrival_cost(self, start: _Pos, end: _Pos, children: _Children) -> s.ArrivalCost:
+        return s.ArrivalCost(children[0], self._span(start, end))
 
     def executor(self, start: _Pos, end: _Pos, children: _Children) -> s.Executor:
         name, kind, *clauses = children

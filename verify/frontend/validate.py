@@ -193,6 +193,7 @@ def validate_system(scope: SystemScope, sink: DiagnosticSink) -> None:
     check_executors(scope, [(inst, task, b) for inst, _c, task, b in _instance_tasks(scope)], sink)
     _check_connections(scope, sink)
     _check_trigger_sources(scope, sink)
+    _check_arrival_cost(scope.system, sink)
     for chain in scope.system.chains:
         first: dict[str, s.Spec] = {}
         for spec in chain.specs:
@@ -204,6 +205,16 @@ def validate_system(scope: SystemScope, sink: DiagnosticSink) -> None:
                           help="keep one of them (a chain has at most one bound of each kind)")
             else:
                 first[spec.kind] = spec
+
+
+def _check_arrival_cost(system: s.System, sink: DiagnosticSink) -> None:
+    """``arrival_cost``: at most one (E212), a time (E302), above zero (E307)."""
+    for cost in system.arrival_costs[:1]:
+        _dimension(cost.cost, "time", "the arrival cost", sink) and _positive(cost.cost, "arrival cost", sink)
+    for again in system.arrival_costs[1:]:
+        sink.emit("E212", f"`arrival_cost` is given more than once for system `{system.name.text}`", again.span,
+                  "given again here", secondary=(Label(system.arrival_costs[0].span, "first given here"),),
+                  help="keep one of them (a system has one arrival cost)")
 
 
 def _check_binding(inst: s.Instance, task: s.Task, b: s.TaskBinding, comp: ComponentScope,

@@ -28,6 +28,7 @@ from collections.abc import Callable
 from importlib import resources
 
 from ..model.activations import DataTriggered, Periodic, SporadicSource
+from ..model.processes import process_of, processes, subscriptions
 from ..model.system import ComponentModel, ExecutorModel, MessageModel, SystemModel, TaskDecl, TaskModel
 from ..core.sanitize import comment, yaml_string
 from ..core.source import Span
@@ -68,20 +69,13 @@ def requirements() -> list[str]:
 
 
 def unit_of(model: SystemModel, task: TaskModel) -> str:
-    """The process running ``task``: its executor, its own (preemptive), its instance's (cooperative)."""
-    if task.executor is not None:
-        return ros2_name(task.executor)
-    if task.kind == "cooperative":
-        return ros2_name(task.instance)
-    return ros2_name(f"{task.instance}_{task.name}")
+    """The process running ``task`` (``verify.model.processes``), as the generated code names it."""
+    return ros2_name(process_of(task).label)
 
 
 def units(model: SystemModel) -> dict[str, list[TaskModel]]:
     """Every process and its tasks, in system order."""
-    out: dict[str, list[TaskModel]] = {}
-    for task in model.tasks:
-        out.setdefault(unit_of(model, task), []).append(task)
-    return out
+    return {ros2_name(process.label): tasks for process, tasks in processes(model).items()}
 
 
 def _executor(model: SystemModel, tasks: list[TaskModel]) -> ExecutorModel | None:
@@ -111,6 +105,26 @@ def differs(model: SystemModel) -> list[tuple[Span, str, str]]:
              "give it one core (`multi_threaded on CORE`: one worker, analysed as such), or split its callbacks "
              "over executors of their own (each becomes a process)")
             for ex in model.executors if ex.multi_threaded and len(ex.workers) > 1]
+
+
+def uncovered(model: SystemModel) -> list[tuple[Span, str, str]]:
+    """What the analysis does not charge (E605): without ``arrival_cost``, the work of the processes that
+    take arrivals (their in-ports' values and records, a sporadic task's releases by message), which
+    preempts the jobs of their cores (specs/codegen.md §9.5). One warning, on the system."""
+    if model.arrival_cost is not None:
+        return []
+    taking = [ros2_name(p.label) for p, tasks in processes(model).items()
+              if subscriptions(model, tasks) or any(isinstance(t.activation, SporadicSource) for t in tasks)]
+    if not taking:
+        return []
+    shown = ", ".join(f"`{name}`" for name in taking[:4]) + (f" and {len(taking) - 4} more" if len(taking) > 4 else "")
+    which, whose = (f"processes {shown} take", "their cores") if len(taking) > 1 else (f"process {shown} takes",
+                                                                                       "its core")
+    return [(model.span, f"system `{model.name}` declares no `arrival_cost`, but its {which} arrivals: rclpy's "
+             f"work per message taken preempts the jobs of {whose}, and the response times `analyze` reports for "
+             "them do not include it",
+             "declare what a process spends per value it takes, e.g. `arrival_cost 3 ms` in the system (the "
+             "`ros2-glue` benchmark measures it on the machine, specs/timing.md §6.6)")]
 
 
 def clashes(model: SystemModel) -> list[tuple[Span, Span, str]]:

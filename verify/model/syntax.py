@@ -344,6 +344,16 @@ class System:
     span: Span = _span()
     end: Span = _span()
     executors: tuple[Executor, ...] = ()
+    arrival_costs: tuple[ArrivalCost, ...] = ()  # (more than one: E212)
+
+
+@dataclass(frozen=True)
+class ArrivalCost:
+    """``arrival_cost QUANTITY``: what a ROS 2 (rclpy) process spends taking one written value off the
+    wire (specs/timing.md §6.6)."""
+
+    cost: Quantity
+    span: Span = _span()
 
 
 @dataclass(frozen=True)

@@ -69,6 +69,8 @@ class TaskModel:
     definition_span: Span = _span()  # the task in its component
     executor: str | None = None  # the ROS 2 executor running it as a callback (core, priority: the executor's)
     group: str | None = None  # a callback's group (``GroupModel.id``)
+    #: the work of a process taking arrivals on an in-port (``verify.model.arrivals``), not a declared task
+    arrival: bool = False
 
     def reads_port(self, port: str) -> bool:
         return any(r.port == port for r in self.reads)
@@ -348,6 +350,10 @@ class SystemModel:
     groups: tuple[GroupModel, ...] = ()  # the callback groups with callbacks, in system order
     #: the ROS messages the message types of its ports are bound to (``message T = ros pkg/Name``)
     messages: tuple[MessageModel, ...] = ()
+    #: ``arrival_cost``: the CPU time a process takes per written value it receives (specs/timing.md §6.6),
+    #: None: not declared (arrivals cost nothing in the analysis)
+    arrival_cost: Fraction | None = None
+    arrival_cost_span: Span = _span()
 
     def message(self, message_type: str) -> MessageModel | None:
         """The ROS message ``message_type`` is bound to; None: unbound (bytes on ROS, specs/codegen.md)."""
@@ -389,7 +395,8 @@ class SystemModel:
     def with_chains(self, chains: tuple[ChainModel, ...]) -> SystemModel:
         """This system with ``chains``; it shares the lookup tables, which do not depend on the chains."""
         other = SystemModel(self.name, self.cores, self.tasks, self.links, chains, self.span, self.compounds,
-                            self.instances, self.components, self.ports, self.executors, self.groups, self.messages)
+                            self.instances, self.components, self.ports, self.executors, self.groups, self.messages,
+                            self.arrival_cost, self.arrival_cost_span)
         if "_lookup" in self.__dict__:
             object.__setattr__(other, "_lookup", self.__dict__["_lookup"])
         return other

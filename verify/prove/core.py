@@ -19,6 +19,7 @@ from typing import cast
 
 from ..core.diagnostics import Diagnostic, DiagnosticSink, Label
 from ..core.gcpause import paused_gc
+from ..model.arrivals import with_arrivals
 from ..model.system import SystemModel
 from .sim import Sample, ScenarioError, SimulationError, SimulationTimeout, Trace
 from ..timing import TaskResponse, response_and_chain_bounds
@@ -52,6 +53,7 @@ def prove(model: SystemModel, *, budget: int = DEFAULT_BUDGET, rlimit: int = DEF
     Deterministic for fixed arguments other than ``jobs``, which never changes the result."""
     if model.holes:
         raise ValueError("prove needs a configured system: use verify.api.require_configured first")
+    model = with_arrivals(model)  # (the work of taking arrivals, as tasks: specs/timing.md §6.6)
     with paused_gc():  # (the searches below run with the collector as the caller has it)
         variant, responses, chains = response_and_chain_bounds(model, data_age=data_age)
         obs = bound_mod.obligations(model, variant, responses, chains)

@@ -20,6 +20,7 @@ import z3
 
 from ..api import LoadResult
 from ..core.diagnostics import Diagnostic, DiagnosticSink, Label
+from ..model.arrivals import with_arrivals
 from ..model.system import SystemModel
 from ..frontend.resolve import SystemScope
 from ..core.source import Span
@@ -183,6 +184,7 @@ def synthesize(source: LoadResult | SystemModel, system: str | None = None, *,
     ``SystemModel`` (with an optional ``scope`` for source spans). Raises ``ObjectiveError`` for an
     unknown objective and ``candidates.TooManyCandidates`` for a hole with too fine a grid."""
     model, scope = _inputs(source, system, scope)
+    model = with_arrivals(model)  # (the work of taking arrivals, as tasks: specs/timing.md §6.6)
     goals = objective if isinstance(objective, list) else parse_objective(objective, model)
     budget = Budget(rlimit, timeout)
     problem = build_problem(model, scope)
@@ -338,6 +340,7 @@ def brute_force(source: LoadResult | SystemModel, system: str | None = None, *,
     With ``limit``, at most that many combinations are evaluated: stopping there with none accepted
     is status "limit", not "unsat", and a best found is marked ``complete=False``."""
     model, scope = _inputs(source, system, scope)
+    model = with_arrivals(model)  # (the work of taking arrivals, as tasks: specs/timing.md §6.6)
     goals = objective if isinstance(objective, list) else parse_objective(objective, model)
     problem = build_problem(model, scope, prune=prune)
     found = enumerate_best(problem, goal_key(goals), first=not goals, limit=limit)

@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING
 from ..core.construct import direct_constructor
 from ..core.diagnostics import Diagnostic, DiagnosticSink
 from ..core.gcpause import paused_gc
+from ..model.arrivals import with_arrivals
 from ..model.system import SystemModel, TaskModel
 
 if TYPE_CHECKING:  # (imported when first used: `verify check` needs the rates alone, not the analysis)
@@ -137,7 +138,7 @@ def analyze(system: SystemModel, *, data_age: str = "reduced") -> AnalysisResult
     ``jitter`` specs: "reduced" (from the first task's read, the default) or "non-reduced"."""
     variant = _variant(data_age)
     with paused_gc():
-        return _analyze(system, variant)
+        return _analyze(with_arrivals(system), variant)
 
 
 def response_and_chain_bounds(system: SystemModel, *, data_age: str = "reduced"
@@ -147,7 +148,7 @@ def response_and_chain_bounds(system: SystemModel, *, data_age: str = "reduced"
     the sampling relations, core loads, per-task summaries and diagnostics."""
     variant = _variant(data_age)
     with paused_gc():
-        _, _, responses, chains, _, _ = _bounds(system, variant)
+        _, _, responses, chains, _, _ = _bounds(with_arrivals(system), variant)
         return variant, responses, chains
 
 
@@ -157,8 +158,8 @@ def timing_of(result: AnalysisResult, system: SystemModel) -> Timing:
     that synthesis learns lemmas from."""
     from .chains import Timing
 
-    return Timing(system, {t.id: t.activation for t in result.tasks}, {t.id: t.events for t in result.tasks},
-                  {t.id: t.response for t in result.tasks})
+    return Timing(with_arrivals(system), {t.id: t.activation for t in result.tasks},
+                  {t.id: t.events for t in result.tasks}, {t.id: t.response for t in result.tasks})
 
 
 def _variant(data_age: str) -> str:

@@ -53,7 +53,10 @@ class TaskResponse:
 
 
 def deadline_of(task: TaskModel, events: EventModel) -> tuple[Fraction | None, str]:
-    """The deadline of ``task`` and where it comes from: given, else ``A⁺`` (§6.4)."""
+    """The deadline of ``task`` and where it comes from: given, else ``A⁺`` (§6.4); an arrival task (§6.6)
+    has none."""
+    if task.arrival:
+        return None, "none (the work of taking arrivals)"
     if task.deadline is not None:
         return task.deadline, "given"
     if events.a_max is not None:

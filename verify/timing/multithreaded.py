@@ -35,11 +35,13 @@ before ``r`` count in ``W`` on every worker they may occupy).
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import replace
 from fractions import Fraction
 
 from ..model.system import ExecutorModel, GroupModel, SystemModel, TaskModel
 from .rates import EventModel
-from .kernel import MAX_STEPS, Interferer, TaskResponse, bcrt, deadline_of, interferer, ratio
+from .kernel import (MAX_STEPS, Interferer, TaskResponse, bcrt, deadline_of, interferer, least_fixed_point, load_of,
+                     ratio)
 
 ZERO = Fraction(0)
 
@@ -58,6 +60,11 @@ class Workers:
                  estimates: Mapping[str, Fraction | None]):
         self.system, self.executor, self.events = system, executor, events
         self.members = system.callbacks(executor.name)
+        #: higher threads on its cores: only the arrival tasks of its process (§6.6; E224 allows no other)
+        self.higher = higher_on_workers(system, executor)
+        self.higher_bounded = all(estimates.get(h.id) is not None for h in self.higher)
+        self.higher_flows = [_later(interferer(system, h, events[h.id], estimates.get(h.id), h.wcet),
+                                    estimates.get(h.id)) for h in self.higher] if self.higher_bounded else []
         self.flows = {m.id: interferer(system, m, events[m.id], estimates.get(m.id), m.wcet) for m in self.members}
         self.carry = carry_in(system, self.members, len(executor.workers))
         self.live_work = sum((m.wcet for m in self.members if not self.flows[m.id].silent), ZERO)
@@ -72,8 +79,13 @@ class Workers:
         deadline, deadline_rule = deadline_of(task, self.events[task.id])
         group = callback_group(self.system, task)
         computed, failure = self._window(task)
+        hold: Fraction | None = task.wcet
+        if self.higher:
+            hold = self._held(task)
         if computed is not None:
             computed += task.wcet
+            if self.higher:
+                computed, failure = self._preempted(task, computed)
         rule = f"multi_threaded executor, {len(self.executor.workers)} workers, {group.describe()}"
         used: Fraction | None = computed
         if task.wcrt_bound is not None:
@@ -81,8 +93,59 @@ class Workers:
         elif computed is None:
             rule = "unbounded"
         return TaskResponse(task.id, task.core, task.priority, bcrt(task), used, computed, rule, deadline,
-                            deadline_rule, ZERO, task.wcet, None, None,
-                            tuple(m.id for m in self.members if m.id != task.id), failure)
+                            deadline_rule, ZERO, hold, None, None,
+                            tuple(m.id for m in self.members if m.id != task.id) + tuple(h.id for h in self.higher),
+                            failure)
+
+    def _held(self, task: TaskModel) -> Fraction | None:
+        """``Eᵢ = Cᵢ + Σₕ η⁺ₕ(Eᵢ + Rₕ)·Cₕ`` over the higher threads of the executor's cores (§6.6)."""
+        if not self.higher_bounded:
+            return None
+        return least_fixed_point(task.wcet, task.wcet, self.higher_flows)[0]
+
+    def _preempted(self, task: TaskModel, start: Fraction) -> tuple[Fraction | None, str | None]:
+        """Rᵢ with the higher threads of the executor's cores (§6.6), or None and why: the least
+        ``w = B + W(w)/m + Cᵢ + Σₕ η⁺ₕ(w + Rₕ)·Cₕ`` from ``start`` (its value without them) — the time the
+        higher threads take in ``[r, f)`` is at most their demand in it, whether it holds the group back,
+        keeps a worker from a callback or preempts the job."""
+        if not self.higher_bounded:
+            return None, "the response time of a higher thread on its cores is not bounded"
+        load = load_of(self.higher_flows)
+        if load is None or load >= 1:
+            return None, "the higher threads on its cores leave it no time"
+        w = start
+        for _ in range(MAX_STEPS):
+            window = self._window_at(task, w)
+            if window is None:
+                return None, "the other callbacks' activations are not bounded"
+            new = window + task.wcet
+            for flow in self.higher_flows:
+                demand = flow.demand(w)
+                if demand is None:
+                    return None, f"the activations of `{flow.task}` are not bounded"
+                new += demand
+            if new == w:
+                return w, None
+            w = new
+        return None, f"no fixed point within {MAX_STEPS} iteration steps"
+
+    def _window_at(self, task: TaskModel, w: Fraction) -> Fraction | None:
+        """``B + W/m`` of §9.4 with the counts ``nⱼ`` taken over a window of length ``w`` (at least
+        ``s − r``); the same as ``_window`` where the counts are capped."""
+        blocking, why = group_blocking(self.system, task, self.executor)
+        assert blocking is not None  # (``_window`` bounded it)
+        workers = len(self.executor.workers)
+        if not (blocking > 0 and why == "siblings"):
+            own = ZERO if self.flows[task.id].silent else task.wcet
+            return blocking + (self.carry + self.live_work - own + self.ahead_work[task.id]) / workers
+        work = self.carry
+        for tid, f in self.flows.items():
+            if tid == task.id or f.silent:
+                continue
+            if f.cost is None or f.period is None or f.jitter is None:
+                return None
+            work += _jobs(f.period, f.jitter, w) * f.cost
+        return blocking + work / workers
 
     def _window(self, task: TaskModel) -> tuple[Fraction | None, str | None]:
         """The least ``w = B + W(w)/m`` of §9.4 (the longest ``s − r``), or None and why."""
@@ -116,6 +179,16 @@ def held_window(live: list[Interferer], blocking: Fraction, carry: Fraction, wor
             return w, None
         w = new
     return None, f"no fixed point within {MAX_STEPS} iteration steps"
+
+
+def higher_on_workers(system: SystemModel, executor: ExecutorModel) -> tuple[TaskModel, ...]:
+    """The tasks on the executor's cores whose threads outrank its own (§6.6: its process's arrival tasks)."""
+    return tuple(t for core in executor.workers for t in system.tasks_on(core) if t.priority > executor.priority)
+
+
+def _later(stream: Interferer, response: Fraction | None) -> Interferer:
+    """``stream`` with its jitter widened by ``response``: a job of it runs up to that long after its release."""
+    return stream if stream.jitter is None or response is None else replace(stream, jitter=stream.jitter + response)
 
 
 def callback_group(system: SystemModel, task: TaskModel) -> GroupModel:

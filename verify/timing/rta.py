@@ -59,16 +59,22 @@ def core_loads(system: SystemModel, infos: Mapping[str, ActivationInfo]) -> tupl
     for core in _cores(system):
         owner = shared.get(core)
         tasks = system.tasks_on(core) if owner is None else system.callbacks(owner.name)
-        rates = [r for t in tasks if (r := infos[t.id].rate) is not None]
-        if len(rates) < len(tasks):
-            total = None
-        else:  # Σ wcet·high as exact integer ratios, normalised once
-            total = ratio_sum(_times(t.wcet.as_integer_ratio(), r.high.as_integer_ratio())
-                              for t, r in zip(tasks, rates))
-            if owner is not None:
-                total /= len(owner.workers)
+        total = _load(tasks, infos)
+        if owner is not None:  # (its process's arrival tasks, §6.6, are the core's own)
+            others = tuple(t for t in system.tasks_on(core) if t.executor != owner.name)
+            own = _load(others, infos) if others else ZERO
+            total = None if total is None or own is None else total / len(owner.workers) + own
+            tasks += others
         loads.append(CoreLoad(core, total, tuple(t.id for t in tasks)))
     return tuple(loads)
+
+
+def _load(tasks: tuple[TaskModel, ...], infos: Mapping[str, ActivationInfo]) -> Fraction | None:
+    """``Σ Cᵢ · fᵢ⁺`` of ``tasks``, None when a rate is not bounded."""
+    rates = [r for t in tasks if (r := infos[t.id].rate) is not None]
+    if len(rates) < len(tasks):
+        return None
+    return ratio_sum(_times(t.wcet.as_integer_ratio(), r.high.as_integer_ratio()) for t, r in zip(tasks, rates))
 
 
 def _times(a: tuple[int, int], b: tuple[int, int]) -> tuple[int, int]:
