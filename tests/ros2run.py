@@ -101,5 +101,13 @@ def stalls(directory: Path) -> list[tuple[int, int]]:
     return sorted((a, b) for path in directory.glob("stalls-*.json") for a, b in json.loads(path.read_text()))
 
 
+def stall_summary(found: list[tuple[int, int]]) -> str:
+    """How many stalls, how long in all, the longest (ms): for a failure's message."""
+    lengths = [b - a for a, b in found]
+    if not lengths:
+        return "no stall"
+    return f"{len(lengths)} stalls, {sum(lengths) / 1e6:.1f} ms in all, the longest {max(lengths) / 1e6:.1f} ms"
+
+
 def overlaps(window: tuple[int, int], found: list[tuple[int, int]]) -> bool:
     return any(a < window[1] and window[0] < b for a, b in found)

@@ -208,15 +208,18 @@ def test_timers_run_at_their_rates_within_two_percent(live):
         assert abs(mean - task.activation.period) <= task.activation.period / 50, (task.id, float(mean))
 
 
-def _unstalled(live, samples: list[tuple[int, int, int]]) -> list[int]:
-    """The values of ``samples`` (value, from, to) after the first WARM_UP_NS of the run (Python's first
-    pass through each code path) whose window the platform did not stall (ros2run.PROBE); at most a
-    half of them may have been stalled (a chain's window is up to a few hundred ms long)."""
-    begin = min(j["release"] for j in live["jobs"]) + WARM_UP_NS
+def _unexplained(run, samples: list[tuple[int, int, int]], bound: Fraction) -> list[tuple[int, int, int]]:
+    """The samples (value ns, from, to) after the first WARM_UP_NS of the run (Python's first pass through
+    each code path) above ``bound`` (s) whose window no probe saw stalled (ros2run.PROBE): a stall takes
+    the CPU from every thread, and delays a job by more than its own length (the higher tasks released
+    meanwhile), which no analysis of the model covers. A window the platform stalled is evidence when
+    within the bound all the same; on a virtual machine whose host takes some 10 % of the CPUs most
+    windows of a few hundred ms hold a stall. At least one sample follows the warm-up."""
+    begin = min(j["release"] for j in run["jobs"]) + WARM_UP_NS
     samples = [(v, a, b) for v, a, b in samples if a >= begin]
-    kept = [v for v, a, b in samples if not ros2run.overlaps((a, b), live["stalls"])]
-    assert len(kept) >= 0.5 * len(samples), f"the platform stalled {len(samples) - len(kept)} of {len(samples)}"
-    return kept
+    assert samples, "no sample after the warm-up"
+    return [(v, a, b) for v, a, b in samples
+            if Fraction(v, 1_000_000_000) > bound and not ros2run.overlaps((a, b), run["stalls"])]
 
 
 def observations(model, jobs: list[dict], chain) -> dict[str, list[int]]:
@@ -238,19 +241,13 @@ def observations(model, jobs: list[dict], chain) -> dict[str, list[int]]:
 
 
 def _responses_within_bounds(run, tasks) -> None:
-    """No response time (finish − release) of a job of ``tasks`` after the warm-up whose window the probes
-    saw unstalled exceeds the task's bound in ``run["analysis"]`` (a stall delays a job by more than its own
-    length: the higher tasks released meanwhile; no analysis of the model covers it). A job's window is
-    short, so most are unstalled: at least a quarter of each task's must be (and one)."""
-    begin = min(j["release"] for j in run["jobs"]) + WARM_UP_NS
+    """No response time (finish − release) of a job of ``tasks`` exceeds the task's bound in
+    ``run["analysis"]`` but where the platform stalled the job's window (``_unexplained``)."""
     for task in tasks:
-        jobs = [j for j in _by_task(run["jobs"], task) if j["release"] >= begin]
-        kept = [j["finish"] - j["release"] for j in jobs
-                if not ros2run.overlaps((j["release"], j["finish"]), run["stalls"])]
-        stalled = len(jobs) - len(kept)
-        assert kept and len(kept) >= len(jobs) / 4, f"{task}: the platform stalled {stalled} of {len(jobs)}"
         bound = run["analysis"].task(task).response.wcrt
-        assert bound is not None and Fraction(max(kept), 1_000_000_000) <= bound, (task, max(kept), float(bound or 0))
+        assert bound is not None, task
+        jobs = [(j["finish"] - j["release"], j["release"], j["finish"]) for j in _by_task(run["jobs"], task)]
+        assert not _unexplained(run, jobs, bound), (task, float(bound), ros2run.stall_summary(run["stalls"]))
 
 
 def test_no_response_time_exceeds_the_analysis_bound(live):
@@ -265,8 +262,9 @@ def test_no_chain_latency_exceeds_the_analysis_bound(live):
         seen = observations(model, live["jobs"], next(c for c in model.chains if c.name == chain.name))
         assert seen["data_age"] and seen["reaction_time"], chain.name
         for metric, bound in (("reaction_time", chain.reaction_time.worst), ("data_age", chain.data_age_reduced.worst)):
-            worst = Fraction(max(_unstalled(live, seen[metric])), 1_000_000_000)
-            assert worst <= bound, f"chain {chain.name}: observed {metric} {float(worst)} s, bound {float(bound)} s"
+            beyond = _unexplained(live, seen[metric], bound)
+            assert not beyond, (f"chain {chain.name}: observed {metric} above the bound {float(bound)} s", beyond,
+                                ros2run.stall_summary(live["stalls"]))
 
 
 def _summary(out: Path, node: str) -> dict:
@@ -452,9 +450,12 @@ def test_an_executor_runs_its_callbacks_one_at_a_time(executors):
 def test_an_and_compound_releases_once_every_member_is_fresh(executors):
     jobs = _by_task(executors["jobs"], "f.All")
     assert len(jobs) > 20
-    for a, b in zip(jobs, jobs[1:]):  # (each release consumed a fresh value of each member)
-        assert b["event"] > a["event"] and b["reads"]["a"][2] > a["reads"]["a"][2]
-        assert b["reads"]["b"][2] > a["reads"]["b"][2]
+    for a, b in zip(jobs, jobs[1:]):  # (a job reads the registers at its start: what arrived last, which
+        # may be newer than the arrival that released it, and then counts as fresh for the next release)
+        assert b["event"] > a["event"] and b["reads"]["a"][2] >= a["reads"]["a"][2]
+        assert b["reads"]["b"][2] >= a["reads"]["b"][2]
+    writes = [len(_by_task(executors["jobs"], w)) for w in ("s1.Tick", "s2.Tick")]
+    assert jobs[-1]["event"] <= min(writes)  # (each release consumed a fresh value of each member)
 
 
 def test_an_or_compound_counts_every_arrival_and_a_pending_callback_absorbs(executors):
@@ -528,7 +529,7 @@ def test_verify_trace_on_the_job_records_gives_the_monitors_figures_exactly(live
     doc = json.loads(capsys.readouterr().out)
     errors = [(d["code"], d["message"]) for d in doc["diagnostics"] if d["severity"] == "error"]
     assert code == 0 and not errors and doc["source"] == "job records" and not doc["partial"], (errors, doc)
-    assert doc["unpaired"] == {"tasks": [], "callbacks": []}
+    assert doc["unpaired"] == {"tasks": [], "callbacks": [], "links": []}
     jobs = {t.id: len(_by_task(live["jobs"], t.id)) for t in model.tasks}
     assert {t["task"]: t["jobs"] for t in doc["tasks"]} == jobs
     assert {t["task"]: t["cpu_jobs"] for t in doc["tasks"]} == jobs  # (every record gives its CPU time)
