@@ -17,14 +17,13 @@ from verify.model.processes import Process, core_of, process_of, processes, subs
 from verify.prove import prove
 from verify.prove.scenario import replay
 from verify.prove.intsim import run_trace
-from verify.prove.sim import Scenario, random_scenario, simulate
 from verify.synth import synthesize
 from verify.timing import analyze
 
 from .conftest import EXAMPLES
 from .executor_systems import executor_system, mt_system
 from .test_intsim import concrete_scenario
-from .test_timing import bound_violations
+from .test_executors import no_run_beyond_the_bounds
 
 MS = F(1, 1000)
 
@@ -198,15 +197,14 @@ system S {
     assert cost.core("c1").utilisation == without.core("c1").utilisation + F(1, 20) + F(1, 30)
 
 
-def _no_run_beyond_the_bounds(text: str, seed: int) -> None:
-    model = with_arrivals(_model(text))
+def _arrivals_added(model):
+    model = with_arrivals(model)
     assert any(t.arrival for t in model.tasks) or not model.links
-    analysis = analyze(model)
-    for run in range(3):
-        scenario = random_scenario(model, random.Random(f"{seed}/{run}"), F(1))
-        if run == 0:
-            scenario = Scenario(scenario.horizon, scenario.phases, None, None, None, scenario.counter_phase)
-        assert bound_violations(model, simulate(model, scenario), analysis) == [], text
+    return model
+
+
+def _no_run_beyond_the_bounds(text: str, seed: int) -> None:
+    no_run_beyond_the_bounds(text, seed, _arrivals_added)
 
 
 @pytest.mark.parametrize("seed", range(12))
