@@ -212,6 +212,81 @@ def test_receipts_of_a_topic_whose_publishes_carry_no_source_timestamp_are_no_pa
     assert recording.links == {} and recording.partial == []
 
 
+def _intra_reader(stamped: bool = True):
+    """A talker and a listener in one process, /chatter delivered intra-process as rclcpp and CARET record
+    it: the subscription's intra-process waitable registered as a second rclcpp subscription of its rcl
+    handle, with a callback of its own (handles are made up)."""
+    from verify.trace.lttng_events import Reader
+
+    reader = Reader()
+    p = reader.process(1)
+    reader.on_rcl_node_init(p, 0, 1, 0x10, "talker", "/")
+    reader.on_rcl_publisher_init(p, 0, 1, 0x11, 0x10, "/chatter")
+    reader.on_rcl_node_init(p, 0, 1, 0x20, "listener", "/")
+    reader.on_rcl_subscription_init(p, 0, 1, 0x21, 0x20, 0x22, "/chatter")
+    reader.on_rclcpp_subscription_callback_added(p, 0, 1, 0x25, 0x26)  # (the waitable's, before its init)
+    reader.on_rclcpp_subscription_init(p, 0, 1, 0x21, 0x25)
+    reader.on_rclcpp_subscription_init(p, 0, 1, 0x21, 0x23)
+    reader.on_rclcpp_subscription_callback_added(p, 0, 1, 0x23, 0x24)
+
+    def message(published: int, address: int, stamp: int, received: int | None) -> None:
+        reader.on_rclcpp_intra_publish(p, published, 1, 0x11, address, stamp if stamped else None)
+        if received is not None:
+            reader.on_dispatch_intra_process_subscription_callback(p, received, 1, 0x26, address, stamp)
+
+    return reader, message
+
+
+@pytest.mark.parametrize("stamped", [True, False])
+def test_an_intra_process_receipt_is_linked_to_its_publish_by_message_address_and_timestamp(stamped):
+    reader, message = _intra_reader(stamped)
+    message(1000, 0x99, 5, 1400)
+    message(2000, 0x99, 6, 2250)  # (the address used again)
+    message(3000, 0x98, 7, 3100)
+    recording = reader.recording(("t",))
+    assert list(recording.links[("/chatter", "/talker", "/listener")].delays) == [400, 250, 100]
+    assert recording.partial == []
+
+
+def test_an_intra_process_receipt_without_its_publish_is_counted_as_partial():
+    reader, message = _intra_reader()
+    p = reader.process(1)
+    reader.on_dispatch_intra_process_subscription_callback(p, 500, 1, 0x26, 0x97, 4)  # (published before)
+    message(1000, 0x99, 5, 1400)
+    message(2000, 0x99, 6, None)  # (lost: its address used again by a message received)
+    message(3000, 0x99, 7, 3300)
+    reader.on_dispatch_intra_process_subscription_callback(p, 3500, 1, 0x26, 0x99, 8)  # (another timestamp)
+    recording = reader.recording(("t",))
+    assert list(recording.links[("/chatter", "/talker", "/listener")].delays) == [400, 300]
+    assert recording.partial == [
+        "intra-process message(s) published and not received by any subscription in the trace (lost, or received "
+        "without a trace event): 1 of `/chatter`",
+        "intra-process message(s) received without their publish in the trace (published before it began, or by a "
+        "process not traced): 2 of `/chatter`"]
+
+
+def test_a_subscriptions_intra_process_callback_is_one_callback_with_it():
+    """As CARET identifies it: the jobs of both callbacks of one subscription (inter- and intra-process) are
+    the jobs of one subscription callback."""
+    reader, _ = _intra_reader()
+    p = reader.process(1)
+    for callback, start in ((0x24, 100), (0x26, 300), (0x24, 500)):
+        reader.on_callback_start(p, start, 1, callback)
+        reader.on_callback_end(p, start + 50, 1, callback)
+    recording = reader.recording(("t",))
+    (key,) = recording.callbacks
+    assert recording.callbacks[key].topic == "/chatter" and list(recording.jobs[key].starts) == [100, 300, 500]
+
+
+def test_intra_process_publishes_without_any_intra_process_receipt_are_no_partial_trace():
+    """ros2_tracing without CARET: `rclcpp_intra_publish` recorded, no receipt event to link it to."""
+    reader, message = _intra_reader(stamped=False)
+    for k in range(3):
+        message(1000 * k, 0x99, k, None)
+    recording = reader.recording(("t",))
+    assert recording.links == {} and recording.partial == []
+
+
 def test_a_link_of_nodes_the_model_does_not_connect_is_listed_not_guessed():
     from verify.trace.delays import measure_delays
 

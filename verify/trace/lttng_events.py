@@ -39,6 +39,10 @@ USED: dict[str, tuple[str, ...]] = {
     # `source_stamp` in its early traces, `source_timestamp` later: "a|b" takes the one the event has)
     "ros2:rmw_take": ("rmw_subscription_handle", "source_timestamp", "taken"),
     "ros2:dispatch_subscription_callback": ("callback", "source_timestamp|source_stamp"),
+    # intra-process: a publish (ros2_tracing's; CARET's adds `message_timestamp`: "?x" reads None without
+    # it) and CARET's receipt, linked by message address and timestamp
+    "ros2:rclcpp_intra_publish": ("publisher_handle", "message", "?message_timestamp"),
+    "ros2:dispatch_intra_process_subscription_callback": ("callback", "message", "message_timestamp"),
 }
 #: what a reader's cache of the publishers and subscriptions linked holds for one not seen yet
 _UNSEEN: tuple[str, str] = ("", "")
@@ -120,12 +124,14 @@ class _Process:
     # last publish): a callback of a reentrant group may run on two threads at once
     running: dict[int, int] = field(default_factory=dict)  # thread -> callback running on it
     jobs: dict[int, Jobs] = field(default_factory=dict)  # callback -> its jobs
+    intra_stamped: bool = False  # its intra-process publishes carry their message timestamp (CARET's)
 
 
 class Reader:
     def __init__(self) -> None:
         self.processes: dict[int, _Process] = {}
         self.linker = Linker()
+        self.intra_linker = Linker(intra=True)
         self.events = 0
         self.ignored: dict[str, int] = {}
         self.handlers: dict[str, Callable[..., None]] = {name: getattr(self, "on_" + name.split(":", 1)[1])
@@ -200,12 +206,29 @@ class Reader:
             p.publishing[tid] = (linked[0], linked[1], message, at)
         elif p.publishing:
             p.publishing.pop(tid, None)
-        callback = p.running.get(tid)
-        if callback is None:
-            return
-        started = p.open.get((callback, tid))
-        if started is not None:
-            p.open[(callback, tid)] = (started[0], at)
+        _wrote(p, at, tid)
+
+    def on_rclcpp_intra_publish(self, p: _Process, at: int, tid: int, publisher: int, message: int,
+                                stamp: int | None) -> None:
+        linked = p.linked.get(publisher, _UNSEEN)
+        if linked is _UNSEEN:
+            linked = p.linked[publisher] = _linked_topic(p, publisher)
+        if stamp is not None:
+            p.intra_stamped = True
+        if linked is not None:
+            self.intra_linker.published(linked[0], linked[1], (id(p), message, stamp), at)
+        _wrote(p, at, tid)
+
+    def on_dispatch_intra_process_subscription_callback(self, p: _Process, at: int, tid: int, callback: int,
+                                                        message: int, stamp: int) -> None:
+        subscription = p.subscription_callbacks.get(callback)
+        handle = p.rclcpp_subscriptions.get(subscription) if subscription is not None else None
+        linked = p.receiving.get(handle, _UNSEEN_SUBSCRIPTION)
+        if linked is _UNSEEN_SUBSCRIPTION:
+            linked = p.receiving[handle] = _linked_subscription(p, handle)
+        if linked is not None:
+            key = (id(p), message, stamp if p.intra_stamped else None)
+            self.intra_linker.received_intra(linked[0], linked[1], key, at)
 
     def on_rmw_publish(self, p: _Process, at: int, tid: int, message: int, stamp: int) -> None:
         self._stamped(p, tid, message, stamp)
@@ -244,10 +267,18 @@ class Reader:
         for pid in sorted(self.processes):
             p = self.processes[pid]
             alike: dict[tuple[object, ...], int] = {}
+            subscribed: dict[int, str] = {}  # rcl subscription handle -> the key of its callback
             for callback in p.registered:
                 found = _identify(p, callback, pid)
                 if found is None:
                     continue
+                handle = p.rclcpp_subscriptions.get(p.subscription_callbacks.get(callback, -1))
+                first = subscribed.get(handle, "") if handle is not None else ""
+                if first:  # (a subscription's intra-process waitable's callback: its jobs the subscription's)
+                    out.jobs[first] = _in_start_order(_joined(out.jobs[first], p.jobs.get(callback) or Jobs()))
+                    continue
+                if handle is not None:
+                    subscribed[handle] = found.key
                 same = (found.node, found.kind, found.period_ns, found.topic, found.symbol)
                 order = alike.get(same, 0)
                 alike[same] = order + 1
@@ -261,8 +292,20 @@ class Reader:
             if unfinished:
                 out.partial.append(f"{unfinished} job(s) of process {pid} started but did not end before the trace did "
                                    "(left out)")
-        self.linker.finish(out, {topic for p in self.processes.values() for _, topic in p.subscriptions.values()})
+        topics = {topic for p in self.processes.values() for _, topic in p.subscriptions.values()}
+        self.linker.finish(out, topics)
+        self.intra_linker.finish(out, topics)
         return out
+
+
+def _wrote(p: _Process, at: int, tid: int) -> None:
+    """A publish at ``at`` on thread ``tid``: the last output of the job running there (if one is)."""
+    callback = p.running.get(tid)
+    if callback is None:
+        return
+    started = p.open.get((callback, tid))
+    if started is not None:
+        p.open[(callback, tid)] = (started[0], at)
 
 
 def _linked_topic(p: _Process, publisher: int) -> tuple[str, str] | None:
@@ -283,6 +326,16 @@ def _linked_subscription(p: _Process, handle: int | None) -> tuple[str, str, tup
     if handle is None or found is None or node is None or found[1] in IGNORED_TOPICS:
         return None
     return found[1], node, (id(p), handle)
+
+
+def _joined(first: Jobs, second: Jobs) -> Jobs:
+    """The jobs of both (in no particular order)."""
+    out = Jobs()
+    for jobs in (first, second):
+        out.starts.extend(jobs.starts)
+        out.ends.extend(jobs.ends)
+        out.writes.extend(jobs.writes)
+    return out
 
 
 def _in_start_order(jobs: Jobs) -> Jobs:

@@ -94,8 +94,16 @@ class _Classes:
 
 
 def _field(payload: dict[str, tuple[int, Getter | None]], wanted: str) -> tuple[int, Getter | None]:
-    """The payload member ``wanted`` names (``"a|b"``: the first of them the event has)."""
+    """The payload member ``wanted`` names (``"a|b"``: the first of them the event has; ``"?a"``: None
+    when the event has no ``a``)."""
+    if wanted.startswith("?"):
+        return payload.get(wanted[1:], (0, _absent))
     return next((payload[name] for name in wanted.split("|") if name in payload), (0, None))
+
+
+def _absent(field: Any) -> None:
+    """The value of an optional field the event does not have."""
+    return None
 
 
 def run(traces: Sequence[str], reader: Reader) -> None:
