@@ -159,3 +159,41 @@ def test_a_truncated_recording_is_read_in_part(program, tmp_path, capsys):
     code = main(["trace", str(model), str(trace)])
     err = capsys.readouterr().err
     assert "Traceback" not in err and "E806" in err and code in (0, 1, 2)
+
+
+#: MODEL with a third node taking /chatter intra-process (the program's INTRA_US; the listener takes its
+#: message after that)
+INTRA_MODEL = MODEL.replace("  connect talker.chatter -> listener.chatter\n", """\
+  instance intra_listener : Listener {
+    task subscription_callback_0 executor main trigger chatter
+  }
+  connect talker.chatter -> listener.chatter delay 0 ms .. 20 ms
+  connect talker.chatter -> intra_listener.chatter delay 0 ms .. 1 ms  // guessed
+""")
+
+
+def test_intra_process_messages_taken_a_known_time_after_their_publish_calibrate_the_connection(program, tmp_path,
+                                                                                              capsys):
+    trace = lttnglive.record(program, ["20000", "1000", ",".join(["1000"] * 5), "0", "2500"], tmp_path / "trace",
+                             realtime=True)
+    recording = read_traces([str(trace)], DiagnosticSink())
+    assert recording is not None and not recording.partial
+    # rclcpp_intra_publish → dispatch_intra_process_subscription_callback, by message address and timestamp
+    intra = recording.links[("/chatter", "/talker", "/intra_listener")]
+    assert len(intra.delays) == 5 and all(2500_000 <= d <= (2500 + SLACK_US) * 1000 for d in intra.delays)
+    assert len(recording.links[("/chatter", "/talker", "/listener")].delays) == 5
+    # (the intra-process callback and the subscription's own: one subscription callback, its 5 jobs)
+    ((key, callback),) = [(k, c) for k, c in recording.callbacks.items() if c.node == "/intra_listener"]
+    assert callback.topic == "/chatter" and len(recording.jobs[key]) == 5
+    model = tmp_path / "m.vfy"
+    model.write_text(INTRA_MODEL, encoding="utf-8")
+    assert main(["trace", str(model), str(trace)]) == 0
+    err = capsys.readouterr().err
+    assert err.count("[E807]") == 1 and "warning[E807]: connection `talker.chatter -> intra_listener.chatter`" in err
+    assert main(["trace", str(model), str(trace), "--calibrate", "--margin", "0", "--in-place"]) == 0
+    capsys.readouterr()
+    found = re.search(r"connect talker.chatter -> intra_listener.chatter delay (\d+) us \.\. (\d+) us  // guessed\n",
+                      model.read_text(encoding="utf-8"))
+    assert found is not None and 2500 <= int(found[1]) <= int(found[2]) <= 2500 + SLACK_US
+    assert main(["trace", str(model), str(trace)]) == 0
+    assert "E807" not in capsys.readouterr().err

@@ -1,6 +1,8 @@
 /* Tracepoints of the `ros2` provider with the names, fields and field types ros2_tracing's
- * tracetools defines (tracetools/tp_call.h; rmw_publish with its source `timestamp`, as since Jazzy), for
- * tests/ros2_events.c: the events `verify trace` reads. */
+ * tracetools defines (tracetools/tp_call.h; rmw_publish with its source `timestamp`, as since Jazzy), and
+ * CARET's for intra-process messages (its fork of tracetools: rclcpp_intra_publish with the
+ * `message_timestamp`, dispatch_intra_process_subscription_callback), for tests/ros2_events.c: the events
+ * `verify trace` reads. */
 #undef TRACEPOINT_PROVIDER
 #define TRACEPOINT_PROVIDER ros2
 
@@ -97,6 +99,18 @@ TRACEPOINT_EVENT(ros2, rmw_take,
             ctf_integer_hex(const void *, message, message_arg)
             ctf_integer(int64_t, source_timestamp, source_timestamp_arg)
             ctf_integer(const int, taken, taken_arg)))
+
+TRACEPOINT_EVENT(ros2, rclcpp_intra_publish,
+  TP_ARGS(const void *, publisher_handle_arg, const void *, message_arg, const uint64_t, message_timestamp_arg),
+  TP_FIELDS(ctf_integer_hex(const void *, publisher_handle, publisher_handle_arg)
+            ctf_integer_hex(const void *, message, message_arg)
+            ctf_integer(const uint64_t, message_timestamp, message_timestamp_arg)))
+
+TRACEPOINT_EVENT(ros2, dispatch_intra_process_subscription_callback,
+  TP_ARGS(const void *, message_arg, const void *, callback_arg, const uint64_t, message_timestamp_arg),
+  TP_FIELDS(ctf_integer_hex(const void *, message, message_arg)
+            ctf_integer_hex(const void *, callback, callback_arg)
+            ctf_integer(const uint64_t, message_timestamp, message_timestamp_arg)))
 
 #endif /* ROS2_TP_H */
 
