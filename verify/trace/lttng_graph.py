@@ -191,7 +191,7 @@ def _consumer(nb: Any, classes: _Classes, reader: Reader, stop: type[Exception])
                 elif len(fields) == 2:  # (rcl_publish, rmw_publish, a dispatch)
                     (i, g), (j, h) = fields
                     handler(q, at, t, g(member(payload, i)), h(member(payload, j)))
-                elif len(fields) == 3:  # (rmw_take)
+                elif len(fields) == 3:  # (rmw_take, the intra-process events)
                     (i, g), (j, h), (k, f) = fields
                     handler(q, at, t, g(member(payload, i)), h(member(payload, j)), f(member(payload, k)))
                 else:
