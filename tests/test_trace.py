@@ -278,6 +278,18 @@ def test_a_subscriptions_intra_process_callback_is_one_callback_with_it():
     assert recording.callbacks[key].topic == "/chatter" and list(recording.jobs[key].starts) == [100, 300, 500]
 
 
+def test_an_optional_field_reads_none_when_the_event_has_not_got_it():
+    """ros2_tracing's `rclcpp_intra_publish` has no `message_timestamp`, CARET's has: both are read."""
+    from verify.trace.lttng_graph import payload_member
+    from verify.trace.lttng_events import USED
+
+    assert "?message_timestamp" in USED["ros2:rclcpp_intra_publish"]
+    _, getter = payload_member({"publisher_handle": (0, int), "message": (1, int)}, "?message_timestamp")
+    assert getter is not None and getter("any member") is None
+    assert payload_member({"message_timestamp": (2, int)}, "?message_timestamp") == (2, int)
+    assert payload_member({}, "message") == (0, None)  # (a field required: the event is not read without it)
+
+
 def test_intra_process_publishes_without_any_intra_process_receipt_are_no_partial_trace():
     """ros2_tracing without CARET: `rclcpp_intra_publish` recorded, no receipt event to link it to."""
     reader, message = _intra_reader(stamped=False)

@@ -83,7 +83,7 @@ class _Classes:
         wanted = USED.get(name)
         handler = self.reader.handlers.get(name)
         payload = _members(nb, nb.event_class_borrow_payload_field_class_const(cls), self.getters)
-        fields = tuple(_field(payload, f) for f in wanted or ())
+        fields = tuple(payload_member(payload, f) for f in wanted or ())
         if wanted is None or any(g is None for _, g in fields) \
                 or nb.stream_class_borrow_default_clock_class_const(stream_class) is None:
             name = name if wanted is None else f"{name} (without ros2_tracing's fields or a clock)"
@@ -93,7 +93,8 @@ class _Classes:
         return (handler, name, fields, pid if pid[1] else None, tid if tid[1] else None)
 
 
-def _field(payload: dict[str, tuple[int, Getter | None]], wanted: str) -> tuple[int, Getter | None]:
+def payload_member(payload: dict[str, tuple[int, Getter | None]],
+                   wanted: str) -> tuple[int, Getter | None]:
     """The payload member ``wanted`` names (``"a|b"``: the first of them the event has; ``"?a"``: None
     when the event has no ``a``)."""
     if wanted.startswith("?"):
