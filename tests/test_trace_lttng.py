@@ -162,8 +162,9 @@ def test_a_truncated_recording_is_read_in_part(program, tmp_path, capsys):
 
 
 #: MODEL with a third node taking /chatter intra-process (the program's INTRA_US; the listener takes its
-#: message after that)
-INTRA_MODEL = MODEL.replace("  connect talker.chatter -> listener.chatter\n", """\
+#: message after that), its wcets with room for a stall of the machine (this is about the delays)
+INTRA_MODEL = MODEL.replace("wcet 4 ms", "wcet 8 ms").replace("wcet 2 ms", "wcet 4 ms").replace(
+    "  connect talker.chatter -> listener.chatter\n", """\
   instance intra_listener : Listener {
     task subscription_callback_0 executor main trigger chatter
   }
