@@ -59,6 +59,10 @@ SLACK_US = 3000
 
 pytestmark = pytest.mark.usefixtures("live_processes_alone")
 
+#: the timers' periods are not what these tests are about: a stall of the machine (a virtual CPU taken
+#: away for a few ms) moves a 5-job timer's mean period by more than the default 1 % (E802)
+LENIENT = ("--tolerance", "20")
+
 
 @pytest.fixture(scope="module")
 def program(tmp_path_factory):
@@ -80,7 +84,7 @@ def test_burned_times_calibrate_to_those_times(program, tmp_path, capsys):
     trace = _record(program, tmp_path, [2000, 3000, 3500, 2500, 3000])
     model = tmp_path / "m.vfy"
     model.write_text(MODEL, encoding="utf-8")
-    assert main(["trace", str(model), str(trace), "--calibrate", "--margin", "0", "--in-place"]) == 0
+    assert main(["trace", *LENIENT, str(model), str(trace), "--calibrate", "--margin", "0", "--in-place"]) == 0
     text = model.read_text(encoding="utf-8")
     times = {k: int(v) for k, v in re.findall(r"(bcet|wcet) (\d+) us", text)[:2]}  # the talker's
     assert 2000 <= times["bcet"] <= 2000 + SLACK_US and 3500 <= times["wcet"] <= 3500 + SLACK_US
@@ -88,7 +92,7 @@ def test_burned_times_calibrate_to_those_times(program, tmp_path, capsys):
     assert text.count(" us") == 6 and "timer 20 ms" in text
     assert re.search(r"connect talker.chatter -> listener.chatter delay \d+ us \.\. \d+ us\n", text)
     capsys.readouterr()
-    assert main(["trace", str(model), str(trace)]) == 0  # the calibrated model agrees with its trace
+    assert main(["trace", *LENIENT, str(model), str(trace)]) == 0  # the calibrated model agrees with its trace
 
 
 def test_one_overrun_job_gives_exactly_one_located_error(program, tmp_path, capsys):
@@ -98,7 +102,7 @@ def test_one_overrun_job_gives_exactly_one_located_error(program, tmp_path, caps
     model = tmp_path / "m.vfy"
     model.write_text(MODEL.replace("wcet 4 ms", "wcet 20 ms").replace("wcet 2 ms", "wcet 20 ms")
                      .replace("timer 20 ms", "timer 100 ms"), encoding="utf-8")
-    assert main(["trace", str(model), str(trace)]) == 1
+    assert main(["trace", *LENIENT, str(model), str(trace)]) == 1
     err = capsys.readouterr().err
     assert err.count("error[") == 1 and "error[E801]" in err and f"{model}:6:10" in err
     assert "1 of 11 jobs above the wcet: job 6: 40." in err
@@ -133,10 +137,10 @@ def test_messages_taken_a_known_time_after_their_publish_calibrate_the_connectio
     model.write_text(MODEL.replace("connect talker.chatter -> listener.chatter",
                                    "connect talker.chatter -> listener.chatter delay 0 ms .. 1 ms  // guessed"),
                      encoding="utf-8")
-    assert main(["trace", str(model), str(trace)]) == 0
+    assert main(["trace", *LENIENT, str(model), str(trace)]) == 0
     err = capsys.readouterr().err
     assert "warning[E807]: connection `talker.chatter -> listener.chatter`" in err and f"{model}:28:52" in err
-    assert main(["trace", str(model), str(trace), "--calibrate", "--margin", "0", "--in-place"]) == 0
+    assert main(["trace", *LENIENT, str(model), str(trace), "--calibrate", "--margin", "0", "--in-place"]) == 0
     capsys.readouterr()
     found = re.search(r"connect talker.chatter -> listener.chatter delay (\d+) us \.\. (\d+) us  // guessed\n",
                       model.read_text(encoding="utf-8"))
@@ -144,7 +148,7 @@ def test_messages_taken_a_known_time_after_their_publish_calibrate_the_connectio
     low, high = int(found[1]), int(found[2])
     # publish → take: the 2.5 ms burnt between them, and the two events after the publish
     assert 2500 <= low <= high <= 2500 + SLACK_US
-    assert main(["trace", str(model), str(trace)]) == 0
+    assert main(["trace", *LENIENT, str(model), str(trace)]) == 0
     assert "E807" not in capsys.readouterr().err
 
 
@@ -156,7 +160,7 @@ def test_a_truncated_recording_is_read_in_part(program, tmp_path, capsys):
     biggest.write_bytes(data[: len(data) * 2 // 3])
     model = tmp_path / "m.vfy"
     model.write_text(MODEL, encoding="utf-8")
-    code = main(["trace", str(model), str(trace)])
+    code = main(["trace", *LENIENT, str(model), str(trace)])
     err = capsys.readouterr().err
     assert "Traceback" not in err and "E806" in err and code in (0, 1, 2)
 
@@ -188,13 +192,13 @@ def test_intra_process_messages_taken_a_known_time_after_their_publish_calibrate
     assert callback.topic == "/chatter" and len(recording.jobs[key]) == 5
     model = tmp_path / "m.vfy"
     model.write_text(INTRA_MODEL, encoding="utf-8")
-    assert main(["trace", str(model), str(trace)]) == 0
+    assert main(["trace", *LENIENT, str(model), str(trace)]) == 0
     err = capsys.readouterr().err
     assert err.count("[E807]") == 1 and "warning[E807]: connection `talker.chatter -> intra_listener.chatter`" in err
-    assert main(["trace", str(model), str(trace), "--calibrate", "--margin", "0", "--in-place"]) == 0
+    assert main(["trace", *LENIENT, str(model), str(trace), "--calibrate", "--margin", "0", "--in-place"]) == 0
     capsys.readouterr()
     found = re.search(r"connect talker.chatter -> intra_listener.chatter delay (\d+) us \.\. (\d+) us  // guessed\n",
                       model.read_text(encoding="utf-8"))
     assert found is not None and 2500 <= int(found[1]) <= int(found[2]) <= 2500 + SLACK_US
-    assert main(["trace", str(model), str(trace)]) == 0
+    assert main(["trace", *LENIENT, str(model), str(trace)]) == 0
     assert "E807" not in capsys.readouterr().err
