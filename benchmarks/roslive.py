@@ -40,10 +40,12 @@ def missing_tools() -> list[str]:
 
 
 def build(project: Path) -> str:
-    """Configure and build the generated project with CMake; returns the compiler's output."""
+    """Configure and build the generated project with CMake; returns the compiler's output. The build
+    type is the generated default's (RelWithDebInfo: -O2 -DNDEBUG) without the debug information, which
+    takes a quarter of the compile time and changes no code."""
     build_dir = project / "build"
-    configure = subprocess.run(["cmake", "-S", str(project), "-B", str(build_dir)], capture_output=True,
-                               text=True, timeout=300)
+    configure = subprocess.run(["cmake", "-S", str(project), "-B", str(build_dir), "-DCMAKE_BUILD_TYPE=Release",
+                                "-DCMAKE_CXX_FLAGS_RELEASE=-O2 -DNDEBUG"], capture_output=True, text=True, timeout=300)
     if configure.returncode != 0:
         raise RuntimeError(configure.stdout + configure.stderr)
     made = subprocess.run(["cmake", "--build", str(build_dir), "-j2"], capture_output=True, text=True, timeout=900)
