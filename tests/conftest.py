@@ -7,6 +7,7 @@ import tempfile
 from pathlib import Path
 
 import pytest
+from hypothesis import settings
 
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLES = ROOT / "examples"
@@ -33,6 +34,13 @@ def write(tmp_path):
 
 def in_ci() -> bool:
     return os.environ.get("CI", "").lower() in ("1", "true", "yes")
+
+
+#: under CI the property-based tests draw the same examples every run (a red run is reproduced by running
+#: it again, and a green one stays green); elsewhere they draw new ones and remember what failed
+settings.register_profile("ci", derandomize=True, database=None, print_blob=True)
+if in_ci():
+    settings.load_profile("ci")
 
 
 #: held by a test module that runs real ROS 1, ROS 2 or LTTng processes and measures their timing, for the

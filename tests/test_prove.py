@@ -419,11 +419,11 @@ def test_integer_evaluator_matches_the_reference_simulator(sysm, rnd):
 
 
 @pytest.mark.slow
-@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(rigid_systems(max_free=1), st.sampled_from(KINDS))
 def test_z3_agrees_with_enumeration(sysm, kind):
-    """(Most draws get compared: in 30 draws, 24 were, 1 s each on average; the others fall outside
-    the encoding's subclass or the test's limits.)"""
+    """(Most draws get compared, up to a few seconds each, nearly all of it Z3's: in 25 draws, 19 were,
+    in 30 s on a quiet machine; the others fall outside the encoding's subclass or the test's limits.)"""
     from verify.prove.z3bmc import z3_applicable, z3_exact
 
     if z3_applicable(sysm) is not None or len(sysm.tasks) > 3:
