@@ -25,3 +25,8 @@ def traced(model_path, traces):
     recording = read_traces(traces, sink)
     assert recording is not None, [d.message for d in sink.items]
     return trace_system(loaded.system(None), loaded.project, recording)
+
+
+def project_files(project):
+    """Every file under ``project`` (a generated project): its bytes by its path relative to ``project``."""
+    return {p.relative_to(project).as_posix(): p.read_bytes() for p in sorted(project.rglob("*")) if p.is_file()}

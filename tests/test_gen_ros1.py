@@ -15,13 +15,10 @@ from verify.cli import main
 from verify.gen import ros1
 from verify.gen.tree import intact
 
+from .builders import project_files
 from .conftest import EXAMPLES
 
 NAVIGATION = EXAMPLES / "navigation"
-
-
-def _files(project: Path) -> dict[str, bytes]:
-    return {p.relative_to(project).as_posix(): p.read_bytes() for p in sorted(project.rglob("*")) if p.is_file()}
 
 
 @pytest.fixture
@@ -34,7 +31,7 @@ def models(tmp_path):
 def test_generates_the_project_layout(models, tmp_path, capsys):
     project = tmp_path / "out"
     assert main(["gen", "ros1", str(models / "navigation.vfy"), "-o", str(project)]) == 0
-    files = _files(project)
+    files = project_files(project)
     for path in ("CMakeLists.txt", "package.xml", "config/parameters.yaml", "launch/Navigation.launch",
                  "include/verify_ros1/runtime.hpp", "include/verify_ros1/monitor.hpp",
                  "include/verify_ros1/envelope.hpp", "glue/ObstacleAvoidance.hpp", "glue/ObstacleAvoidance_main.cpp",
@@ -62,28 +59,13 @@ def test_a_hand_edited_skeleton_survives_regeneration_byte_for_byte(models, tmp_
     skeleton = project / "user" / "Mapper.hpp"
     mine = skeleton.read_bytes().replace(b"override {\n  }", b"override {\n    map = scan.value();  // mine\n  }")
     skeleton.write_bytes(mine)
-    before = _files(project)
+    before = project_files(project)
     capsys.readouterr()
     assert main(["gen", "ros1", str(models / "navigation.vfy"), "-o", str(project)]) == 0
-    assert _files(project) == before
+    assert project_files(project) == before
     out = capsys.readouterr().out
     assert "unchanged: 17" in out and "left alone (yours): 11" in out and "    user/Mapper.hpp" in out
     assert "written" not in out
-
-
-def test_regenerating_after_synth_changes_only_the_parameter_file(models, tmp_path):
-    project = tmp_path / "out"
-    holes = str(models / "navigation-holes.vfy")
-    first, second = tmp_path / "first.vfy", tmp_path / "second.vfy"
-    assert main(["synth", holes, "-o", str(first)]) == 0
-    assert main(["synth", holes, "--objective", "latency:reactive", "-o", str(second)]) == 0
-    shutil.copy(models / "components.vfy", tmp_path / "components.vfy")
-    assert main(["gen", "ros1", str(first), "-o", str(project)]) == 0
-    before = _files(project)
-    assert main(["gen", "ros1", str(second), "-o", str(project)]) == 0
-    after = _files(project)
-    assert {p for p in after if after[p] != before.get(p)} == {"config/parameters.yaml"}
-    assert set(after) == set(before)
 
 
 def test_a_system_with_holes_is_refused_with_a_pointer_to_synth(models, tmp_path, capsys):

@@ -21,14 +21,11 @@ from verify.cli import main
 from verify.gen import ros2
 from verify.gen.tree import intact
 
+from .builders import project_files
 from .conftest import EXAMPLES
 
 NAVIGATION = EXAMPLES / "navigation"
 RUNTIME = Path(ros2.__file__).parent / "ros2_runtime"
-
-
-def _files(project: Path) -> dict[str, bytes]:
-    return {p.relative_to(project).as_posix(): p.read_bytes() for p in sorted(project.rglob("*")) if p.is_file()}
 
 
 @pytest.fixture(scope="module")
@@ -52,7 +49,7 @@ def models(tmp_path):
 def test_generates_an_ament_python_package(models, tmp_path, capsys):
     project = tmp_path / "out"
     assert main(["gen", "ros2", str(models / "navigation-ros.vfy"), "-o", str(project)]) == 0
-    files = _files(project)
+    files = project_files(project)
     pkg = "navigation_nodes"
     for path in ("package.xml", "setup.py", "setup.cfg", f"resource/{pkg}", "requirements.txt",
                  "config/parameters.yaml", "launch/Navigation.launch.py", f"{pkg}/system.py", f"{pkg}/main.py",
@@ -121,27 +118,12 @@ def test_a_hand_edited_user_module_survives_regeneration_byte_for_byte(models, t
     assert main(["gen", "ros2", str(models / "navigation-ros.vfy"), "-o", str(project)]) == 0
     user = project / "navigation_nodes" / "user" / "Mapper.py"
     user.write_bytes(user.read_bytes() + b"        map.value.info.width = 7  # mine\n")
-    before = _files(project)
+    before = project_files(project)
     capsys.readouterr()
     assert main(["gen", "ros2", str(models / "navigation-ros.vfy"), "-o", str(project)]) == 0
-    assert _files(project) == before
+    assert project_files(project) == before
     out = capsys.readouterr().out
     assert "navigation_nodes/user/Mapper.py" in out and "written" not in out
-
-
-def test_regenerating_after_synth_changes_only_the_parameter_file(models, tmp_path):
-    project = tmp_path / "out"
-    holes = str(models / "navigation-holes.vfy")
-    first, second = tmp_path / "first.vfy", tmp_path / "second.vfy"
-    assert main(["synth", holes, "-o", str(first)]) == 0
-    assert main(["synth", holes, "--objective", "latency:reactive", "-o", str(second)]) == 0
-    shutil.copy(models / "components.vfy", tmp_path / "components.vfy")
-    assert main(["gen", "ros2", str(first), "-o", str(project)]) == 0
-    before = _files(project)
-    assert main(["gen", "ros2", str(second), "-o", str(project)]) == 0
-    after = _files(project)
-    assert {p for p in after if after[p] != before.get(p)} == {"config/parameters.yaml"}
-    assert set(after) == set(before)
 
 
 def test_an_edited_glue_file_is_refused_with_e601_and_nothing_is_written(models, tmp_path, capsys):
