@@ -118,3 +118,13 @@ def pytest_terminal_summary(terminalreporter):
     TIGHTNESS_LOG.parent.mkdir(parents=True, exist_ok=True)
     TIGHTNESS_LOG.write_text("\n".join(text) + "\n", encoding="utf-8")
     terminalreporter.write_line(f"(also written to {TIGHTNESS_LOG.relative_to(ROOT)})")
+
+
+@pytest.fixture
+def navigation_models(tmp_path):
+    """A copy of examples/navigation (its systems and component library) in the test's own directory."""
+    import shutil
+
+    directory = tmp_path / "model"
+    shutil.copytree(EXAMPLES / "navigation", directory)
+    return directory

@@ -21,16 +21,9 @@ from .conftest import EXAMPLES
 NAVIGATION = EXAMPLES / "navigation"
 
 
-@pytest.fixture
-def models(tmp_path):
-    directory = tmp_path / "model"
-    shutil.copytree(NAVIGATION, directory)
-    return directory
-
-
-def test_generates_the_project_layout(models, tmp_path, capsys):
+def test_generates_the_project_layout(navigation_models, tmp_path, capsys):
     project = tmp_path / "out"
-    assert main(["gen", "ros1", str(models / "navigation.vfy"), "-o", str(project)]) == 0
+    assert main(["gen", "ros1", str(navigation_models / "navigation.vfy"), "-o", str(project)]) == 0
     files = project_files(project)
     for path in ("CMakeLists.txt", "package.xml", "config/parameters.yaml", "launch/Navigation.launch",
                  "include/verify_ros1/runtime.hpp", "include/verify_ros1/monitor.hpp",
@@ -42,78 +35,78 @@ def test_generates_the_project_layout(models, tmp_path, capsys):
     assert "written: 28" in out
 
 
-def test_output_is_deterministic(models):
-    model = verify.load(str(models / "navigation.vfy")).system(None)
+def test_output_is_deterministic(navigation_models):
+    model = verify.load(str(navigation_models / "navigation.vfy")).system(None)
     assert ros1.generate(model) == ros1.generate(model)
 
 
-def test_every_glue_file_is_stamped_and_no_user_file_is(models):
-    model = verify.load(str(models / "navigation.vfy")).system(None)
+def test_every_glue_file_is_stamped_and_no_user_file_is(navigation_models):
+    model = verify.load(str(navigation_models / "navigation.vfy")).system(None)
     for f in ros1.generate(model).files:
         assert intact(f.text) == (f.owner == "glue"), f.path
 
 
-def test_a_hand_edited_skeleton_survives_regeneration_byte_for_byte(models, tmp_path, capsys):
+def test_a_hand_edited_skeleton_survives_regeneration_byte_for_byte(navigation_models, tmp_path, capsys):
     project = tmp_path / "out"
-    assert main(["gen", "ros1", str(models / "navigation.vfy"), "-o", str(project)]) == 0
+    assert main(["gen", "ros1", str(navigation_models / "navigation.vfy"), "-o", str(project)]) == 0
     skeleton = project / "user" / "Mapper.hpp"
     mine = skeleton.read_bytes().replace(b"override {\n  }", b"override {\n    map = scan.value();  // mine\n  }")
     skeleton.write_bytes(mine)
     before = project_files(project)
     capsys.readouterr()
-    assert main(["gen", "ros1", str(models / "navigation.vfy"), "-o", str(project)]) == 0
+    assert main(["gen", "ros1", str(navigation_models / "navigation.vfy"), "-o", str(project)]) == 0
     assert project_files(project) == before
     out = capsys.readouterr().out
     assert "unchanged: 17" in out and "left alone (yours): 11" in out and "    user/Mapper.hpp" in out
     assert "written" not in out
 
 
-def test_a_system_with_holes_is_refused_with_a_pointer_to_synth(models, tmp_path, capsys):
+def test_a_system_with_holes_is_refused_with_a_pointer_to_synth(navigation_models, tmp_path, capsys):
     project = tmp_path / "out"
-    assert main(["gen", "ros1", str(models / "navigation-holes.vfy"), "-o", str(project)]) == 2
+    assert main(["gen", "ros1", str(navigation_models / "navigation-holes.vfy"), "-o", str(project)]) == 2
     err = capsys.readouterr().err
     assert "error[E218]: `gen` needs a configured system, but `oa.OATask` has a synthesis hole" in err
     assert "navigation-holes.vfy:17:" in err and "run `synth`" in err
     assert not project.exists()
 
 
-def test_an_edited_glue_file_is_never_replaced_and_nothing_is_written(models, tmp_path, capsys):
+def test_an_edited_glue_file_is_never_replaced_and_nothing_is_written(navigation_models, tmp_path, capsys):
     project = tmp_path / "out"
-    assert main(["gen", "ros1", str(models / "navigation.vfy"), "-o", str(project)]) == 0
+    assert main(["gen", "ros1", str(navigation_models / "navigation.vfy"), "-o", str(project)]) == 0
     glue = project / "glue" / "Laser.hpp"
     edited = glue.read_text(encoding="utf-8") + "// my fix\n"
     glue.write_text(edited, encoding="utf-8")
     (project / "config" / "parameters.yaml").unlink()
     capsys.readouterr()
-    assert main(["gen", "ros1", str(models / "navigation.vfy"), "-o", str(project)]) == 2
+    assert main(["gen", "ros1", str(navigation_models / "navigation.vfy"), "-o", str(project)]) == 2
     err = capsys.readouterr().err
     assert "error[E601]:" in err and "glue/Laser.hpp was edited by hand; it is not replaced" in err
     assert "--force" in err
     assert glue.read_text(encoding="utf-8") == edited
     assert not (project / "config" / "parameters.yaml").exists()  # nothing written
-    assert main(["gen", "ros1", str(models / "navigation.vfy"), "-o", str(project), "--force"]) == 0
+    assert main(["gen", "ros1", str(navigation_models / "navigation.vfy"), "-o", str(project), "--force"]) == 0
     assert intact(glue.read_text(encoding="utf-8"))
 
 
-def test_a_file_in_the_way_that_gen_did_not_write_is_refused(models, tmp_path, capsys):
+def test_a_file_in_the_way_that_gen_did_not_write_is_refused(navigation_models, tmp_path, capsys):
     project = tmp_path / "out"
     project.mkdir()
     (project / "CMakeLists.txt").write_text("project(mine)\n", encoding="utf-8")
-    assert main(["gen", "ros1", str(models / "navigation.vfy"), "-o", str(project), "--format", "json"]) == 2
+    assert main(["gen", "ros1", str(navigation_models / "navigation.vfy"), "-o", str(project), "--format", "json"]) == 2
     out = capsys.readouterr().out
     assert '"code": "E601"' in out and "was not written by verify gen" in out
     assert (project / "CMakeLists.txt").read_text(encoding="utf-8") == "project(mine)\n"
 
 
-def test_an_output_that_is_a_file_is_refused(models, tmp_path, capsys):
+def test_an_output_that_is_a_file_is_refused(navigation_models, tmp_path, capsys):
     target = tmp_path / "out"
     target.write_text("x", encoding="utf-8")
-    assert main(["gen", "ros1", str(models / "navigation.vfy"), "-o", str(target)]) == 2
+    assert main(["gen", "ros1", str(navigation_models / "navigation.vfy"), "-o", str(target)]) == 2
     assert "E004" in capsys.readouterr().err
 
 
-def test_an_unknown_target_is_a_usage_error(models, capsys):
-    assert main(["gen", "ros3", str(models / "navigation.vfy"), "-o", "x"]) == 2
+def test_an_unknown_target_is_a_usage_error(navigation_models, capsys):
+    assert main(["gen", "ros3", str(navigation_models / "navigation.vfy"), "-o", "x"]) == 2
     assert "invalid choice: 'ros3'" in capsys.readouterr().err
 
 
@@ -215,7 +208,7 @@ def test_the_monitor_library_works_from_hand_written_code(tmp_path):
     assert (scratch / "latency" / "run1" / "n.json").is_file()  # (summary_dir:=… made when it was missing)
 
 
-def test_a_fifo_or_junk_in_the_way_is_refused_without_blocking(models, tmp_path, capsys):
+def test_a_fifo_or_junk_in_the_way_is_refused_without_blocking(navigation_models, tmp_path, capsys):
     import os
 
     project = tmp_path / "out"
@@ -224,7 +217,7 @@ def test_a_fifo_or_junk_in_the_way_is_refused_without_blocking(models, tmp_path,
     (project / "user").mkdir()
     os.mkfifo(project / "user" / "Base.hpp")
     (project / "CMakeLists.txt").write_bytes(b"\x1b[31mred\x00\xff\n")
-    assert main(["gen", "ros1", str(models / "navigation.vfy"), "-o", str(project)]) == 2
+    assert main(["gen", "ros1", str(navigation_models / "navigation.vfy"), "-o", str(project)]) == 2
     err = capsys.readouterr().err
     assert "config/parameters.yaml was not written by verify gen" in err
     assert "user/Base.hpp is not a regular file" in err

@@ -8,7 +8,6 @@ from __future__ import annotations
 import ast
 import re
 import importlib
-import shutil
 import sys
 from fractions import Fraction
 from pathlib import Path
@@ -24,7 +23,6 @@ from verify.gen.tree import intact
 from .builders import project_files
 from .conftest import EXAMPLES
 
-NAVIGATION = EXAMPLES / "navigation"
 RUNTIME = Path(ros2.__file__).parent / "ros2_runtime"
 
 
@@ -39,16 +37,9 @@ def runtime():
         sys.path.remove(str(RUNTIME))
 
 
-@pytest.fixture
-def models(tmp_path):
-    directory = tmp_path / "model"
-    shutil.copytree(NAVIGATION, directory)
-    return directory
-
-
-def test_generates_an_ament_python_package(models, tmp_path, capsys):
+def test_generates_an_ament_python_package(navigation_models, tmp_path, capsys):
     project = tmp_path / "out"
-    assert main(["gen", "ros2", str(models / "navigation-ros.vfy"), "-o", str(project)]) == 0
+    assert main(["gen", "ros2", str(navigation_models / "navigation-ros.vfy"), "-o", str(project)]) == 0
     files = project_files(project)
     pkg = "navigation_nodes"
     for path in ("package.xml", "setup.py", "setup.cfg", f"resource/{pkg}", "requirements.txt",
@@ -68,8 +59,8 @@ def test_generates_an_ament_python_package(models, tmp_path, capsys):
     assert out.startswith("generated ros2 code for system Navigation in ")
 
 
-def test_output_is_deterministic_and_only_glue_is_stamped(models):
-    model = verify.load(str(models / "navigation-ros.vfy")).system(None)
+def test_output_is_deterministic_and_only_glue_is_stamped(navigation_models):
+    model = verify.load(str(navigation_models / "navigation-ros.vfy")).system(None)
     tree = ros2.generate(model)
     assert tree == ros2.generate(model)
     for f in tree.files:
@@ -79,8 +70,8 @@ def test_output_is_deterministic_and_only_glue_is_stamped(models):
                                                    "Planner")}
 
 
-def test_the_structure_maps_processes_ports_and_real_types(models):
-    model = verify.load(str(models / "navigation-ros.vfy")).system(None)
+def test_the_structure_maps_processes_ports_and_real_types(navigation_models):
+    model = verify.load(str(navigation_models / "navigation-ros.vfy")).system(None)
     text = next(f.text for f in ros2.generate(model).files if f.path.endswith("/system.py"))
     system: dict[str, object] = {}
     exec(compile(text, "system.py", "exec"), system)  # (our own generated literals)
@@ -97,8 +88,8 @@ def test_the_structure_maps_processes_ports_and_real_types(models):
     assert system["TASKS"]["mapper.CurMapTask"]["reads"] == ["scan"]
 
 
-def test_parameters_are_ros2_parameter_files_and_exact(models):
-    model = verify.load(str(models / "navigation-ros.vfy")).system(None)
+def test_parameters_are_ros2_parameter_files_and_exact(navigation_models):
+    model = verify.load(str(navigation_models / "navigation-ros.vfy")).system(None)
     text = next(f.text for f in ros2.generate(model).files if f.path == "config/parameters.yaml")
     params = yaml.safe_load(text)
     laser = params["/Navigation/laser_LaserTask"]["ros__parameters"]
@@ -113,28 +104,28 @@ def test_parameters_are_ros2_parameter_files_and_exact(models):
     assert params["/Navigation/oa"]["ros__parameters"]["unit"]["cpu"] == 1
 
 
-def test_a_hand_edited_user_module_survives_regeneration_byte_for_byte(models, tmp_path, capsys):
+def test_a_hand_edited_user_module_survives_regeneration_byte_for_byte(navigation_models, tmp_path, capsys):
     project = tmp_path / "out"
-    assert main(["gen", "ros2", str(models / "navigation-ros.vfy"), "-o", str(project)]) == 0
+    assert main(["gen", "ros2", str(navigation_models / "navigation-ros.vfy"), "-o", str(project)]) == 0
     user = project / "navigation_nodes" / "user" / "Mapper.py"
     user.write_bytes(user.read_bytes() + b"        map.value.info.width = 7  # mine\n")
     before = project_files(project)
     capsys.readouterr()
-    assert main(["gen", "ros2", str(models / "navigation-ros.vfy"), "-o", str(project)]) == 0
+    assert main(["gen", "ros2", str(navigation_models / "navigation-ros.vfy"), "-o", str(project)]) == 0
     assert project_files(project) == before
     out = capsys.readouterr().out
     assert "navigation_nodes/user/Mapper.py" in out and "written" not in out
 
 
-def test_an_edited_glue_file_is_refused_with_e601_and_nothing_is_written(models, tmp_path, capsys):
+def test_an_edited_glue_file_is_refused_with_e601_and_nothing_is_written(navigation_models, tmp_path, capsys):
     project = tmp_path / "out"
-    assert main(["gen", "ros2", str(models / "navigation.vfy"), "-o", str(project)]) == 0
+    assert main(["gen", "ros2", str(navigation_models / "navigation.vfy"), "-o", str(project)]) == 0
     glue = project / "navigation_nodes" / "glue" / "Laser.py"
     edited = glue.read_text(encoding="utf-8") + "# my fix\n"
     glue.write_text(edited, encoding="utf-8")
     (project / "config" / "parameters.yaml").unlink()
     capsys.readouterr()
-    assert main(["gen", "ros2", str(models / "navigation.vfy"), "-o", str(project)]) == 2
+    assert main(["gen", "ros2", str(navigation_models / "navigation.vfy"), "-o", str(project)]) == 2
     err = capsys.readouterr().err
     assert "error[E601]:" in err and "glue/Laser.py was edited by hand; it is not replaced" in err
     assert glue.read_text(encoding="utf-8") == edited

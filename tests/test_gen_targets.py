@@ -9,13 +9,11 @@ import pytest
 from verify.cli import main
 
 from .builders import project_files
-from .conftest import EXAMPLES
 
 
 @pytest.mark.parametrize("target", ["ros1", "ros2"])
-def test_regenerating_after_synth_changes_only_the_parameter_file(target, tmp_path):
-    models = tmp_path / "model"
-    shutil.copytree(EXAMPLES / "navigation", models)
+def test_regenerating_after_synth_changes_only_the_parameter_file(target, navigation_models, tmp_path):
+    models = navigation_models
     project = tmp_path / "out"
     holes = str(models / "navigation-holes.vfy")
     first, second = tmp_path / "first.vfy", tmp_path / "second.vfy"
